@@ -1,0 +1,24 @@
+//! spherify-mesh: triangle meshes for spherical parameterisation.
+//!
+//! * [`Mesh`]: validated position and face arrays (finite, indices in range).
+//! * [`validate`]: the full topological report of thesis Prop. 2.8 and more.
+//! * [`halfedge::HalfEdgeMesh`]: connectivity of an oriented manifold mesh.
+//! * [`orient`]: consistent, outward orientation (thesis Alg. 2.9, seedless).
+//! * [`io`]: OBJ, OFF, PLY and STL read and write.
+//! * [`dijkstra`]: single-source shortest paths on the vertex graph (thesis App. A).
+
+pub mod dijkstra;
+pub mod edge_table;
+pub mod error;
+pub mod graph;
+pub mod halfedge;
+pub mod io;
+pub mod mesh;
+pub mod orient;
+pub mod validate;
+
+pub use error::{FormatError, Location, MeshError, TopologyError, TopologyProblem};
+pub use graph::Adjacency;
+pub use halfedge::HalfEdgeMesh;
+pub use mesh::Mesh;
+pub use validate::MeshReport;

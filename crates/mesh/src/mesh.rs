@@ -1,0 +1,136 @@
+//! The validated triangle array: positions and faces that are safe to index.
+//!
+//! A `Mesh` is checked once, when it is built (STYLE 5): it has at least one
+//! vertex and one face, every coordinate is finite and every index is in range.
+//! Topology (manifoldness, genus, orientation) is *not* required here: that is what
+//! [`crate::validate`] reports and [`crate::halfedge::HalfEdgeMesh`] demands.
+
+use crate::error::MeshError;
+
+/// Largest number of vertices: indices are `u32` inside the core.
+pub const MAX_VERTICES: usize = u32::MAX as usize;
+
+/// A triangle mesh as two parallel arrays: `positions[v]` is vertex `v`, and each
+/// face lists three vertex indices, counter-clockwise seen from outside.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Mesh {
+    positions: Vec<[f64; 3]>,
+    faces: Vec<[u32; 3]>,
+}
+
+impl Mesh {
+    /// Builds a mesh, checking that it is non-empty, finite and in range. O(n).
+    pub fn new(positions: Vec<[f64; 3]>, faces: Vec<[u32; 3]>) -> Result<Mesh, MeshError> {
+        check_positions(&positions)?;
+        if faces.is_empty() {
+            return Err(MeshError::NoFaces);
+        }
+        let n = positions.len();
+        if let Some((face, index)) = first_out_of_range(&faces, n) {
+            return Err(MeshError::IndexOutOfRange { face, index: index as i64, n_vertices: n });
+        }
+        Ok(Mesh { positions, faces })
+    }
+
+    /// Builds a mesh from signed 64-bit indices (as numpy hands them over),
+    /// rejecting negative and too large ones.
+    pub fn from_signed(positions: Vec<[f64; 3]>, faces: &[[i64; 3]]) -> Result<Mesh, MeshError> {
+        check_positions(&positions)?;
+        if faces.is_empty() {
+            return Err(MeshError::NoFaces);
+        }
+        let n = positions.len();
+        let mut converted = Vec::with_capacity(faces.len());
+        for (face, corners) in faces.iter().enumerate() {
+            let mut out = [0u32; 3];
+            for (slot, &index) in out.iter_mut().zip(corners) {
+                if index < 0 || index as u64 >= n as u64 {
+                    return Err(MeshError::IndexOutOfRange { face, index, n_vertices: n });
+                }
+                *slot = index as u32;
+            }
+            converted.push(out);
+        }
+        Ok(Mesh { positions, faces: converted })
+    }
+
+    pub fn positions(&self) -> &[[f64; 3]] {
+        &self.positions
+    }
+
+    pub fn faces(&self) -> &[[u32; 3]] {
+        &self.faces
+    }
+
+    pub fn n_vertices(&self) -> usize {
+        self.positions.len()
+    }
+
+    pub fn n_faces(&self) -> usize {
+        self.faces.len()
+    }
+
+    /// The same vertices with every face's orientation reversed where `flip[f]`.
+    pub fn with_flipped_faces(&self, flip: &[bool]) -> Mesh {
+        let faces = self
+            .faces
+            .iter()
+            .zip(flip)
+            .map(|(&[a, b, c], &f)| if f { [a, c, b] } else { [a, b, c] })
+            .collect();
+        Mesh { positions: self.positions.clone(), faces }
+    }
+
+    pub fn into_parts(self) -> (Vec<[f64; 3]>, Vec<[u32; 3]>) {
+        (self.positions, self.faces)
+    }
+}
+
+fn check_positions(positions: &[[f64; 3]]) -> Result<(), MeshError> {
+    if positions.is_empty() {
+        return Err(MeshError::NoVertices);
+    }
+    if positions.len() > MAX_VERTICES {
+        return Err(MeshError::TooManyVertices { n_vertices: positions.len(), max: MAX_VERTICES });
+    }
+    if let Some((vertex, value)) = first_non_finite(positions) {
+        return Err(MeshError::NonFiniteCoordinate { vertex, value });
+    }
+    Ok(())
+}
+
+/// The first vertex with a NaN or infinite coordinate, and that coordinate.
+pub fn first_non_finite(positions: &[[f64; 3]]) -> Option<(usize, f64)> {
+    positions
+        .iter()
+        .enumerate()
+        .find_map(|(v, p)| p.iter().find(|x| !x.is_finite()).map(|&x| (v, x)))
+}
+
+fn first_out_of_range(faces: &[[u32; 3]], n: usize) -> Option<(usize, u32)> {
+    faces
+        .iter()
+        .enumerate()
+        .find_map(|(f, c)| c.iter().find(|&&i| i as usize >= n).map(|&i| (f, i)))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rejects_empty_nan_and_out_of_range() {
+        assert!(matches!(Mesh::new(vec![], vec![[0, 1, 2]]), Err(MeshError::NoVertices)));
+        let p = vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
+        assert!(matches!(Mesh::new(p.clone(), vec![]), Err(MeshError::NoFaces)));
+        let err = Mesh::new(p.clone(), vec![[0, 1, 3]]).unwrap_err();
+        assert!(matches!(err, MeshError::IndexOutOfRange { face: 0, index: 3, n_vertices: 3 }));
+        let err = Mesh::from_signed(p.clone(), &[[0, -1, 2]]).unwrap_err();
+        assert!(matches!(err, MeshError::IndexOutOfRange { index: -1, .. }));
+        let mut bad = p.clone();
+        bad[1][2] = f64::NAN;
+        let err = Mesh::new(bad, vec![[0, 1, 2]]).unwrap_err();
+        assert!(matches!(err, MeshError::NonFiniteCoordinate { vertex: 1, .. }));
+        assert!(Mesh::new(p, vec![[0, 1, 2]]).is_ok());
+    }
+}

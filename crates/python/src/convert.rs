@@ -1,0 +1,41 @@
+//! numpy <-> core arrays. Shape checks live here because they are about the
+//! conversion; content checks (finite, in range) are the core's.
+
+use numpy::ndarray::Array2;
+use numpy::{IntoPyArray, PyArray2, PyReadonlyArrayDyn};
+use pyo3::prelude::*;
+
+use crate::errors::mesh_error;
+
+/// Copies an `(n, K)` array into rows, or raises `MeshError` naming `what`.
+pub fn rows<T: numpy::Element + Copy + Default, const K: usize>(
+    py: Python<'_>,
+    array: &PyReadonlyArrayDyn<'_, T>,
+    what: &str,
+) -> PyResult<Vec<[T; K]>> {
+    let view = array.as_array();
+    let shape = view.shape();
+    if shape.len() != 2 || shape[1] != K {
+        return Err(mesh_error(py, format!("{what} must have shape (n, {K}), got {shape:?}")));
+    }
+    let mut out = vec![[T::default(); K]; shape[0]];
+    for (row, src) in out.iter_mut().zip(view.outer_iter()) {
+        for (dst, &x) in row.iter_mut().zip(src.iter()) {
+            *dst = x;
+        }
+    }
+    Ok(out)
+}
+
+/// Rows as a new `(n, K)` numpy array.
+pub fn to_numpy<'py, T: numpy::Element + Copy, const K: usize>(py: Python<'py>, data: &[[T; K]]) -> Bound<'py, PyArray2<T>> {
+    let flat: Vec<T> = data.iter().flatten().copied().collect();
+    Array2::from_shape_vec((data.len(), K), flat)
+        .expect("row count times K equals the flat length")
+        .into_pyarray(py)
+}
+
+/// Indices as int64 rows for Python (the core uses u32).
+pub fn to_i64_rows<const K: usize>(data: &[[u32; K]]) -> Vec<[i64; K]> {
+    data.iter().map(|r| r.map(i64::from)).collect()
+}

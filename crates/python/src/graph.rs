@@ -1,0 +1,77 @@
+//! Shortest paths on the vertex graph (thesis App. A).
+
+use numpy::{IntoPyArray, PyArray1};
+use pyo3::prelude::*;
+use spherify_mesh::dijkstra::{self as paths, EdgeWeights};
+use spherify_mesh::Adjacency;
+
+use crate::errors::mesh_error;
+use crate::mesh::CoreMesh;
+
+fn weights<'a>(py: Python<'_>, mesh: &'a CoreMesh, name: &str) -> PyResult<EdgeWeights<'a>> {
+    match name {
+        "uniform" => Ok(EdgeWeights::Uniform),
+        "length" => Ok(EdgeWeights::Length(mesh.mesh.positions())),
+        other => Err(mesh_error(py, format!("weights must be 'length' or 'uniform', got {other:?}"))),
+    }
+}
+
+fn check_vertex(py: Python<'_>, mesh: &CoreMesh, v: i64, what: &str) -> PyResult<u32> {
+    let n = mesh.mesh.n_vertices();
+    if v < 0 || v as u64 >= n as u64 {
+        return Err(mesh_error(py, format!("{what} vertex {v} is out of range (the mesh has {n} vertices)")));
+    }
+    Ok(v as u32)
+}
+
+/// dijkstra(mesh, source, weights) -> (distances (n,) float64, predecessors (n,) int64).
+#[pyfunction]
+#[pyo3(signature = (mesh, source, weights="length"))]
+pub fn dijkstra<'py>(
+    py: Python<'py>,
+    mesh: &CoreMesh,
+    source: i64,
+    weights: &str,
+) -> PyResult<(Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<i64>>)> {
+    let source = check_vertex(py, mesh, source, "source")?;
+    let w = self::weights(py, mesh, weights)?;
+    let paths = py.detach(|| {
+        let graph = Adjacency::from_faces(mesh.mesh.n_vertices(), mesh.mesh.faces());
+        paths::dijkstra(&graph, source, w)
+    });
+    // The source was checked above, so the search always runs.
+    let paths = paths.ok_or_else(|| mesh_error(py, "source vertex out of range"))?;
+    let pred: Vec<i64> = paths
+        .predecessors
+        .iter()
+        .map(|&p| if p == paths::NO_VERTEX { -1 } else { i64::from(p) })
+        .collect();
+    Ok((paths.distances.into_pyarray(py), pred.into_pyarray(py)))
+}
+
+/// shortest_path(mesh, source, target, weights) -> (length, path (k,) int64);
+/// raises MeshError when the target cannot be reached.
+#[pyfunction]
+#[pyo3(signature = (mesh, source, target, weights="length"))]
+pub fn shortest_path<'py>(
+    py: Python<'py>,
+    mesh: &CoreMesh,
+    source: i64,
+    target: i64,
+    weights: &str,
+) -> PyResult<(f64, Bound<'py, PyArray1<i64>>)> {
+    let source = check_vertex(py, mesh, source, "source")?;
+    let target = check_vertex(py, mesh, target, "target")?;
+    let w = self::weights(py, mesh, weights)?;
+    let found = py.detach(|| {
+        let graph = Adjacency::from_faces(mesh.mesh.n_vertices(), mesh.mesh.faces());
+        paths::dijkstra_to(&graph, source, target, w)
+    });
+    match found {
+        Some((length, path)) => {
+            let path: Vec<i64> = path.into_iter().map(i64::from).collect();
+            Ok((length, path.into_pyarray(py)))
+        }
+        None => Err(mesh_error(py, format!("vertex {target} cannot be reached from vertex {source}: they lie in different components"))),
+    }
+}

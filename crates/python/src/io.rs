@@ -1,0 +1,56 @@
+//! `load` / `save`: file formats are read and written by `spherify_mesh::io`.
+
+use numpy::PyReadonlyArrayDyn;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use spherify_mesh::io::{self, PlyEncoding, VertexAttributes, WriteOptions};
+
+use crate::convert::{rows, to_numpy};
+use crate::errors::{mesh_error, to_py};
+use crate::mesh::CoreMesh;
+
+/// load(path) -> (CoreMesh, notes, attributes): reads OBJ, OFF, PLY or STL.
+#[pyfunction]
+pub fn load<'py>(py: Python<'py>, path: std::path::PathBuf) -> PyResult<(CoreMesh, Vec<String>, Bound<'py, PyDict>)> {
+    let loaded = py.detach(|| io::read(&path)).map_err(|e| to_py(py, e))?;
+    let attributes = PyDict::new(py);
+    if let Some(sphere) = &loaded.attributes.sphere {
+        attributes.set_item("sphere", to_numpy(py, sphere))?;
+    }
+    if let Some(uv) = &loaded.attributes.uv {
+        attributes.set_item("uv", to_numpy(py, uv))?;
+    }
+    Ok((CoreMesh { mesh: loaded.mesh }, loaded.notes, attributes))
+}
+
+/// save(mesh, path, sphere=None, uv=None, ply_encoding="binary_little_endian",
+/// stl_binary=True): writes to a temporary file, then renames it into place.
+#[pyfunction]
+#[pyo3(signature = (mesh, path, sphere=None, uv=None, ply_encoding="binary_little_endian", stl_binary=true))]
+pub fn save(
+    py: Python<'_>,
+    mesh: &CoreMesh,
+    path: std::path::PathBuf,
+    sphere: Option<PyReadonlyArrayDyn<'_, f64>>,
+    uv: Option<PyReadonlyArrayDyn<'_, f64>>,
+    ply_encoding: &str,
+    stl_binary: bool,
+) -> PyResult<()> {
+    let ply_encoding = match ply_encoding {
+        "ascii" => PlyEncoding::Ascii,
+        "binary_little_endian" => PlyEncoding::BinaryLittleEndian,
+        "binary_big_endian" => PlyEncoding::BinaryBigEndian,
+        other => {
+            return Err(mesh_error(
+                py,
+                format!("ply_encoding must be 'ascii', 'binary_little_endian' or 'binary_big_endian', got {other:?}"),
+            ))
+        }
+    };
+    let attributes = VertexAttributes {
+        sphere: sphere.map(|a| rows::<f64, 3>(py, &a, "sphere")).transpose()?,
+        uv: uv.map(|a| rows::<f64, 2>(py, &a, "uv")).transpose()?,
+    };
+    let options = WriteOptions { ply_encoding, stl_binary };
+    py.detach(|| io::write(&path, &mesh.mesh, &attributes, &options)).map_err(|e| to_py(py, e))
+}

@@ -1,0 +1,26 @@
+//! `spherify._core`: the PyO3 bindings. This crate translates between numpy and
+//! the core crates and maps errors to the Python exception hierarchy; it holds no
+//! algorithm (STYLE 1, 3).
+
+use pyo3::prelude::*;
+
+mod convert;
+mod errors;
+mod graph;
+mod io;
+mod mesh;
+mod validate;
+
+#[pymodule]
+fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<mesh::CoreMesh>()?;
+    m.add_function(wrap_pyfunction!(io::load, m)?)?;
+    m.add_function(wrap_pyfunction!(io::save, m)?)?;
+    m.add_function(wrap_pyfunction!(validate::check, m)?)?;
+    m.add_function(wrap_pyfunction!(validate::check_raw, m)?)?;
+    m.add_function(wrap_pyfunction!(validate::orient, m)?)?;
+    m.add_function(wrap_pyfunction!(graph::dijkstra, m)?)?;
+    m.add_function(wrap_pyfunction!(graph::shortest_path, m)?)?;
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    Ok(())
+}

@@ -1,0 +1,30 @@
+"""spherify: one-to-one maps of closed genus-0 triangle meshes onto the unit sphere.
+
+The Rust core does the work; this package is its Python face. See README.md.
+"""
+
+from __future__ import annotations
+
+from . import datasets
+from ._core import __version__
+from ._errors import ConvergenceError, FormatError, MeshError, SpherifyError, TopologyError
+from ._mesh import Mesh, check, dijkstra, load, orient, save, shortest_path
+from ._report import MeshReport
+
+__all__ = [
+    "ConvergenceError",
+    "FormatError",
+    "Mesh",
+    "MeshError",
+    "MeshReport",
+    "SpherifyError",
+    "TopologyError",
+    "__version__",
+    "check",
+    "datasets",
+    "dijkstra",
+    "load",
+    "orient",
+    "save",
+    "shortest_path",
+]

@@ -1,0 +1,39 @@
+# Type stubs of the Rust extension spherify._core (checked by mypy.stubtest in CI).
+from os import PathLike
+from typing import Any, Dict, List, Optional, Tuple, final
+
+import numpy as np
+import numpy.typing as npt
+
+from ._report import MeshReport
+
+__version__: str
+
+@final
+class CoreMesh:
+    def __new__(cls, vertices: npt.NDArray[np.float64], faces: npt.NDArray[np.int64]) -> CoreMesh: ...
+    def vertices(self) -> npt.NDArray[np.float64]: ...
+    def faces(self) -> npt.NDArray[np.int64]: ...
+    @property
+    def n_vertices(self) -> int: ...
+    @property
+    def n_faces(self) -> int: ...
+
+def load(path: str | PathLike[str]) -> Tuple[CoreMesh, List[str], Dict[str, npt.NDArray[np.float64]]]: ...
+def save(
+    mesh: CoreMesh,
+    path: str | PathLike[str],
+    sphere: Optional[npt.NDArray[np.float64]] = None,
+    uv: Optional[npt.NDArray[np.float64]] = None,
+    ply_encoding: str = "binary_little_endian",
+    stl_binary: bool = True,
+) -> None: ...
+def check(mesh: CoreMesh) -> MeshReport: ...
+def check_raw(vertices: npt.NDArray[np.float64], faces: npt.NDArray[np.int64]) -> MeshReport: ...
+def orient(mesh: CoreMesh) -> Tuple[CoreMesh, Dict[str, int]]: ...
+def dijkstra(
+    mesh: CoreMesh, source: int, weights: str = "length"
+) -> Tuple[npt.NDArray[np.float64], npt.NDArray[np.int64]]: ...
+def shortest_path(
+    mesh: CoreMesh, source: int, target: int, weights: str = "length"
+) -> Tuple[float, npt.NDArray[np.int64]]: ...

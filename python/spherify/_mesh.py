@@ -1,0 +1,233 @@
+"""The Mesh type and the functions that read, write, check and orient it."""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+from typing import Any, Dict, List, Optional, Tuple, Union
+
+import numpy as np
+
+from . import _core
+from ._errors import MeshError
+from ._report import MeshReport
+
+PathLike = Union[str, "os.PathLike[str]"]
+
+
+def _as_vertices(vertices: Any, what: str = "vertices") -> np.ndarray:
+    try:
+        array = np.asarray(vertices)
+        if array.dtype.kind not in "fiub":
+            raise TypeError(f"dtype {array.dtype}")
+        return np.ascontiguousarray(array, dtype=np.float64)
+    except (TypeError, ValueError) as err:
+        raise MeshError(f"{what} must be a numeric (n, 3) array: {err}") from None
+
+
+def _as_faces(faces: Any) -> np.ndarray:
+    array = np.asarray(faces)
+    if array.dtype.kind not in "iu":
+        raise MeshError(
+            f"faces must be an integer array of shape (m, 3), got dtype {array.dtype}")
+    if array.dtype.kind == "u" and array.size and array.max() > np.iinfo(np.int64).max:
+        raise MeshError("faces hold indices larger than int64 can represent")
+    return np.ascontiguousarray(array, dtype=np.int64)
+
+
+class Mesh:
+    """A triangle mesh: vertex positions and faces, copied into the Rust core.
+
+    Parameters
+    ----------
+    vertices : (n, 3) array_like of float
+        Positions; any float or integer dtype, stored as float64.
+    faces : (m, 3) array_like of int
+        Vertex indices of each triangle, counter-clockwise seen from outside;
+        any integer dtype, stored as int64.
+
+    Raises
+    ------
+    MeshError
+        Wrong shapes or dtypes, empty arrays, NaN or infinite coordinates,
+        negative or out-of-range indices. Topology is not required here: use
+        :func:`check` to find out what the mesh is.
+
+    Notes
+    -----
+    The arrays are never reordered or merged. ``vertices`` and ``faces`` are
+    read-only copies; build a new Mesh to change them. Cost O(n + m).
+    """
+
+    __slots__ = ("_core", "_vertices", "_faces", "notes", "attributes")
+
+    def __init__(self, vertices: Any, faces: Any) -> None:
+        core = _core.CoreMesh(_as_vertices(vertices), _as_faces(faces))
+        self._set(core, [], {})
+
+    @classmethod
+    def _from_core(cls, core: Any, notes: List[str], attributes: Dict[str, np.ndarray]) -> "Mesh":
+        mesh = cls.__new__(cls)
+        mesh._set(core, notes, attributes)
+        return mesh
+
+    def _set(self, core: Any, notes: List[str], attributes: Dict[str, np.ndarray]) -> None:
+        self._core = core
+        self._vertices: Optional[np.ndarray] = None
+        self._faces: Optional[np.ndarray] = None
+        #: Remarks from loading (e.g. polygons fan-triangulated, STL welding).
+        self.notes: List[str] = list(notes)
+        #: Per-vertex arrays read from the file: ``"sphere"`` (n, 3), ``"uv"`` (n, 2).
+        self.attributes: Dict[str, np.ndarray] = dict(attributes)
+
+    @property
+    def vertices(self) -> np.ndarray:
+        """(n, 3) float64, read-only."""
+        if self._vertices is None:
+            self._vertices = self._core.vertices()
+            self._vertices.flags.writeable = False
+        return self._vertices
+
+    @property
+    def faces(self) -> np.ndarray:
+        """(m, 3) int64, read-only."""
+        if self._faces is None:
+            self._faces = self._core.faces()
+            self._faces.flags.writeable = False
+        return self._faces
+
+    @property
+    def n_vertices(self) -> int:
+        return int(self._core.n_vertices)
+
+    @property
+    def n_faces(self) -> int:
+        return int(self._core.n_faces)
+
+    def __repr__(self) -> str:
+        return f"Mesh(n_vertices={self.n_vertices}, n_faces={self.n_faces})"
+
+
+def load(path: PathLike) -> Mesh:
+    """Read a triangle mesh from ``.obj``, ``.off``, ``.ply`` (ascii or binary)
+    or ``.stl`` (ascii or binary), chosen by extension.
+
+    Polygons are fan-triangulated and STL corners welded, each with a note in
+    ``mesh.notes``. Per-vertex ``sphere_x/y/z`` and ``u v`` PLY properties and
+    OBJ ``vt`` coordinates land in ``mesh.attributes``. O(file size).
+
+    Raises
+    ------
+    FileNotFoundError, OSError
+        The file cannot be read.
+    FormatError
+        The file is malformed; the message names the file and the line (text)
+        or byte offset (binary).
+    """
+    core, notes, attributes = _core.load(os.fspath(path))
+    return Mesh._from_core(core, notes, attributes)
+
+
+def save(mesh: Mesh, path: PathLike, *, sphere: Any = None, uv: Any = None,
+         ply_encoding: str = "binary_little_endian", stl_binary: bool = True) -> None:
+    """Write ``mesh`` to ``path`` (format by extension).
+
+    Parameters
+    ----------
+    sphere : (n, 3) array_like of float, optional
+        Per-vertex sphere positions, stored as PLY properties
+        ``sphere_x sphere_y sphere_z`` (``.ply`` only).
+    uv : (n, 2) array_like of float, optional
+        Per-vertex texture coordinates (``.ply`` as ``u v``, ``.obj`` as ``vt``).
+    ply_encoding : {"binary_little_endian", "binary_big_endian", "ascii"}
+    stl_binary : bool
+
+    The file is written under a temporary name and renamed into place, so an
+    existing file is never left half-written.
+    """
+    sphere_array = None if sphere is None else _as_vertices(sphere, "sphere")
+    uv_array = None if uv is None else _as_vertices(uv, "uv")
+    _core.save(mesh._core, os.fspath(path), sphere_array, uv_array, ply_encoding, stl_binary)
+
+
+def check(mesh: Union[Mesh, Tuple[Any, Any]]) -> MeshReport:
+    """Validate a mesh and report every problem found.
+
+    Parameters
+    ----------
+    mesh : Mesh or (vertices, faces)
+        A raw ``(vertices, faces)`` pair may hold NaN coordinates and negative
+        or out-of-range indices: those are reported rather than raised.
+
+    Returns
+    -------
+    MeshReport
+        Topology (closed, manifold, components, Euler characteristic, genus,
+        boundary loops), defects (non-manifold edges and vertices, degenerate,
+        duplicate faces, unused vertices) and orientation (consistent, outward).
+        Cost O(m log d), d the largest vertex degree.
+    """
+    if isinstance(mesh, Mesh):
+        report = _core.check(mesh._core)
+        notes = mesh.notes
+    elif isinstance(mesh, tuple) and len(mesh) == 2:
+        report = _core.check_raw(_as_vertices(mesh[0]), _as_faces(mesh[1]))
+        notes = []
+    else:
+        raise MeshError(f"check expects a Mesh or a (vertices, faces) pair, got {type(mesh).__name__}")
+    if notes:
+        report = dataclasses.replace(report, notes=list(notes) + list(report.notes))
+    return report
+
+
+def orient(mesh: Mesh, *, return_info: bool = False) -> Any:
+    """Orient every face consistently and outward (thesis Alg. 2.9).
+
+    Unlike Alg. 2.9 no seed face is needed: each connected component is made
+    consistent with its first face, and a closed component that then encloses
+    negative volume is reversed as a whole. Open components are made consistent
+    only. O(m log d).
+
+    Returns
+    -------
+    Mesh
+        Same vertices; faces reordered within themselves where needed. With
+        ``return_info=True``, ``(mesh, info)`` where ``info`` has
+        ``flipped_faces``, ``components`` and ``components_turned_outward``.
+
+    Raises
+    ------
+    TopologyError
+        An edge has more than two faces, a face repeats a vertex, or the surface
+        is not orientable; ``err.report`` is the full :class:`MeshReport`.
+    """
+    core, info = _core.orient(mesh._core)
+    oriented = Mesh._from_core(core, mesh.notes, mesh.attributes)
+    return (oriented, info) if return_info else oriented
+
+
+def dijkstra(mesh: Mesh, source: int, *, weights: str = "length") -> Tuple[np.ndarray, np.ndarray]:
+    """Shortest-path distances from ``source`` along mesh edges (thesis App. A).
+
+    Parameters
+    ----------
+    weights : {"length", "uniform"}
+        Euclidean edge lengths, or 1 per edge (graph distance).
+
+    Returns
+    -------
+    distances : (n,) float64
+        ``inf`` for vertices in other components.
+    predecessors : (n,) int64
+        Previous vertex on a shortest path; -1 for the source and unreachable ones.
+
+    Binary-heap Dijkstra, O((n + e) log n), deterministic tie-breaking.
+    """
+    return _core.dijkstra(mesh._core, int(source), weights)
+
+
+def shortest_path(mesh: Mesh, source: int, target: int, *, weights: str = "length") -> Tuple[float, np.ndarray]:
+    """Length and vertex sequence ``(k,) int64`` of a shortest path from
+    ``source`` to ``target``; stops as soon as ``target`` is settled.
+    Raises :class:`MeshError` when no path exists."""
+    return _core.shortest_path(mesh._core, int(source), int(target), weights)
