@@ -1,0 +1,15 @@
+//! spherify-sphere: maps of closed genus-0 meshes onto the unit sphere.
+//!
+//! * [`predicates`]: exact orientation signs (2D orientation, the 3x3 determinant
+//!   of thesis eq. 3.9, collinearity) on which every validity decision rests.
+//!
+//! Still to come here (see DESIGN.md): the spherical methods of thesis ch. 3
+//! (radial projection, relaxation, Alexa, Gotsman), ch. 5 and ch. 6 (the
+//! theta-phi method: poles, cut path, the two Tutte-like systems of 6.27), the
+//! validity tests of 3.4 built on [`predicates`], quality measures (angle,
+//! conformal, area and stretch distortion), and point maps between surface and
+//! sphere (3.3, 6.6).
+
+pub mod predicates;
+
+pub use predicates::Sign;
