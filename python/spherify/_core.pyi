@@ -7,6 +7,8 @@ import numpy.typing as npt
 
 from ._report import MeshReport
 
+__all__ = ["CoreMesh", "__version__", "check", "check_raw", "dijkstra", "load", "orient", "save", "shortest_path"]
+
 __version__: str
 
 @final

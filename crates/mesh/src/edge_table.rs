@@ -47,36 +47,37 @@ impl EdgeTable {
         for v in 0..n_vertices {
             bucket[v + 1] += bucket[v];
         }
+        // Each entry packs (larger endpoint, corner id) into one u64, so that a
+        // plain integer sort of a bucket orders it by edge and then by corner.
         let mut fill = bucket.clone();
-        let mut sorted = vec![0u32; bucket[n_vertices] as usize];
+        let mut keys = vec![0u64; bucket[n_vertices] as usize];
         for (fi, f) in faces.iter().enumerate() {
             for k in 0..3 {
                 let (a, b) = (f[k], f[(k + 1) % 3]);
                 if a != b {
                     let slot = &mut fill[a.min(b) as usize];
-                    sorted[*slot as usize] = (3 * fi + k) as u32;
+                    keys[*slot as usize] = (u64::from(a.max(b)) << 32) | (3 * fi + k) as u64;
                     *slot += 1;
                 }
             }
         }
-        // Within each bucket, order by the larger endpoint (then corner id, which
-        // keeps the order deterministic), and cut the bucket into groups.
-        let mut group_offsets = Vec::with_capacity(sorted.len() / 2 + 1);
+        let mut group_offsets = Vec::with_capacity(keys.len() / 2 + 1);
         group_offsets.push(0u32);
-        let far_end = |c: u32| {
-            let (a, b) = corner_endpoints(faces, c);
-            a.max(b)
-        };
         for v in 0..n_vertices {
             let (lo, hi) = (bucket[v] as usize, bucket[v + 1] as usize);
-            let run = &mut sorted[lo..hi];
-            run.sort_unstable_by_key(|&c| (far_end(c), c));
+            let run = &mut keys[lo..hi];
+            if run.len() <= 16 {
+                insertion_sort(run);
+            } else {
+                run.sort_unstable();
+            }
             for i in lo + 1..=hi {
-                if i == hi || far_end(sorted[i]) != far_end(sorted[i - 1]) {
+                if i == hi || keys[i] >> 32 != keys[i - 1] >> 32 {
                     group_offsets.push(i as u32);
                 }
             }
         }
+        let sorted = keys.iter().map(|&k| k as u32).collect();
         EdgeTable { corners: sorted, group_offsets }
     }
 
@@ -89,6 +90,20 @@ impl EdgeTable {
     #[inline]
     pub fn group(&self, e: usize) -> &[u32] {
         &self.corners[self.group_offsets[e] as usize..self.group_offsets[e + 1] as usize]
+    }
+}
+
+/// Buckets hold a vertex's edges to higher-numbered neighbours: a handful, for
+/// which insertion sort beats the general sort.
+fn insertion_sort(run: &mut [u64]) {
+    for i in 1..run.len() {
+        let x = run[i];
+        let mut j = i;
+        while j > 0 && run[j - 1] > x {
+            run[j] = run[j - 1];
+            j -= 1;
+        }
+        run[j] = x;
     }
 }
 

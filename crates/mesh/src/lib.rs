@@ -6,6 +6,7 @@
 //! * [`orient`]: consistent, outward orientation (thesis Alg. 2.9, seedless).
 //! * [`io`]: OBJ, OFF, PLY and STL read and write.
 //! * [`dijkstra`]: single-source shortest paths on the vertex graph (thesis App. A).
+//! * [`predicates`]: exact orientation signs on which every validity decision rests.
 
 pub mod dijkstra;
 pub mod edge_table;
@@ -15,6 +16,7 @@ pub mod halfedge;
 pub mod io;
 pub mod mesh;
 pub mod orient;
+pub mod predicates;
 pub mod validate;
 
 pub use error::{FormatError, Location, MeshError, TopologyError, TopologyProblem};

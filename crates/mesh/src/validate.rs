@@ -9,6 +9,7 @@
 
 use crate::edge_table::{corner_endpoints, EdgeTable, NONE};
 use crate::mesh::Mesh;
+use crate::predicates::collinear3;
 
 /// How many offending indices a report lists per kind of problem.
 pub const LIST_CAP: usize = 100;
@@ -136,72 +137,32 @@ pub fn check_raw(positions: &[[f64; 3]], faces: &[[i64; 3]]) -> MeshReport {
 fn check_faces(positions: &[[f64; 3]], faces: &[[u32; 3]]) -> MeshReport {
     let n = positions.len();
     let mut r = MeshReport { n_vertices: n, n_faces: faces.len(), ..Default::default() };
-    let table = EdgeTable::new(n, faces);
+    // The passes are independent: run them on two cores.
+    let (table, elements) = rayon::join(|| EdgeTable::new(n, faces), || element_pass(positions, faces));
     r.n_edges = table.n_edges();
-
-    let mut referenced = vec![false; n];
-    for f in faces {
-        for &v in f {
-            referenced[v as usize] = true;
-        }
-    }
-    for (v, p) in positions.iter().enumerate() {
-        if !referenced[v] {
-            r.unreferenced_vertices.push(v as u32);
-        }
-        if p.iter().any(|x| !x.is_finite()) {
-            r.non_finite_vertices.push(v as u32);
-        }
-    }
-    let mut repeated_index = 0usize;
-    for (fi, &[a, b, c]) in faces.iter().enumerate() {
-        let repeats = a == b || b == c || a == c;
-        repeated_index += repeats as usize;
-        if repeats || zero_area(positions[a as usize], positions[b as usize], positions[c as usize]) {
-            r.degenerate_faces.push(fi as u32);
-        }
-    }
-
-    // Edges: boundary, non-manifold, orientation, duplicates.
-    let mut boundary_corners = Vec::new();
-    for e in 0..table.n_edges() {
-        let group = table.group(e);
-        let (a, b) = corner_endpoints(faces, group[0]);
-        let key = [a.min(b), a.max(b)];
-        match group {
-            [c] => boundary_corners.push(*c),
-            [c, d] => {
-                if corner_endpoints(faces, *c) == corner_endpoints(faces, *d) {
-                    r.inconsistent_edges.push(key);
-                }
-            }
-            _ => r.nonmanifold_edges.push(key),
-        }
-        for (i, &c) in group.iter().enumerate() {
-            let f = (c / 3) as usize;
-            let earlier = group[..i].iter().any(|&d| {
-                let g = (d / 3) as usize;
-                g < f && sorted(faces[g]) == sorted(faces[f])
-            });
-            // A face is a duplicate once, not once per shared edge: count it on
-            // the edge where the face's corner is its lowest-numbered shared one.
-            if earlier && first_edge_of_face(faces, c) {
-                r.duplicate_faces.push(f as u32);
-            }
-        }
-    }
-    r.boundary_edges = boundary_corners.len();
+    let ((edges, nonmanifold_vertices), (n_components, component_of)) = rayon::join(
+        || rayon::join(|| edge_pass(faces, &table), || count_fans(n, faces, &table)),
+        || components(n, faces, &elements.referenced),
+    );
+    r.unreferenced_vertices = elements.unreferenced;
+    r.non_finite_vertices = elements.non_finite;
+    r.degenerate_faces = elements.degenerate;
+    r.boundary_edges = edges.boundary_corners.len();
+    r.inconsistent_edges = edges.inconsistent;
+    r.nonmanifold_edges = edges.nonmanifold;
+    r.duplicate_faces = edges.duplicates;
+    r.nonmanifold_vertices = nonmanifold_vertices;
+    r.n_components = n_components;
+    r.connected = n_components == 1;
     r.closed = r.boundary_edges == 0 && r.nonmanifold_edges.is_empty();
     r.consistently_oriented = r.inconsistent_edges.is_empty() && r.nonmanifold_edges.is_empty();
-
-    count_fans(n, faces, &table, &mut r);
     r.manifold = r.nonmanifold_edges.is_empty() && r.nonmanifold_vertices.is_empty();
-    let component_of = components(n, faces, &referenced, &mut r);
-    r.boundary_loops = boundary_loops(n, faces, &boundary_corners);
+    r.boundary_loops = boundary_loops(n, faces, &edges.boundary_corners);
 
-    let n_referenced = referenced.iter().filter(|&&x| x).count() as i64;
+    let n_referenced = elements.referenced.iter().filter(|&&x| x).count() as i64;
     r.euler_characteristic = n_referenced - r.n_edges as i64 + faces.len() as i64;
     let twice_genus = 2 * r.n_components as i64 - r.boundary_loops.total as i64 - r.euler_characteristic;
+    let repeated_index = elements.repeated_index;
     if r.manifold && repeated_index == 0 && twice_genus >= 0 && twice_genus % 2 == 0 {
         r.genus = Some(twice_genus / 2);
     }
@@ -214,9 +175,92 @@ fn check_faces(positions: &[[f64; 3]], faces: &[[u32; 3]]) -> MeshReport {
         && r.euler_characteristic == 2
         && repeated_index == 0
         && r.unreferenced_vertices.is_empty();
-    r.duplicate_faces.items.sort_unstable();
     describe_problems(&mut r, repeated_index);
     r
+}
+
+/// Per-vertex and per-face findings that need no connectivity.
+struct ElementFindings {
+    referenced: Vec<bool>,
+    unreferenced: Capped<u32>,
+    non_finite: Capped<u32>,
+    degenerate: Capped<u32>,
+    repeated_index: usize,
+}
+
+fn element_pass(positions: &[[f64; 3]], faces: &[[u32; 3]]) -> ElementFindings {
+    let mut out = ElementFindings {
+        referenced: vec![false; positions.len()],
+        unreferenced: Capped::default(),
+        non_finite: Capped::default(),
+        degenerate: Capped::default(),
+        repeated_index: 0,
+    };
+    for (fi, &[a, b, c]) in faces.iter().enumerate() {
+        out.referenced[a as usize] = true;
+        out.referenced[b as usize] = true;
+        out.referenced[c as usize] = true;
+        let repeats = a == b || b == c || a == c;
+        out.repeated_index += repeats as usize;
+        if repeats || collinear3(positions[a as usize], positions[b as usize], positions[c as usize]) {
+            out.degenerate.push(fi as u32);
+        }
+    }
+    for (v, p) in positions.iter().enumerate() {
+        if !out.referenced[v] {
+            out.unreferenced.push(v as u32);
+        }
+        if p.iter().any(|x| !x.is_finite()) {
+            out.non_finite.push(v as u32);
+        }
+    }
+    out
+}
+
+/// What the edge groups say: boundary, non-manifold and inconsistent edges,
+/// and duplicate faces (which share all three edges with their twin).
+struct EdgeFindings {
+    boundary_corners: Vec<u32>,
+    inconsistent: Capped<[u32; 2]>,
+    nonmanifold: Capped<[u32; 2]>,
+    duplicates: Capped<u32>,
+}
+
+fn edge_pass(faces: &[[u32; 3]], table: &EdgeTable) -> EdgeFindings {
+    let mut out = EdgeFindings {
+        boundary_corners: Vec::new(),
+        inconsistent: Capped::default(),
+        nonmanifold: Capped::default(),
+        duplicates: Capped::default(),
+    };
+    for e in 0..table.n_edges() {
+        let group = table.group(e);
+        let (a, b) = corner_endpoints(faces, group[0]);
+        let key = [a.min(b), a.max(b)];
+        match group {
+            [c] => out.boundary_corners.push(*c),
+            [c, d] => {
+                if corner_endpoints(faces, *c) == corner_endpoints(faces, *d) {
+                    out.inconsistent.push(key);
+                }
+            }
+            _ => out.nonmanifold.push(key),
+        }
+        for (i, &c) in group.iter().enumerate() {
+            let f = (c / 3) as usize;
+            let earlier = group[..i].iter().any(|&d| {
+                let g = (d / 3) as usize;
+                g < f && sorted(faces[g]) == sorted(faces[f])
+            });
+            // A face is a duplicate once, not once per shared edge: count it on
+            // the edge where the face's corner is its lowest-numbered shared one.
+            if earlier && first_edge_of_face(faces, c) {
+                out.duplicates.push(f as u32);
+            }
+        }
+    }
+    out.duplicates.items.sort_unstable();
+    out
 }
 
 fn sorted(mut f: [u32; 3]) -> [u32; 3] {
@@ -236,23 +280,10 @@ fn first_edge_of_face(faces: &[[u32; 3]], c: u32) -> bool {
     (0..3).filter(|&k| f[k] != f[(k + 1) % 3]).all(|k| key(k) >= mine)
 }
 
-/// Exactly zero area: the three points are collinear, decided with exact
-/// predicates on the three coordinate-plane projections.
-fn zero_area(a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> bool {
-    let orient = |i: usize, j: usize| {
-        robust::orient2d(
-            robust::Coord { x: a[i], y: a[j] },
-            robust::Coord { x: b[i], y: b[j] },
-            robust::Coord { x: c[i], y: c[j] },
-        )
-    };
-    orient(0, 1) == 0.0 && orient(1, 2) == 0.0 && orient(2, 0) == 0.0
-}
-
 /// Non-manifold vertices: the faces around a vertex form fans, joined across every
 /// edge they share; more than one fan means two surface sheets touch at the vertex
 /// (thesis 2.3, condition (b)). Union-find on corners.
-fn count_fans(n: usize, faces: &[[u32; 3]], table: &EdgeTable, r: &mut MeshReport) {
+fn count_fans(n: usize, faces: &[[u32; 3]], table: &EdgeTable) -> Capped<u32> {
     // Corner slot 3f+k stands for face f at vertex faces[f][k].
     let mut parent: Vec<u32> = (0..faces.len() as u32 * 3).collect();
     let mut fans = vec![0i64; n];
@@ -283,11 +314,13 @@ fn count_fans(n: usize, faces: &[[u32; 3]], table: &EdgeTable, r: &mut MeshRepor
             }
         }
     }
+    let mut nonmanifold = Capped::default();
     for (v, &count) in fans.iter().enumerate() {
         if count > 1 {
-            r.nonmanifold_vertices.push(v as u32);
+            nonmanifold.push(v as u32);
         }
     }
+    nonmanifold
 }
 
 fn find(parent: &mut [u32], mut x: u32) -> u32 {
@@ -311,8 +344,9 @@ fn union(parent: &mut [u32], a: u32, b: u32) -> bool {
     true
 }
 
-/// Connected components of the referenced vertices; returns each face's component.
-fn components(n: usize, faces: &[[u32; 3]], referenced: &[bool], r: &mut MeshReport) -> Vec<u32> {
+/// Connected components of the referenced vertices: their number and each
+/// face's component.
+fn components(n: usize, faces: &[[u32; 3]], referenced: &[bool]) -> (usize, Vec<u32>) {
     let mut parent: Vec<u32> = (0..n as u32).collect();
     for &[a, b, c] in faces {
         union(&mut parent, a, b);
@@ -329,9 +363,8 @@ fn components(n: usize, faces: &[[u32; 3]], referenced: &[bool], r: &mut MeshRep
             }
         }
     }
-    r.n_components = count as usize;
-    r.connected = count == 1;
-    faces.iter().map(|f| label[find(&mut parent, f[0]) as usize]).collect()
+    let component_of = faces.iter().map(|f| label[find(&mut parent, f[0]) as usize]).collect();
+    (count as usize, component_of)
 }
 
 /// Boundary loops: chains of one-face edges, followed in their face's direction.

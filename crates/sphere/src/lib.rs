@@ -1,7 +1,9 @@
 //! spherify-sphere: maps of closed genus-0 meshes onto the unit sphere.
 //!
 //! * [`predicates`]: exact orientation signs (2D orientation, the 3x3 determinant
-//!   of thesis eq. 3.9, collinearity) on which every validity decision rests.
+//!   of thesis eq. 3.9, collinearity), re-exported from `spherify-mesh`, where they
+//!   live because mesh validation and the 2D Tutte check in `spherify-sparse` need
+//!   them too.
 //!
 //! Still to come here (see DESIGN.md): the spherical methods of thesis ch. 3
 //! (radial projection, relaxation, Alexa, Gotsman), ch. 5 and ch. 6 (the
@@ -10,6 +12,5 @@
 //! conformal, area and stretch distortion), and point maps between surface and
 //! sphere (3.3, 6.6).
 
-pub mod predicates;
-
-pub use predicates::Sign;
+pub use spherify_mesh::predicates;
+pub use spherify_mesh::predicates::Sign;
