@@ -5,6 +5,9 @@
 //!   live because mesh validation and the 2D Tutte check in `spherify-sparse` need
 //!   them too.
 //!
+//! * [`validity`]: the orientation and area tests of thesis 3.4 that decide
+//!   whether points on the sphere form a GC-embedding.
+//!
 //! Still to come here (see DESIGN.md): the spherical methods of thesis ch. 3
 //! (radial projection, relaxation, Alexa, Gotsman), ch. 5 and ch. 6 (the
 //! theta-phi method: poles, cut path, the two Tutte-like systems of 6.27), the
@@ -12,5 +15,8 @@
 //! conformal, area and stretch distortion), and point maps between surface and
 //! sphere (3.3, 6.6).
 
+pub mod validity;
+
 pub use spherify_mesh::predicates;
 pub use spherify_mesh::predicates::Sign;
+pub use validity::{check_sphere, SphereReport};

@@ -1,0 +1,170 @@
+//! Validity of a GC-drawing on the sphere (thesis 3.4).
+//!
+//! The orientation test (3.9) evaluates sign det[v_i, v_j, v_k] for every face
+//! with an exact predicate: positive means counter-clockwise seen from outside.
+//! The sign does not change when a point is scaled by a positive factor, so the
+//! test speaks about the normalised points even when the input is a little off
+//! the unit sphere. The area test (3.11) sums signed spherical triangle areas,
+//! E = 2 atan2(det[a, b, c], 1 + a.b + b.c + c.a) (Van Oosterom and Strackee
+//! 1983), which stays accurate for tiny and for large triangles. When every face
+//! is positively oriented the drawing covers the sphere a whole number k of
+//! times and the sum is 4 pi k; k = 1 together with the orientation test proves
+//! a GC-embedding. The sum only has to be accurate to within 2 pi to decide k.
+
+use rayon::prelude::*;
+use spherify_mesh::predicates::{det3_sign, Sign};
+
+/// What [`check_sphere`] finds.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SphereReport {
+    /// Every face positively oriented, the areas sum to 4 pi (covering degree 1),
+    /// and every point finite and away from the origin.
+    pub valid: bool,
+    pub n_positive: usize,
+    pub n_negative: usize,
+    pub n_zero: usize,
+    /// Faces with det <= 0 (upside down or collapsed), in increasing order.
+    pub flipped_faces: Vec<u32>,
+    /// Sum of signed spherical triangle areas of the normalised points.
+    pub area_sum: f64,
+    /// |area_sum - 4 pi|.
+    pub area_error: f64,
+    /// How many times the drawing covers the sphere: round(area_sum / 4 pi).
+    pub covering_degree: i64,
+    /// Largest | |p| - 1 | over the points.
+    pub max_norm_error: f64,
+    /// Points that are NaN, infinite or at the origin (no direction).
+    pub bad_points: Vec<u32>,
+}
+
+/// Runs the orientation and area tests. `faces` index into `points`, which must
+/// have one entry per vertex (the caller checks lengths). O(F), in parallel.
+pub fn check_sphere(faces: &[[u32; 3]], points: &[[f64; 3]]) -> SphereReport {
+    let bad_points: Vec<u32> = points
+        .iter()
+        .enumerate()
+        .filter(|(_, p)| !p.iter().all(|x| x.is_finite()) || p == &&[0.0; 3])
+        .map(|(v, _)| v as u32)
+        .collect();
+    let max_norm_error = points
+        .par_iter()
+        .map(|p| (norm(*p) - 1.0).abs())
+        .reduce(|| 0.0, |a: f64, b: f64| if b.is_nan() || b > a { b } else { a });
+    let unit: Vec<[f64; 3]> = points.par_iter().map(|&p| scale(p, 1.0 / norm(p))).collect();
+    let (signs, areas): (Vec<Sign>, Vec<f64>) = faces
+        .par_iter()
+        .map(|&[a, b, c]| {
+            let (pa, pb, pc) = (points[a as usize], points[b as usize], points[c as usize]);
+            let (ua, ub, uc) = (unit[a as usize], unit[b as usize], unit[c as usize]);
+            (det3_sign(pa, pb, pc), signed_area(ua, ub, uc))
+        })
+        .unzip();
+    let mut report = SphereReport {
+        valid: false,
+        n_positive: 0,
+        n_negative: 0,
+        n_zero: 0,
+        flipped_faces: Vec::new(),
+        area_sum: areas.iter().sum(),
+        area_error: 0.0,
+        covering_degree: 0,
+        max_norm_error,
+        bad_points,
+    };
+    for (f, sign) in signs.iter().enumerate() {
+        match sign {
+            Sign::Positive => report.n_positive += 1,
+            Sign::Negative => report.n_negative += 1,
+            Sign::Zero => report.n_zero += 1,
+        }
+        if *sign != Sign::Positive {
+            report.flipped_faces.push(f as u32);
+        }
+    }
+    let full = 4.0 * std::f64::consts::PI;
+    report.area_error = (report.area_sum - full).abs();
+    report.covering_degree = if report.area_sum.is_finite() { (report.area_sum / full).round() as i64 } else { 0 };
+    report.valid = report.flipped_faces.is_empty() && report.bad_points.is_empty() && report.covering_degree == 1;
+    report
+}
+
+/// Signed area of the spherical triangle of unit vectors a, b, c: positive when
+/// counter-clockwise seen from outside.
+pub fn signed_area(a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> f64 {
+    let det = dot(cross(a, b), c);
+    2.0 * det.atan2(1.0 + dot(a, b) + dot(b, c) + dot(c, a))
+}
+
+fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+}
+
+fn norm(a: [f64; 3]) -> f64 {
+    dot(a, a).sqrt()
+}
+
+fn scale(a: [f64; 3], s: f64) -> [f64; 3] {
+    [a[0] * s, a[1] * s, a[2] * s]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn octahedron() -> (Vec<[f64; 3]>, Vec<[u32; 3]>) {
+        let p = vec![
+            [1.0, 0.0, 0.0],
+            [-1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, -1.0, 0.0],
+            [0.0, 0.0, 1.0],
+            [0.0, 0.0, -1.0],
+        ];
+        let f = vec![[0, 2, 4], [2, 1, 4], [1, 3, 4], [3, 0, 4], [2, 0, 5], [1, 2, 5], [3, 1, 5], [0, 3, 5]];
+        (p, f)
+    }
+
+    #[test]
+    fn octahedron_is_a_valid_embedding() {
+        let (p, f) = octahedron();
+        let r = check_sphere(&f, &p);
+        assert!(r.valid, "{r:?}");
+        assert_eq!((r.n_positive, r.n_negative, r.n_zero), (8, 0, 0));
+        assert!(r.area_error < 1e-12);
+        // Each octant has area 4 pi / 8.
+        assert!((signed_area(p[0], p[2], p[4]) - std::f64::consts::FRAC_PI_2).abs() < 1e-15);
+    }
+
+    #[test]
+    fn swapped_vertices_and_inward_faces_are_caught() {
+        let (mut p, f) = octahedron();
+        p.swap(0, 2);
+        let r = check_sphere(&f, &p);
+        assert!(!r.valid && r.n_negative > 0);
+        let (p, f) = octahedron();
+        let inward: Vec<[u32; 3]> = f.iter().map(|&[a, b, c]| [a, c, b]).collect();
+        let r = check_sphere(&inward, &p);
+        assert_eq!((r.n_negative, r.covering_degree), (8, -1));
+        assert!(!r.valid);
+    }
+
+    #[test]
+    fn scaling_points_keeps_the_verdict_and_collapse_is_zero() {
+        let (p, f) = octahedron();
+        let scaled: Vec<[f64; 3]> = p.iter().enumerate().map(|(i, &q)| scale(q, 1.0 + i as f64)).collect();
+        let r = check_sphere(&f, &scaled);
+        assert!(r.valid && r.max_norm_error > 1.0);
+        let mut collapsed = p.clone();
+        collapsed[4] = collapsed[0];
+        let r = check_sphere(&f, &collapsed);
+        assert!(!r.valid && r.n_zero > 0);
+        let mut nan = p;
+        nan[3][1] = f64::NAN;
+        let r = check_sphere(&f, &nan);
+        assert!(!r.valid && r.bad_points == vec![3]);
+    }
+}
