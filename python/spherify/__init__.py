@@ -8,8 +8,8 @@ from __future__ import annotations
 from . import datasets
 from ._core import __version__
 from ._errors import ConvergenceError, FormatError, MeshError, SpherifyError, TopologyError
-from ._mesh import Mesh, check, dijkstra, load, orient, save, shortest_path
-from ._report import MeshReport
+from ._mesh import Mesh, check, check_sphere, dijkstra, load, orient, save, shortest_path
+from ._report import MeshReport, SphereReport
 
 __all__ = [
     "ConvergenceError",
@@ -17,10 +17,12 @@ __all__ = [
     "Mesh",
     "MeshError",
     "MeshReport",
+    "SphereReport",
     "SpherifyError",
     "TopologyError",
     "__version__",
     "check",
+    "check_sphere",
     "datasets",
     "dijkstra",
     "load",

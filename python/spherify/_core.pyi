@@ -5,9 +5,9 @@ from typing import Any, Dict, List, Optional, Tuple, final
 import numpy as np
 import numpy.typing as npt
 
-from ._report import MeshReport
+from ._report import MeshReport, SphereReport
 
-__all__ = ["CoreMesh", "__version__", "check", "check_raw", "dijkstra", "load", "orient", "save", "shortest_path"]
+__all__ = ["CoreMesh", "__version__", "check", "check_raw", "check_sphere", "dijkstra", "load", "orient", "save", "shortest_path"]
 
 __version__: str
 
@@ -32,6 +32,7 @@ def save(
 ) -> None: ...
 def check(mesh: CoreMesh) -> MeshReport: ...
 def check_raw(vertices: npt.NDArray[np.float64], faces: npt.NDArray[np.int64]) -> MeshReport: ...
+def check_sphere(mesh: CoreMesh, points: npt.NDArray[np.float64]) -> SphereReport: ...
 def orient(mesh: CoreMesh) -> Tuple[CoreMesh, Dict[str, int]]: ...
 def dijkstra(
     mesh: CoreMesh, source: int, weights: str = "length"

@@ -10,7 +10,7 @@ import numpy as np
 
 from . import _core
 from ._errors import MeshError
-from ._report import MeshReport
+from ._report import MeshReport, SphereReport
 
 PathLike = Union[str, "os.PathLike[str]"]
 
@@ -231,3 +231,23 @@ def shortest_path(mesh: Mesh, source: int, target: int, *, weights: str = "lengt
     ``source`` to ``target``; stops as soon as ``target`` is settled.
     Raises :class:`MeshError` when no path exists."""
     return _core.shortest_path(mesh._core, int(source), int(target), weights)
+
+
+def check_sphere(mesh: Mesh, points: Any) -> SphereReport:
+    """Decide whether ``points`` on the sphere form a valid GC-embedding of ``mesh``.
+
+    Parameters
+    ----------
+    mesh : Mesh
+        Consistently oriented, counter-clockwise seen from outside (run
+        :func:`orient` first).
+    points : (n, 3) array_like of float
+        One point per vertex, on (or near) the unit sphere centred at the origin.
+
+    Returns
+    -------
+    SphereReport
+        The orientation test (thesis 3.9) with an exact sign per face and the
+        area test (3.11) with signed spherical excess. O(m), in parallel.
+    """
+    return _core.check_sphere(mesh._core, _as_vertices(points, "points"))

@@ -5,6 +5,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import List, Optional, Tuple
 
+import numpy as np
+
 
 @dataclass(frozen=True)
 class MeshReport:
@@ -110,3 +112,48 @@ class MeshReport:
         lines += [f"  problem: {p}" for p in self.problems]
         lines += [f"  note: {n}" for n in self.notes]
         return "\n".join(lines)
+
+
+@dataclass(frozen=True)
+class SphereReport:
+    """Validity of points on the sphere as a GC-embedding (thesis 3.4).
+
+    Attributes
+    ----------
+    valid : bool
+        Every face positively oriented under the exact predicate, the signed
+        spherical areas sum to 4 pi (the drawing covers the sphere once), and
+        every point is finite and away from the origin. Together these prove
+        that the points with minor-arc edges form a GC-embedding: a bijection.
+    n_positive, n_negative, n_zero : int
+        Faces by the exact sign of det[v_i, v_j, v_k] (thesis eq. 3.9).
+    flipped_faces : (k,) int64
+        Faces with det <= 0: upside down or collapsed.
+    area_sum : float
+        Sum of signed spherical triangle areas of the normalised points (3.11).
+    area_error : float
+        |area_sum - 4 pi|.
+    covering_degree : int
+        round(area_sum / 4 pi): how many times the drawing wraps the sphere.
+    max_norm_error : float
+        Largest | |p| - 1 |; the orientation test does not depend on it.
+    bad_points : list of int
+        Points that are NaN, infinite or zero.
+    """
+
+    valid: bool
+    n_positive: int
+    n_negative: int
+    n_zero: int
+    flipped_faces: np.ndarray
+    area_sum: float
+    area_error: float
+    covering_degree: int
+    max_norm_error: float
+    bad_points: List[int] = field(default_factory=list)
+
+    def __str__(self) -> str:
+        verdict = "valid GC-embedding" if self.valid else "NOT a valid embedding"
+        return (f"SphereReport: {verdict}; faces +{self.n_positive} -{self.n_negative} "
+                f"0:{self.n_zero}; area sum {self.area_sum:.12g} (error {self.area_error:.3g}, "
+                f"covers {self.covering_degree}x); max | |p| - 1 | = {self.max_norm_error:.3g}")

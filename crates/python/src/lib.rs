@@ -9,6 +9,7 @@ mod errors;
 mod graph;
 mod io;
 mod mesh;
+mod sphere;
 mod validate;
 
 #[pymodule]
@@ -19,6 +20,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(validate::check, m)?)?;
     m.add_function(wrap_pyfunction!(validate::check_raw, m)?)?;
     m.add_function(wrap_pyfunction!(validate::orient, m)?)?;
+    m.add_function(wrap_pyfunction!(sphere::check_sphere, m)?)?;
     m.add_function(wrap_pyfunction!(graph::dijkstra, m)?)?;
     m.add_function(wrap_pyfunction!(graph::shortest_path, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
