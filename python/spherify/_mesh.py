@@ -108,6 +108,19 @@ class Mesh:
         return f"Mesh(n_vertices={self.n_vertices}, n_faces={self.n_faces})"
 
 
+MeshLike = Union[Mesh, Tuple[Any, Any]]
+
+
+def as_mesh(mesh: Any) -> Mesh:
+    """``mesh`` itself when it is a :class:`Mesh`; ``Mesh(V, F)`` for a
+    ``(V, F)`` pair; :class:`MeshError` for anything else."""
+    if isinstance(mesh, Mesh):
+        return mesh
+    if isinstance(mesh, tuple) and len(mesh) == 2:
+        return Mesh(*mesh)
+    raise MeshError(f"expected a spherify.Mesh or a (vertices, faces) pair, got {type(mesh).__name__}")
+
+
 def load(path: PathLike) -> Mesh:
     """Read a triangle mesh from ``.obj``, ``.off``, ``.ply`` (ascii or binary)
     or ``.stl`` (ascii or binary), chosen by extension.
@@ -128,7 +141,7 @@ def load(path: PathLike) -> Mesh:
     return Mesh._from_core(core, notes, attributes)
 
 
-def save(mesh: Mesh, path: PathLike, *, sphere: Any = None, uv: Any = None,
+def save(mesh: MeshLike, path: PathLike, *, sphere: Any = None, uv: Any = None,
          ply_encoding: str = "binary_little_endian", stl_binary: bool = True) -> None:
     """Write ``mesh`` to ``path`` (format by extension).
 
@@ -147,10 +160,10 @@ def save(mesh: Mesh, path: PathLike, *, sphere: Any = None, uv: Any = None,
     """
     sphere_array = None if sphere is None else _as_vertices(sphere, "sphere")
     uv_array = None if uv is None else _as_vertices(uv, "uv")
-    _core.save(mesh._core, os.fspath(path), sphere_array, uv_array, ply_encoding, stl_binary)
+    _core.save(as_mesh(mesh)._core, os.fspath(path), sphere_array, uv_array, ply_encoding, stl_binary)
 
 
-def check(mesh: Union[Mesh, Tuple[Any, Any]]) -> MeshReport:
+def check(mesh: MeshLike) -> MeshReport:
     """Validate a mesh and report every problem found.
 
     Parameters
@@ -180,7 +193,7 @@ def check(mesh: Union[Mesh, Tuple[Any, Any]]) -> MeshReport:
     return report
 
 
-def orient(mesh: Mesh, *, return_info: bool = False) -> Any:
+def orient(mesh: MeshLike, *, return_info: bool = False) -> Any:
     """Orient every face consistently and outward (thesis Alg. 2.9).
 
     Unlike Alg. 2.9 no seed face is needed: each connected component is made
@@ -201,12 +214,13 @@ def orient(mesh: Mesh, *, return_info: bool = False) -> Any:
         An edge has more than two faces, a face repeats a vertex, or the surface
         is not orientable; ``err.report`` is the full :class:`MeshReport`.
     """
+    mesh = as_mesh(mesh)
     core, info = _core.orient(mesh._core)
     oriented = Mesh._from_core(core, mesh.notes, mesh.attributes)
     return (oriented, info) if return_info else oriented
 
 
-def dijkstra(mesh: Mesh, source: int, *, weights: str = "length") -> Tuple[np.ndarray, np.ndarray]:
+def dijkstra(mesh: MeshLike, source: int, *, weights: str = "length") -> Tuple[np.ndarray, np.ndarray]:
     """Shortest-path distances from ``source`` along mesh edges (thesis App. A).
 
     Parameters
@@ -223,17 +237,17 @@ def dijkstra(mesh: Mesh, source: int, *, weights: str = "length") -> Tuple[np.nd
 
     Binary-heap Dijkstra, O((n + e) log n), deterministic tie-breaking.
     """
-    return _core.dijkstra(mesh._core, int(source), weights)
+    return _core.dijkstra(as_mesh(mesh)._core, int(source), weights)
 
 
-def shortest_path(mesh: Mesh, source: int, target: int, *, weights: str = "length") -> Tuple[float, np.ndarray]:
+def shortest_path(mesh: MeshLike, source: int, target: int, *, weights: str = "length") -> Tuple[float, np.ndarray]:
     """Length and vertex sequence ``(k,) int64`` of a shortest path from
     ``source`` to ``target``; stops as soon as ``target`` is settled.
     Raises :class:`MeshError` when no path exists."""
-    return _core.shortest_path(mesh._core, int(source), int(target), weights)
+    return _core.shortest_path(as_mesh(mesh)._core, int(source), int(target), weights)
 
 
-def check_sphere(mesh: Mesh, points: Any) -> SphereReport:
+def check_sphere(mesh: MeshLike, points: Any) -> SphereReport:
     """Decide whether ``points`` on the sphere form a valid GC-embedding of ``mesh``.
 
     Parameters
@@ -250,4 +264,4 @@ def check_sphere(mesh: Mesh, points: Any) -> SphereReport:
         The orientation test (thesis 3.9) with an exact sign per face and the
         area test (3.11) with signed spherical excess. O(m), in parallel.
     """
-    return _core.check_sphere(mesh._core, _as_vertices(points, "points"))
+    return _core.check_sphere(as_mesh(mesh)._core, _as_vertices(points, "points"))

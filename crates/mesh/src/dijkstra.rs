@@ -36,8 +36,15 @@ impl EdgeWeights<'_> {
             EdgeWeights::Uniform => 1.0,
             EdgeWeights::Length(p) => {
                 let (a, b) = (p[u], p[z]);
+                // Scaled by the largest component so that squaring neither
+                // overflows (coordinates near 1e154) nor underflows.
                 let d = [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
-                (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt()
+                let m = d.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+                if m == 0.0 || !m.is_finite() {
+                    return m;
+                }
+                let s = [d[0] / m, d[1] / m, d[2] / m];
+                m * (s[0] * s[0] + s[1] * s[1] + s[2] * s[2]).sqrt()
             }
         }
     }
@@ -218,6 +225,16 @@ fn search(
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn huge_edges_keep_their_length() {
+        let p = [[0.0, 0.0, 0.0], [1e155, 0.0, 0.0], [0.0, 3e200, 4e200]];
+        let w = super::EdgeWeights::Length(&p);
+        assert_eq!(w.weight(0, 1), 1e155);
+        assert!((w.weight(0, 2) / 5e200 - 1.0).abs() < 1e-15);
+        let tiny = [[0.0, 0.0, 0.0], [3e-200, 4e-200, 0.0]];
+        assert!((super::EdgeWeights::Length(&tiny).weight(0, 1) / 5e-200 - 1.0).abs() < 1e-15);
+    }
+
     use super::*;
 
     /// An undirected graph from an edge list; neighbours sorted.

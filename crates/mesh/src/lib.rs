@@ -18,6 +18,7 @@ pub mod mesh;
 pub mod orient;
 pub mod predicates;
 pub mod validate;
+mod volume;
 
 pub use error::{FormatError, Location, MeshError, TopologyError, TopologyProblem};
 pub use graph::Adjacency;

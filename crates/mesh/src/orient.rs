@@ -11,6 +11,7 @@ use crate::edge_table::{corner_endpoints, EdgeTable, NONE};
 use crate::error::{TopologyError, TopologyProblem};
 use crate::mesh::Mesh;
 use crate::validate;
+use crate::volume::component_volumes;
 
 /// What [`orient`] changed.
 #[derive(Debug, Clone, PartialEq)]
@@ -94,19 +95,13 @@ pub fn orient(mesh: &Mesh) -> Result<(Mesh, OrientInfo), TopologyError> {
         n_components += 1;
     }
 
-    // Turn inward-facing closed components outward: signed volume by the
-    // divergence theorem, measured from the bounding-box centre.
-    let positions = mesh.positions();
-    let centre = bbox_centre(positions);
-    let mut volume = vec![0.0f64; n_components as usize];
+    // Turn inward-facing closed components outward (signed volume < 0).
+    let volume = component_volumes(mesh.positions(), faces, &component, n_components as usize, Some(&flip));
     let mut closed = vec![true; n_components as usize];
-    for (f, &[a, b, c]) in faces.iter().enumerate() {
-        let comp = component[f] as usize;
-        closed[comp] &= closed_face[f];
-        let d = det_about(positions[a as usize], positions[b as usize], positions[c as usize], centre);
-        volume[comp] += if flip[f] { -d } else { d };
+    for (f, &c) in component.iter().enumerate() {
+        closed[c as usize] &= closed_face[f];
     }
-    let turn: Vec<bool> = volume.iter().zip(&closed).map(|(&v, &c)| c && v < 0.0).collect();
+    let turn: Vec<bool> = volume.normalized.iter().zip(&closed).map(|(&v, &c)| c && v < 0.0).collect();
     for (f, fl) in flip.iter_mut().enumerate() {
         *fl ^= turn[component[f] as usize];
     }
@@ -116,28 +111,6 @@ pub fn orient(mesh: &Mesh) -> Result<(Mesh, OrientInfo), TopologyError> {
         components_turned_outward: turn.iter().filter(|&&x| x).count(),
     };
     Ok((mesh.with_flipped_faces(&flip), info))
-}
-
-fn bbox_centre(positions: &[[f64; 3]]) -> [f64; 3] {
-    let mut lo = [f64::INFINITY; 3];
-    let mut hi = [f64::NEG_INFINITY; 3];
-    for p in positions {
-        for i in 0..3 {
-            lo[i] = lo[i].min(p[i]);
-            hi[i] = hi[i].max(p[i]);
-        }
-    }
-    [0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1]), 0.5 * (lo[2] + hi[2])]
-}
-
-/// det[a - o, b - o, c - o]: six times the signed volume of the tetrahedron (o, a, b, c).
-fn det_about(a: [f64; 3], b: [f64; 3], c: [f64; 3], o: [f64; 3]) -> f64 {
-    let (a, b, c) = (sub(a, o), sub(b, o), sub(c, o));
-    a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) + a[2] * (b[0] * c[1] - b[1] * c[0])
-}
-
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
 }
 
 #[cfg(test)]
@@ -172,6 +145,20 @@ mod tests {
             assert_eq!(info.flipped_faces, mask.count_ones() as usize);
             let report = validate::check(&fixed);
             assert!(report.consistently_oriented && report.outward);
+        }
+    }
+
+    #[test]
+    fn tiny_and_huge_meshes_turn_outward() {
+        for scale in [1e-120, 1e103] {
+            let p: Vec<[f64; 3]> = [[1.0, 0.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, 1.0], [0.0, 0.0, -1.0]]
+                .iter()
+                .map(|q| q.map(|x| x * scale))
+                .collect();
+            let inward: Vec<[u32; 3]> = OCTA.iter().map(|&[a, b, c]| [a, c, b]).collect();
+            let (fixed, info) = orient(&Mesh::new(p, inward).unwrap()).unwrap();
+            assert_eq!(info.components_turned_outward, 1, "scale {scale}");
+            assert!(validate::check(&fixed).outward, "scale {scale}");
         }
     }
 }

@@ -10,6 +10,7 @@
 use crate::edge_table::{corner_endpoints, EdgeTable, NONE};
 use crate::mesh::Mesh;
 use crate::predicates::collinear3;
+use crate::volume::component_volumes;
 
 /// How many offending indices a report lists per kind of problem.
 pub const LIST_CAP: usize = 100;
@@ -166,9 +167,9 @@ fn check_faces(positions: &[[f64; 3]], faces: &[[u32; 3]]) -> MeshReport {
     if r.manifold && repeated_index == 0 && twice_genus >= 0 && twice_genus % 2 == 0 {
         r.genus = Some(twice_genus / 2);
     }
-    let volumes = component_volumes(positions, faces, &component_of, r.n_components);
-    r.signed_volume = volumes.iter().sum();
-    r.outward = r.closed && r.consistently_oriented && volumes.iter().all(|&v| v > 0.0);
+    let volumes = component_volumes(positions, faces, &component_of, r.n_components, None);
+    r.signed_volume = volumes.total();
+    r.outward = r.closed && r.consistently_oriented && volumes.normalized.iter().all(|&v| v > 0.0);
     r.is_sphere_topology = r.closed
         && r.manifold
         && r.n_components == 1
@@ -407,34 +408,6 @@ fn boundary_loops(n: usize, faces: &[[u32; 3]], boundary_corners: &[u32]) -> Cap
         }
     }
     loops
-}
-
-/// Signed volume enclosed by each component (divergence theorem), measured from
-/// the centre of the bounding box to keep the sums small.
-fn component_volumes(positions: &[[f64; 3]], faces: &[[u32; 3]], component_of: &[u32], n: usize) -> Vec<f64> {
-    let mut lo = [f64::INFINITY; 3];
-    let mut hi = [f64::NEG_INFINITY; 3];
-    for p in positions.iter().filter(|p| p.iter().all(|x| x.is_finite())) {
-        for i in 0..3 {
-            lo[i] = lo[i].min(p[i]);
-            hi[i] = hi[i].max(p[i]);
-        }
-    }
-    let o = [0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1]), 0.5 * (lo[2] + hi[2])];
-    let mut volumes = vec![0.0; n];
-    for (f, &[a, b, c]) in faces.iter().enumerate() {
-        let p = |v: u32| {
-            let q = positions[v as usize];
-            [q[0] - o[0], q[1] - o[1], q[2] - o[2]]
-        };
-        let (a, b, c) = (p(a), p(b), p(c));
-        let det = a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0])
-            + a[2] * (b[0] * c[1] - b[1] * c[0]);
-        if let Some(v) = volumes.get_mut(component_of[f] as usize) {
-            *v += det / 6.0;
-        }
-    }
-    volumes
 }
 
 /// "1 face" / "3 faces", "1 vertex" / "2 vertices".

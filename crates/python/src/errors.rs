@@ -3,7 +3,9 @@
 //! the matching builtin (`ValueError`, `RuntimeError`).
 
 use pyo3::call::PyCallArgs;
-use pyo3::exceptions::{PyFileNotFoundError, PyOSError, PyPermissionError};
+use pyo3::exceptions::{
+    PyFileExistsError, PyFileNotFoundError, PyIsADirectoryError, PyNotADirectoryError, PyOSError, PyPermissionError,
+};
 use pyo3::prelude::*;
 use spherify_mesh::{Location, MeshError};
 
@@ -39,6 +41,9 @@ pub fn to_py(py: Python<'_>, err: MeshError) -> PyErr {
             match source.kind() {
                 std::io::ErrorKind::NotFound => PyFileNotFoundError::new_err(message),
                 std::io::ErrorKind::PermissionDenied => PyPermissionError::new_err(message),
+                std::io::ErrorKind::AlreadyExists => PyFileExistsError::new_err(message),
+                std::io::ErrorKind::IsADirectory => PyIsADirectoryError::new_err(message),
+                std::io::ErrorKind::NotADirectory => PyNotADirectoryError::new_err(message),
                 _ => PyOSError::new_err(message),
             }
         }

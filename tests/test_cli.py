@@ -1,0 +1,133 @@
+"""The ``spherify`` command line through ``spherify.cli.main(argv)``: exit status
+0 for a valid (or orient-repairable) genus-0 mesh, 1 for problems orient cannot
+repair, 2 for unreadable input or bad arguments."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import spherify as sp
+
+cli = pytest.importorskip("spherify.cli")
+if not hasattr(sp.datasets, "names"):  # pragma: no cover - while datasets.py is being written
+    pytest.skip("spherify.datasets.names() is missing; the CLI parser needs it", allow_module_level=True)
+
+V = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])
+F = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]], dtype=np.int64)
+
+
+def write(tmp_path: Path, name: str, faces: np.ndarray, vertices: np.ndarray = V) -> Path:
+    path = tmp_path / name
+    sp.save(sp.Mesh(vertices, faces), path)
+    return path
+
+
+def test_check_dataset_is_valid(capsys: pytest.CaptureFixture[str]) -> None:
+    assert cli.main(["check", "--dataset", "icosphere", "--n-vertices", "200"]) == 0
+    out = capsys.readouterr().out
+    mesh = sp.datasets.make("icosphere", 200)
+    assert "MeshReport" in out
+    assert f"{mesh.n_vertices} vertices" in out and f"{mesh.n_faces} faces" in out
+
+
+@pytest.mark.parametrize("ext", ["obj", "ply"])
+def test_check_valid_file(tmp_path: Path, capsys: pytest.CaptureFixture[str], ext: str) -> None:
+    path = write(tmp_path, f"tetra.{ext}", F)
+    assert cli.main(["check", str(path)]) == 0
+    out = capsys.readouterr().out
+    assert str(path) in out and "problem" not in out
+
+
+def test_check_file_with_a_hole_fails(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    path = write(tmp_path, "open.obj", F[1:])
+    assert cli.main(["check", str(path)]) == 1
+    out = capsys.readouterr().out
+    report = sp.check(sp.load(path))
+    for problem in report.problems:  # every problem the report finds is printed
+        assert problem in out
+
+
+def test_check_inward_file_is_repaired_by_orient(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    path = write(tmp_path, "inward.off", F[:, ::-1])
+    before = path.read_bytes()
+    assert cli.main(["check", str(path)]) == 0
+    out = capsys.readouterr().out
+    assert "orient" in out and "4 faces" in out
+    assert path.read_bytes() == before  # check only reports; it never writes
+    assert [p.name for p in tmp_path.iterdir()] == ["inward.off"]
+
+
+def test_check_nonmanifold_file_fails(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    # Two tetrahedra glued along edge (0, 1): 4 faces on one edge.
+    V2 = np.vstack([V, [[0.0, -1.0, 0.0], [0.0, 0.0, -1.0]]])
+    F2 = np.vstack([F, [[0, 1, 4], [0, 5, 1], [0, 4, 5], [1, 5, 4]]])
+    path = write(tmp_path, "glued.obj", F2, V2)
+    assert cli.main(["check", str(path)]) == 1
+    assert "non-manifold" in capsys.readouterr().out
+
+
+def test_check_missing_file_is_status_2(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    missing = tmp_path / "missing.obj"
+    assert cli.main(["check", str(missing)]) == 2
+    captured = capsys.readouterr()
+    assert str(missing) in captured.err and captured.out == ""
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_check_malformed_file_is_status_2(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    path = tmp_path / "bad.obj"
+    path.write_text("v 0 0 0\nv 1 0 nope\n")
+    assert cli.main(["check", str(path)]) == 2
+    assert "line 2" in capsys.readouterr().err
+
+
+def test_check_without_input_is_status_2(capsys: pytest.CaptureFixture[str]) -> None:
+    assert cli.main(["check"]) == 2
+    assert "--dataset" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("argv", [["check", "--dataset", "no_such_shape"], ["frobnicate"], []])
+def test_bad_arguments_exit_with_status_2(argv, capsys: pytest.CaptureFixture[str]) -> None:
+    with pytest.raises(SystemExit) as info:
+        cli.main(argv)
+    assert info.value.code == 2
+    assert "usage" in capsys.readouterr().err
+
+
+def test_orient_writes_an_outward_copy(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    source = write(tmp_path, "inward.obj", F[:, ::-1])
+    before = source.read_bytes()
+    out = tmp_path / "fixed.ply"
+    assert cli.main(["orient", str(source), "-o", str(out)]) == 0
+    assert str(out) in capsys.readouterr().out
+    fixed = sp.load(out)
+    assert sp.check(fixed).valid
+    assert np.array_equal(fixed.vertices, V)
+    assert source.read_bytes() == before  # the input is left alone
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["fixed.ply", "inward.obj"]
+
+
+def test_orient_dataset(tmp_path: Path) -> None:
+    out = tmp_path / "ico.off"
+    assert cli.main(["orient", "--dataset", "icosphere", "--n-vertices", "100", "-o", str(out)]) == 0
+    assert sp.check(sp.load(out)).valid
+
+
+def test_orient_refuses_a_nonmanifold_mesh(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    V2 = np.vstack([V, [[0.5, 0.5, 0.5]]])
+    F2 = np.vstack([F, [[1, 2, 4]]])  # a third face on edge (1, 2)
+    source = write(tmp_path, "fin.obj", F2, V2)
+    out = tmp_path / "out.obj"
+    assert cli.main(["orient", str(source), "-o", str(out)]) == 2
+    assert "error" in capsys.readouterr().err
+    assert not out.exists()
+
+
+def test_orient_requires_an_output(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    source = write(tmp_path, "t.obj", F)
+    with pytest.raises(SystemExit) as info:
+        cli.main(["orient", str(source)])
+    assert info.value.code == 2
