@@ -12,7 +12,7 @@ import pathlib
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import given
 from hypothesis import strategies as st
 
 
@@ -33,7 +33,7 @@ NAMES = datasets.names()
 SIZES = [100, 1000, 20000]
 # smallest angle (degrees) each shape keeps at every size; measured minima are a
 # few degrees above (see the module's docstrings)
-MIN_ANGLE = {"icosphere": 50.0, "ellipsoid": 20.0, "bumpy_blob": 25.0,
+MIN_ANGLE = {"icosphere": 50.0, "ellipsoid": 20.0, "bumpy_blob": 30.0,
              "helix_tube": 12.0, "urchin": 12.0, "tentacles": 12.0}
 _cache: dict = {}
 
@@ -193,10 +193,12 @@ def test_seed_changes_shape(name):
     assert not np.array_equal(arrays(name, 3000, seed=1)[0], arrays(name, 3000)[0])
 
 
+@pytest.mark.parametrize("size", [1, 500])
 @pytest.mark.parametrize("name", NAMES)
-def test_no_self_intersections_small(name):
-    # the smallest meshes are the coarsest, where polygonal tubes come closest
-    V, F = arrays(name, 500)
+def test_no_self_intersections_small(name, size):
+    # the smallest meshes are the coarsest, where polygonal tubes come closest;
+    # for urchin and tentacles both sizes give the smallest mesh (1,700-2,800)
+    V, F = arrays(name, size)
     assert crossing_pairs(V, F) == 0
 
 
@@ -230,7 +232,7 @@ def test_icosphere_counts():
 
 def test_shapes_sit_where_documented():
     V, _ = arrays("ellipsoid", 1000)
-    assert np.allclose(np.abs(V).max(axis=0), [1.0, 0.6, 0.4])
+    assert np.allclose(np.abs(V).max(axis=0), [1.0, 0.6, 0.4], rtol=0.01)
     V, _ = arrays("urchin", 20000)
     r = np.linalg.norm(V, axis=1)
     assert r.min() > 0.99 and 2.5 < r.max() < 3.4          # body 1, spikes 2 +- 15% + tip
@@ -245,6 +247,21 @@ def test_thin_spikes_have_many_rings():
 
 
 @pytest.mark.parametrize("name, kwargs", [
+    ("tentacles", {"curl": 0.0}),              # straight arms
+    ("tentacles", {"arms": 1}),
+    ("tentacles", {"arms": 12, "arm_radius": 0.08}),
+    ("urchin", {"spikes": 1}),
+    ("urchin", {"spikes": 6, "spike_radius": 0.2, "spike_length": 0.3}),
+    ("helix_tube", {"turns": 0.2}),
+    ("helix_tube", {"turns": 10, "pitch": 0.35}),
+    ("bumpy_blob", {"bumps": 0}),
+])
+def test_unusual_parameters(name, kwargs):
+    V, F = arrays(name, 3000, **kwargs)
+    assert_clean_sphere(V, F, 12.0)
+
+
+@pytest.mark.parametrize("name, kwargs", [
     ("ellipsoid", {"axes": (1.0, -1.0, 1.0)}),
     ("ellipsoid", {"axes": (1.0, 1.0)}),
     ("bumpy_blob", {"amplitude": -0.1}),
@@ -256,6 +273,7 @@ def test_thin_spikes_have_many_rings():
     ("tentacles", {"curl": 6.0}),               # curls into itself
     ("tentacles", {"arms": 60}),                # arms too close
     ("tentacles", {"arm_radius": float("nan")}),
+    ("tentacles", {"arm_length": 0.5}),        # too short to curl
 ])
 def test_bad_parameters_raise(name, kwargs):
     with pytest.raises(ValueError):
@@ -275,17 +293,17 @@ def test_unknown_name_raises():
         datasets._make_arrays("icosphere", 1000, spikes=3)
 
 
-@settings(deadline=None, max_examples=15)
-@given(name=st.sampled_from(NAMES), n=st.integers(1, 6000), seed=st.integers(0, 2**32 - 1))
+@given(name=st.sampled_from(NAMES), n=st.integers(1, 5000), seed=st.integers(0, 2**32 - 1))
 def test_any_size_and_seed(name, n, seed):
     kwargs = {"seed": seed} if name in ("bumpy_blob", "urchin", "tentacles") else {}
     V, F = datasets._make_arrays(name, n, **kwargs)
     assert_clean_sphere(V, F, MIN_ANGLE[name])
-    floor = len(datasets._make_arrays(name, 1, **kwargs)[0])
-    if n <= floor:
-        assert len(V) == floor
-    elif n >= 140:
-        assert abs(len(V) - n) <= 0.25 * n
+    # within 25% of the target, except that a target below the shape's smallest
+    # mesh (under 3,000 vertices for the defaults) gives that mesh, and the
+    # geodesic spheres step coarsely below 140 vertices
+    assert len(V) <= max(1.25 * n, 3000)
+    if n >= 140:
+        assert len(V) >= 0.75 * n
 
 
 # ---------------------------------------------- with the compiled extension
