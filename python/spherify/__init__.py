@@ -7,9 +7,11 @@ from __future__ import annotations
 
 from . import datasets
 from ._core import __version__
-from ._errors import ConvergenceError, FormatError, MeshError, SpherifyError, TopologyError
+from ._errors import (ConvergenceError, FormatError, MeshError, SpherifyError, SpherifyWarning,
+                      TopologyError)
 from ._mesh import Mesh, check, check_sphere, dijkstra, load, orient, save, shortest_path
 from ._report import MeshReport, SphereReport
+from ._tutte import TutteInfo, boundary_loop, tutte
 
 __all__ = [
     "ConvergenceError",
@@ -19,8 +21,11 @@ __all__ = [
     "MeshReport",
     "SphereReport",
     "SpherifyError",
+    "SpherifyWarning",
     "TopologyError",
+    "TutteInfo",
     "__version__",
+    "boundary_loop",
     "check",
     "check_sphere",
     "datasets",
@@ -29,4 +34,5 @@ __all__ = [
     "orient",
     "save",
     "shortest_path",
+    "tutte",
 ]

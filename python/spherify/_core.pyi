@@ -7,7 +7,7 @@ import numpy.typing as npt
 
 from ._report import MeshReport, SphereReport
 
-__all__ = ["CoreMesh", "__version__", "check", "check_raw", "check_sphere", "dijkstra", "load", "orient", "save", "shortest_path"]
+__all__ = ["CoreMesh", "__version__", "boundary_loop", "check", "check_raw", "check_sphere", "dijkstra", "load", "orient", "save", "shortest_path", "tutte"]
 
 __version__: str
 
@@ -40,3 +40,14 @@ def dijkstra(
 def shortest_path(
     mesh: CoreMesh, source: int, target: int, weights: str = "length"
 ) -> Tuple[float, npt.NDArray[np.int64]]: ...
+def boundary_loop(mesh: CoreMesh) -> npt.NDArray[np.int64]: ...
+def tutte(
+    mesh: CoreMesh,
+    weights: str = "uniform",
+    rho: float = 1.0,
+    boundary: str = "circle",
+    polygon: Optional[npt.NDArray[np.float64]] = None,
+    solver: str = "auto",
+    tol: float = 1e-10,
+    max_iter: int = 10000,
+) -> Tuple[npt.NDArray[np.float64], Dict[str, Any]]: ...

@@ -47,3 +47,9 @@ class ConvergenceError(SpherifyError, RuntimeError):
     def __init__(self, message: str, state: Any = None) -> None:
         super().__init__(message)
         self.state = state
+
+
+class SpherifyWarning(UserWarning):
+    """A result that was computed but comes without its usual guarantee (for
+    instance a Tutte embedding with negative cotangent weights, or one in which
+    floating point flipped a triangle)."""

@@ -8,7 +8,8 @@ fn main() {
         eprintln!("usage: profile_check MESH");
         std::process::exit(2);
     };
-    for _ in 0..3 {
+    let rounds: usize = std::env::var("ROUNDS").ok().and_then(|r| r.parse().ok()).unwrap_or(3);
+    for _ in 0..rounds {
         let t = Instant::now();
         let loaded = match io::read(std::path::Path::new(&path)) {
             Ok(l) => l,

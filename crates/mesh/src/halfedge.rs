@@ -6,7 +6,7 @@
 //! boundary edge has a half-edge with no face; those half-edges are linked along
 //! their boundary loop by `next`. Built in O(F log d) from the edge table.
 
-use crate::edge_table::{corner_endpoints, EdgeTable, NONE};
+use crate::edge_table::{corner_endpoints, NONE};
 use crate::error::{TopologyError, TopologyProblem};
 use crate::graph::Adjacency;
 use crate::mesh::Mesh;
@@ -40,7 +40,7 @@ impl HalfEdgeMesh {
                 return Err(fail(TopologyProblem::RepeatedIndex { face: f as u32 }));
             }
         }
-        let table = EdgeTable::new(n, faces);
+        let table = mesh.edge_table();
         let n_he = 2 * table.n_edges();
         let mut to = vec![NONE; n_he];
         let mut face = vec![NONE; n_he];

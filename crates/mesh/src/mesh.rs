@@ -5,17 +5,28 @@
 //! Topology (manifoldness, genus, orientation) is *not* required here: that is what
 //! [`crate::validate`] reports and [`crate::halfedge::HalfEdgeMesh`] demands.
 
+use crate::edge_table::EdgeTable;
 use crate::error::MeshError;
+use std::sync::OnceLock;
 
 /// Largest number of vertices: indices are `u32` inside the core.
 pub const MAX_VERTICES: usize = u32::MAX as usize;
 
 /// A triangle mesh as two parallel arrays: `positions[v]` is vertex `v`, and each
 /// face lists three vertex indices, counter-clockwise seen from outside.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone)]
 pub struct Mesh {
     positions: Vec<[f64; 3]>,
     faces: Vec<[u32; 3]>,
+    /// Built on first use and kept: validation, orientation and the half-edge
+    /// build all start from it, and the mesh never changes.
+    edge_table: OnceLock<EdgeTable>,
+}
+
+impl PartialEq for Mesh {
+    fn eq(&self, other: &Mesh) -> bool {
+        self.positions == other.positions && self.faces == other.faces
+    }
 }
 
 impl Mesh {
@@ -29,7 +40,7 @@ impl Mesh {
         if let Some((face, index)) = first_out_of_range(&faces, n) {
             return Err(MeshError::IndexOutOfRange { face, index: index as i64, n_vertices: n });
         }
-        Ok(Mesh { positions, faces })
+        Ok(Mesh { positions, faces, edge_table: OnceLock::new() })
     }
 
     /// Builds a mesh from signed 64-bit indices (as numpy hands them over),
@@ -51,7 +62,7 @@ impl Mesh {
             }
             converted.push(out);
         }
-        Ok(Mesh { positions, faces: converted })
+        Ok(Mesh { positions, faces: converted, edge_table: OnceLock::new() })
     }
 
     pub fn positions(&self) -> &[[f64; 3]] {
@@ -78,7 +89,12 @@ impl Mesh {
             .zip(flip)
             .map(|(&[a, b, c], &f)| if f { [a, c, b] } else { [a, b, c] })
             .collect();
-        Mesh { positions: self.positions.clone(), faces }
+        Mesh { positions: self.positions.clone(), faces, edge_table: OnceLock::new() }
+    }
+
+    /// The faces' corners grouped by undirected edge (built once, then cached).
+    pub fn edge_table(&self) -> &EdgeTable {
+        self.edge_table.get_or_init(|| EdgeTable::new(self.positions.len(), &self.faces))
     }
 
     pub fn into_parts(self) -> (Vec<[f64; 3]>, Vec<[u32; 3]>) {

@@ -7,7 +7,7 @@
 //! whether the whole component faces inward, in which case every face of it is
 //! reversed. The result is a consistent, outward orientation with no user input.
 
-use crate::edge_table::{corner_endpoints, EdgeTable, NONE};
+use crate::edge_table::{corner_endpoints, NONE};
 use crate::error::{TopologyError, TopologyProblem};
 use crate::mesh::Mesh;
 use crate::validate;
@@ -38,7 +38,7 @@ pub fn orient(mesh: &Mesh) -> Result<(Mesh, OrientInfo), TopologyError> {
             return Err(fail(TopologyProblem::RepeatedIndex { face: f as u32 }));
         }
     }
-    let table = EdgeTable::new(mesh.n_vertices(), faces);
+    let table = mesh.edge_table();
     // partner[c]: the other corner on c's edge when the edge has two faces.
     let mut partner = vec![NONE; 3 * faces.len()];
     let mut closed_face = vec![true; faces.len()];
@@ -60,19 +60,18 @@ pub fn orient(mesh: &Mesh) -> Result<(Mesh, OrientInfo), TopologyError> {
         }
     }
 
-    // Breadth-first propagation (Alg. 2.9 step 4, with a queue instead of the
-    // thesis's stack: either visits every face of the component).
+    // Propagation with a last-in-first-out list of faces, as in Alg. 2.9 step 4.
     let mut flip = vec![false; faces.len()];
     let mut component = vec![NONE; faces.len()];
     let mut n_components = 0u32;
-    let mut queue = std::collections::VecDeque::new();
+    let mut stack = Vec::new();
     for seed in 0..faces.len() {
         if component[seed] != NONE {
             continue;
         }
         component[seed] = n_components;
-        queue.push_back(seed as u32);
-        while let Some(f) = queue.pop_front() {
+        stack.push(seed as u32);
+        while let Some(f) = stack.pop() {
             for k in 0..3 {
                 let c = 3 * f + k;
                 let d = partner[c as usize];
@@ -86,7 +85,7 @@ pub fn orient(mesh: &Mesh) -> Result<(Mesh, OrientInfo), TopologyError> {
                 if component[g as usize] == NONE {
                     component[g as usize] = n_components;
                     flip[g as usize] = wanted;
-                    queue.push_back(g);
+                    stack.push(g);
                 } else if flip[g as usize] != wanted {
                     return Err(fail(TopologyProblem::NotOrientable { face: g }));
                 }
@@ -110,7 +109,9 @@ pub fn orient(mesh: &Mesh) -> Result<(Mesh, OrientInfo), TopologyError> {
         components: n_components as usize,
         components_turned_outward: turn.iter().filter(|&&x| x).count(),
     };
-    Ok((mesh.with_flipped_faces(&flip), info))
+    // Already consistent and outward: keep the mesh (and its cached edge table).
+    let oriented = if info.flipped_faces == 0 { mesh.clone() } else { mesh.with_flipped_faces(&flip) };
+    Ok((oriented, info))
 }
 
 #[cfg(test)]

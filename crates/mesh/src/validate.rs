@@ -95,7 +95,8 @@ pub struct MeshReport {
 
 /// Validates a mesh whose arrays are already known to be finite and in range.
 pub fn check(mesh: &Mesh) -> MeshReport {
-    check_faces(mesh.positions(), mesh.faces())
+    let (table, elements) = rayon::join(|| mesh.edge_table(), || element_pass(mesh.positions(), mesh.faces()));
+    check_faces(mesh.positions(), mesh.faces(), table, elements)
 }
 
 /// Validates raw arrays that may hold non-finite coordinates and out-of-range or
@@ -114,7 +115,8 @@ pub fn check_raw(positions: &[[f64; 3]], faces: &[[i64; 3]]) -> MeshReport {
             out_of_range.push(f as u32);
         }
     }
-    let mut report = check_faces(positions, &kept);
+    let (table, elements) = rayon::join(|| EdgeTable::new(positions.len(), &kept), || element_pass(positions, &kept));
+    let mut report = check_faces(positions, &kept, &table, elements);
     let remap = |list: &mut Capped<u32>| list.items.iter_mut().for_each(|f| *f = kept_ids[*f as usize]);
     remap(&mut report.degenerate_faces);
     remap(&mut report.duplicate_faces);
@@ -135,15 +137,18 @@ pub fn check_raw(positions: &[[f64; 3]], faces: &[[i64; 3]]) -> MeshReport {
     report
 }
 
-fn check_faces(positions: &[[f64; 3]], faces: &[[u32; 3]]) -> MeshReport {
+/// The analysis behind [`check`] and [`check_raw`]; the edge table and the
+/// element pass are independent, so callers compute them in parallel.
+fn check_faces(positions: &[[f64; 3]], faces: &[[u32; 3]], table: &EdgeTable, elements: ElementFindings) -> MeshReport {
     let n = positions.len();
     let mut r = MeshReport { n_vertices: n, n_faces: faces.len(), ..Default::default() };
-    // The passes are independent: run them on two cores.
-    let (table, elements) = rayon::join(|| EdgeTable::new(n, faces), || element_pass(positions, faces));
     r.n_edges = table.n_edges();
-    let ((edges, nonmanifold_vertices), (n_components, component_of)) = rayon::join(
-        || rayon::join(|| edge_pass(faces, &table), || count_fans(n, faces, &table)),
-        || components(n, faces, &elements.referenced),
+    let ((edges, nonmanifold_vertices), (n_components, volumes)) = rayon::join(
+        || rayon::join(|| edge_pass(faces, table), || count_fans(n, faces, table)),
+        || {
+            let (count, component_of) = components(n, faces, &elements.referenced);
+            (count, component_volumes(positions, faces, &component_of, count, None))
+        },
     );
     r.unreferenced_vertices = elements.unreferenced;
     r.non_finite_vertices = elements.non_finite;
@@ -167,7 +172,6 @@ fn check_faces(positions: &[[f64; 3]], faces: &[[u32; 3]]) -> MeshReport {
     if r.manifold && repeated_index == 0 && twice_genus >= 0 && twice_genus % 2 == 0 {
         r.genus = Some(twice_genus / 2);
     }
-    let volumes = component_volumes(positions, faces, &component_of, r.n_components, None);
     r.signed_volume = volumes.total();
     r.outward = r.closed && r.consistently_oriented && volumes.normalized.iter().all(|&v| v > 0.0);
     r.is_sphere_topology = r.closed
@@ -234,29 +238,37 @@ fn edge_pass(faces: &[[u32; 3]], table: &EdgeTable) -> EdgeFindings {
         nonmanifold: Capped::default(),
         duplicates: Capped::default(),
     };
+    // Third vertex of the face of corner c.
+    let apex = |c: u32| faces[(c / 3) as usize][((c + 2) % 3) as usize];
     for e in 0..table.n_edges() {
         let group = table.group(e);
         let (a, b) = corner_endpoints(faces, group[0]);
         let key = [a.min(b), a.max(b)];
-        match group {
-            [c] => out.boundary_corners.push(*c),
+        match *group {
+            [c] => out.boundary_corners.push(c),
+            // The common case, kept tight: two faces, c < d.
             [c, d] => {
-                if corner_endpoints(faces, *c) == corner_endpoints(faces, *d) {
+                if corner_endpoints(faces, d) == (a, b) {
                     out.inconsistent.push(key);
                 }
+                if apex(c) == apex(d) && first_edge_of_face(faces, d) {
+                    out.duplicates.push(d / 3);
+                }
             }
-            _ => out.nonmanifold.push(key),
-        }
-        for (i, &c) in group.iter().enumerate() {
-            let f = (c / 3) as usize;
-            let earlier = group[..i].iter().any(|&d| {
-                let g = (d / 3) as usize;
-                g < f && sorted(faces[g]) == sorted(faces[f])
-            });
-            // A face is a duplicate once, not once per shared edge: count it on
-            // the edge where the face's corner is its lowest-numbered shared one.
-            if earlier && first_edge_of_face(faces, c) {
-                out.duplicates.push(f as u32);
+            _ => {
+                out.nonmanifold.push(key);
+                for (i, &c) in group.iter().enumerate() {
+                    let f = (c / 3) as usize;
+                    let earlier = group[..i].iter().any(|&d| {
+                        let g = (d / 3) as usize;
+                        g < f && sorted(faces[g]) == sorted(faces[f])
+                    });
+                    // A face is a duplicate once, not once per shared edge: count
+                    // it on the edge where its corner is the lowest-numbered one.
+                    if earlier && first_edge_of_face(faces, c) {
+                        out.duplicates.push(f as u32);
+                    }
+                }
             }
         }
     }
@@ -299,11 +311,8 @@ fn count_fans(n: usize, faces: &[[u32; 3]], table: &EdgeTable) -> Capped<u32> {
             }
         }
     }
-    let slot_at = |c: u32, v: u32| {
-        let f = (c / 3) as usize;
-        let k = faces[f].iter().position(|&x| x == v).unwrap_or(0);
-        (3 * f + k) as u32
-    };
+    // Corner c runs from slot c's vertex to the next slot's vertex in its face.
+    let slot_at = |c: u32, v: u32| if corner_endpoints(faces, c).0 == v { c } else { c - c % 3 + (c + 1) % 3 };
     for e in 0..table.n_edges() {
         let group = table.group(e);
         let (a, b) = corner_endpoints(faces, group[0]);

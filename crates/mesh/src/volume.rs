@@ -40,10 +40,12 @@ pub(crate) fn component_volumes(
     }
     let half_size = (0..3).map(|i| hi[i] / 2.0 - lo[i] / 2.0).fold(0.0, f64::max);
     let unit = if half_size > 0.0 && half_size.is_finite() { half_size.log2().ceil().exp2() } else { 1.0 };
-    let centre: Vec<f64> = (0..3).map(|i| lo[i] / unit / 2.0 + hi[i] / unit / 2.0).collect();
+    // unit is a power of two, so multiplying by its inverse is exact.
+    let inverse = 1.0 / unit;
+    let centre: Vec<f64> = (0..3).map(|i| lo[i] * inverse / 2.0 + hi[i] * inverse / 2.0).collect();
     let local = |v: u32| {
         let q = positions[v as usize];
-        [q[0] / unit - centre[0], q[1] / unit - centre[1], q[2] / unit - centre[2]]
+        [q[0] * inverse - centre[0], q[1] * inverse - centre[1], q[2] * inverse - centre[2]]
     };
     let mut normalized = vec![0.0; n_components];
     for (f, &[a, b, c]) in faces.iter().enumerate() {

@@ -10,6 +10,7 @@ mod graph;
 mod io;
 mod mesh;
 mod sphere;
+mod tutte;
 mod validate;
 
 #[pymodule]
@@ -21,6 +22,8 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(validate::check_raw, m)?)?;
     m.add_function(wrap_pyfunction!(validate::orient, m)?)?;
     m.add_function(wrap_pyfunction!(sphere::check_sphere, m)?)?;
+    m.add_function(wrap_pyfunction!(tutte::boundary_loop, m)?)?;
+    m.add_function(wrap_pyfunction!(tutte::tutte, m)?)?;
     m.add_function(wrap_pyfunction!(graph::dijkstra, m)?)?;
     m.add_function(wrap_pyfunction!(graph::shortest_path, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;

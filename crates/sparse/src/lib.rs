@@ -2,13 +2,31 @@
 //!
 //! * [`csr`]: compressed sparse row matrices ([`CsrMatrix`]) built from triplets,
 //!   with matrix-vector products, transpose, diagonal and row scaling.
+//! * [`solve()`]: one entry point for `A x = b` with several right-hand sides,
+//!   choosing among a sparse direct solver (Cholesky / LU from `faer`),
+//!   conjugate gradients with Jacobi or IC(0) preconditioning, and the
+//!   Gauss-Seidel iteration of thesis 4.5 ([`SolverKind`], [`SolveParams`],
+//!   [`SolveInfo`]).
 //!
-//! Still to come here (see DESIGN.md): Gauss-Seidel (thesis 4.5), preconditioned
-//! conjugate gradients, a fast default solver, and the 2D Tutte embedding of a
-//! disk with a convex boundary (ch. 4) with its weights (4.4).
+//! * [`tutte`]: the generalised 2D Tutte embedding of a disk with a convex
+//!   boundary (thesis 4.3), checked triangle by triangle with an exact predicate,
+//!   with the weights of [`weights`] (thesis 4.4: uniform, chord length, and
+//!   beyond the thesis mean-value and cotangent).
 
 pub mod csr;
 pub mod error;
+pub mod tutte;
+pub mod weights;
+
+mod cg;
+mod direct;
+mod gauss_seidel;
+mod preconditioner;
+mod solve;
+#[cfg(test)]
+mod test_support;
+mod vector;
 
 pub use csr::CsrMatrix;
 pub use error::SparseError;
+pub use solve::{solve, SolveInfo, SolveParams, SolverKind};

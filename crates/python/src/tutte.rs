@@ -1,0 +1,138 @@
+//! `boundary_loop` and `tutte` (thesis ch. 4).
+
+use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArrayDyn};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use spherify_mesh::HalfEdgeMesh;
+use spherify_sparse::tutte::{self as core_tutte, BoundaryShape, TutteError, TutteParams};
+use spherify_sparse::weights::Weights;
+use spherify_sparse::{SolveParams, SolverKind};
+
+use crate::convert::{rows, to_numpy};
+use crate::errors::{mesh_error, spherify_error, to_py};
+use crate::mesh::CoreMesh;
+
+pub fn solver_kind(py: Python<'_>, name: &str) -> PyResult<SolverKind> {
+    Ok(match name {
+        "auto" => SolverKind::Auto,
+        "direct" | "cholesky" => SolverKind::Direct,
+        "cg" | "cg_ic0" => SolverKind::CgIc0,
+        "cg_jacobi" => SolverKind::CgJacobi,
+        "gauss_seidel" => SolverKind::GaussSeidel,
+        other => {
+            return Err(mesh_error(
+                py,
+                format!("solver must be 'auto', 'direct', 'cg', 'cg_ic0', 'cg_jacobi' or 'gauss_seidel', got {other:?}"),
+            ))
+        }
+    })
+}
+
+pub fn solver_name(kind: SolverKind) -> &'static str {
+    match kind {
+        SolverKind::Auto => "auto",
+        SolverKind::Direct => "direct",
+        SolverKind::CgIc0 => "cg_ic0",
+        SolverKind::CgJacobi => "cg_jacobi",
+        SolverKind::GaussSeidel => "gauss_seidel",
+    }
+}
+
+fn weights(py: Python<'_>, name: &str, rho: f64) -> PyResult<Weights> {
+    Ok(match name {
+        "uniform" => Weights::Uniform,
+        "chord" => {
+            if !rho.is_finite() {
+                return Err(mesh_error(py, format!("rho must be finite, got {rho}")));
+            }
+            Weights::Chord { rho }
+        }
+        "mean_value" => Weights::MeanValue,
+        "cotangent" => Weights::Cotangent,
+        other => {
+            return Err(mesh_error(
+                py,
+                format!("weights must be 'uniform', 'chord', 'mean_value' or 'cotangent', got {other:?}"),
+            ))
+        }
+    })
+}
+
+pub fn tutte_error(py: Python<'_>, err: TutteError) -> PyErr {
+    match err {
+        TutteError::Topology(t) => to_py(py, t.into()),
+        TutteError::NoConvergence { solver, iterations, residual, ref uv } => {
+            let message = err.to_string();
+            let state = PyDict::new(py);
+            let filled = (|| -> PyResult<()> {
+                state.set_item("solver", solver_name(solver))?;
+                state.set_item("iterations", iterations)?;
+                state.set_item("residual", residual)?;
+                state.set_item("uv", to_numpy(py, uv))?;
+                Ok(())
+            })();
+            match filled {
+                Ok(()) => spherify_error(py, "ConvergenceError", (message, state)),
+                Err(e) => e,
+            }
+        }
+        other => mesh_error(py, other.to_string()),
+    }
+}
+
+/// boundary_loop(mesh) -> (k,) int64, counter-clockwise; TopologyError unless a disk.
+#[pyfunction]
+pub fn boundary_loop<'py>(py: Python<'py>, mesh: &CoreMesh) -> PyResult<Bound<'py, PyArray1<i64>>> {
+    let result = py.detach(|| {
+        let he = HalfEdgeMesh::new(&mesh.mesh)?;
+        core_tutte::boundary_loop(&mesh.mesh, &he)
+    });
+    let cycle = result.map_err(|e| to_py(py, e.into()))?;
+    Ok(cycle.into_iter().map(i64::from).collect::<Vec<_>>().into_pyarray(py))
+}
+
+/// tutte(mesh, weights, rho, boundary, polygon, solver, tol, max_iter) -> (uv, info dict).
+#[pyfunction]
+#[pyo3(signature = (mesh, weights="uniform", rho=1.0, boundary="circle", polygon=None, solver="auto", tol=1e-10, max_iter=10000))]
+#[allow(clippy::too_many_arguments)]
+pub fn tutte<'py>(
+    py: Python<'py>,
+    mesh: &CoreMesh,
+    weights: &str,
+    rho: f64,
+    boundary: &str,
+    polygon: Option<PyReadonlyArrayDyn<'_, f64>>,
+    solver: &str,
+    tol: f64,
+    max_iter: usize,
+) -> PyResult<(Bound<'py, PyArray2<f64>>, Bound<'py, PyDict>)> {
+    let boundary = match (boundary, polygon) {
+        ("circle", None) => BoundaryShape::Circle,
+        ("circle_length", None) => BoundaryShape::CircleByLength,
+        ("polygon", Some(points)) => BoundaryShape::Polygon(rows::<f64, 2>(py, &points, "boundary polygon")?),
+        (other, _) => {
+            return Err(mesh_error(
+                py,
+                format!("boundary must be 'circle', 'circle_length' or a (k, 2) array of points, got {other:?}"),
+            ))
+        }
+    };
+    let params = TutteParams {
+        weights: self::weights(py, weights, rho)?,
+        boundary,
+        solver: solver_kind(py, solver)?,
+        solve: SolveParams { tol, max_iter, x0: None },
+    };
+    let embedding = py.detach(|| core_tutte::tutte(&mesh.mesh, &params)).map_err(|e| tutte_error(py, e))?;
+    let info = PyDict::new(py);
+    info.set_item("solver", solver_name(embedding.info.solver))?;
+    info.set_item("iterations", embedding.info.iterations)?;
+    info.set_item("residual", embedding.info.residual)?;
+    info.set_item("seconds", embedding.info.seconds)?;
+    let ids = |v: &[u32]| v.iter().map(|&x| i64::from(x)).collect::<Vec<_>>();
+    info.set_item("boundary", ids(&embedding.boundary).into_pyarray(py))?;
+    info.set_item("flipped_faces", ids(&embedding.inverted.flipped).into_pyarray(py))?;
+    info.set_item("degenerate_faces", ids(&embedding.inverted.degenerate).into_pyarray(py))?;
+    info.set_item("negative_weights", embedding.negative_weights)?;
+    Ok((to_numpy(py, &embedding.uv), info))
+}

@@ -1,0 +1,302 @@
+//! Sparse direct solvers: Cholesky `L L^T` for symmetric positive definite
+//! matrices and LU with partial pivoting for the rest, both from the `faer`
+//! crate (supernodal, with a fill-reducing ordering: AMD for Cholesky, COLAMD
+//! for LU).
+//!
+//! This is the only module that names `faer`: its API changes between minor
+//! versions, and STYLE.md ("Avoid") wants such a dependency behind one small
+//! module so an upgrade touches one file.
+//!
+//! The thesis (4.5) prefers Gauss-Seidel to a direct method because the
+//! Tutte matrix has no band structure; a modern fill-reducing ordering makes
+//! that moot on planar meshes: nested-dissection-like orderings of a planar
+//! graph give `O(n log n)` fill (Lipton, Rose and Tarjan 1979), and AMD gets
+//! close on meshes. `crate::solve` has the measurements.
+
+use crate::error::SparseError;
+use crate::vector::{residual_into, residual_scale};
+use crate::CsrMatrix;
+use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
+use faer::linalg::cholesky::llt::factor::LltError as DenseLltError;
+use faer::sparse::linalg::cholesky::{
+    factorize_symbolic_cholesky, LltRef, SymbolicCholesky, SymmetricOrdering,
+};
+use faer::sparse::linalg::lu::{factorize_symbolic_lu, LuRef, NumericLu, SymbolicLu};
+use faer::sparse::linalg::LuError;
+use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
+use faer::{Conj, Mat, Par, Side};
+use std::panic::{catch_unwind, AssertUnwindSafe};
+
+/// Iterative-refinement steps tried after the first solve when the residual
+/// misses the tolerance (an ill-conditioned LU); each costs one solve with the
+/// existing factor and one mat-vec, never a new factorisation.
+const MAX_REFINEMENT_STEPS: usize = 2;
+
+/// Parallelism of the numeric factorisations: rayon's pool, so the one thread
+/// switch of DESIGN.md governs it too.
+fn factor_par() -> Par {
+    Par::rayon(0)
+}
+
+/// Parallelism of the triangular solves: none. faer's supernodal solve hands
+/// `par` to a dense kernel per supernode, and a Tutte factor has hundreds of
+/// thousands of tiny supernodes: measured on the 1000 x 1000 grid with two
+/// right-hand sides, 8.4 s with rayon against 0.4 s sequential (2 cores).
+const SOLVE_PAR: Par = Par::Seq;
+
+/// A factorised matrix, ready to solve any number of right-hand sides.
+pub(crate) enum Factor {
+    /// `A = P^T L L^T P` (AMD ordering `P`), of `A` itself.
+    Cholesky { symbolic: SymbolicCholesky<usize>, values: Vec<f64> },
+    /// LU of `A^T`; see [`Factor::lu`] for why the transpose.
+    LuOfTranspose { symbolic: SymbolicLu<usize>, numeric: NumericLu<usize, f64> },
+}
+
+/// The CSR arrays of `A` read as compressed *columns*: that is `A^T` in
+/// faer's CSC form, with no copy of the values. faer wants one index type for
+/// offsets and indices, so the u32 column indices are widened.
+struct TransposeView {
+    col_ptr: Vec<usize>,
+    row_idx: Vec<usize>,
+}
+
+impl TransposeView {
+    fn new(a: &CsrMatrix) -> TransposeView {
+        TransposeView {
+            col_ptr: a.row_offsets().to_vec(),
+            row_idx: a.col_indices().iter().map(|&j| j as usize).collect(),
+        }
+    }
+
+    fn matrix<'a>(&'a self, a: &'a CsrMatrix) -> SparseColMatRef<'a, usize, f64> {
+        // `new_checked` asserts the CSC invariants, which are exactly the
+        // CsrMatrix invariants (offsets from 0 to nnz, sorted unique indices
+        // within range), so it cannot fire on a CsrMatrix.
+        let n = a.n_rows();
+        let symbolic =
+            SymbolicSparseColMatRef::new_checked(n, n, &self.col_ptr, None, &self.row_idx);
+        SparseColMatRef::new(symbolic, a.values())
+    }
+}
+
+/// Runs a faer call, turning a panic inside it into a typed error: faer
+/// asserts internally, and a panic must never reach Python (DESIGN.md).
+fn guarded<T>(what: &str, f: impl FnOnce() -> Result<T, SparseError>) -> Result<T, SparseError> {
+    match catch_unwind(AssertUnwindSafe(f)) {
+        Ok(result) => result,
+        Err(_) => {
+            Err(SparseError::Factorization { detail: format!("{what} panicked inside faer") })
+        }
+    }
+}
+
+fn failed(what: &str, e: impl std::fmt::Debug) -> SparseError {
+    SparseError::Factorization { detail: format!("{what}: {e:?}") }
+}
+
+/// Scratch memory for faer, or a typed error when it cannot be had.
+fn scratch(req: StackReq) -> Result<MemBuffer, SparseError> {
+    MemBuffer::try_new(req).map_err(|e| failed("allocating scratch", e))
+}
+
+impl Factor {
+    /// Sparse Cholesky of a symmetric matrix (square, finite, symmetric within
+    /// tolerance: checked by the dispatcher). Only one triangle is read.
+    ///
+    /// Errors: [`SparseError::NotPositiveDefinite`] on a non-positive pivot.
+    pub(crate) fn cholesky(a: &CsrMatrix) -> Result<Factor, SparseError> {
+        guarded("sparse Cholesky", || {
+            let view = TransposeView::new(a);
+            // The CSC view is A^T = A (A is symmetric); its lower triangle is
+            // A's upper one, equal to A's lower one within the tolerance.
+            let m = view.matrix(a);
+            let symbolic = factorize_symbolic_cholesky(
+                m.symbolic(),
+                Side::Lower,
+                SymmetricOrdering::Amd,
+                Default::default(),
+            )
+            .map_err(|e| failed("sparse Cholesky analysis", e))?;
+            let mut values = Vec::new();
+            values
+                .try_reserve_exact(symbolic.len_val())
+                .map_err(|e| failed("allocating the Cholesky factor", e))?;
+            values.resize(symbolic.len_val(), 0.0);
+            let par = factor_par();
+            let mut mem =
+                scratch(symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()))?;
+            let result = symbolic.factorize_numeric_llt(
+                &mut values,
+                m,
+                Side::Lower,
+                Default::default(),
+                par,
+                MemStack::new(&mut mem),
+                Default::default(),
+            );
+            // The only numeric failure faer reports is a non-positive pivot.
+            if let Err(DenseLltError::NonPositivePivot { .. }) = result {
+                return Err(SparseError::NotPositiveDefinite { method: "sparse Cholesky pivot" });
+            }
+            Ok(Factor::Cholesky { symbolic, values })
+        })
+    }
+
+    /// Sparse LU with partial pivoting. We factor `A^T`, which is what the
+    /// CSR arrays are in column form (no transposed copy), and solve with the
+    /// transposed factor. For the Tutte matrices this is also the better
+    /// choice: `A` is row-diagonally dominant (thesis 4.3), so `A^T` is
+    /// column-diagonally dominant, where partial pivoting never needs to swap
+    /// rows and the diagonal pivots are as stable as they come.
+    ///
+    /// Errors: [`SparseError::Singular`] for a structurally singular matrix.
+    pub(crate) fn lu(a: &CsrMatrix) -> Result<Factor, SparseError> {
+        guarded("sparse LU", || {
+            let view = TransposeView::new(a);
+            let m = view.matrix(a);
+            let symbolic = factorize_symbolic_lu(m.symbolic(), Default::default())
+                .map_err(|e| failed("sparse LU analysis", e))?;
+            let mut numeric = NumericLu::new();
+            let par = factor_par();
+            let mut mem =
+                scratch(symbolic.factorize_numeric_lu_scratch::<f64>(par, Default::default()))?;
+            let result = symbolic.factorize_numeric_lu(
+                &mut numeric,
+                m,
+                par,
+                MemStack::new(&mut mem),
+                Default::default(),
+            );
+            match result {
+                Ok(_) => {}
+                Err(LuError::SymbolicSingular { index }) => {
+                    return Err(SparseError::Singular {
+                        detail: format!("structurally singular, no pivot for step {index}"),
+                    })
+                }
+                Err(LuError::Generic(e)) => return Err(failed("sparse LU", e)),
+            }
+            Ok(Factor::LuOfTranspose { symbolic, numeric })
+        })
+    }
+
+    /// Solves in place for all columns of `x` at once (one pass over the
+    /// factor serves every right-hand side).
+    fn solve_in_place(&self, x: &mut Mat<f64>) -> Result<(), SparseError> {
+        let k = x.ncols();
+        match self {
+            Factor::Cholesky { symbolic, values } => {
+                let mut mem = scratch(symbolic.solve_in_place_scratch::<f64>(k, SOLVE_PAR))?;
+                LltRef::new(symbolic, values).solve_in_place_with_conj(
+                    Conj::No,
+                    x.as_mut(),
+                    SOLVE_PAR,
+                    MemStack::new(&mut mem),
+                );
+            }
+            Factor::LuOfTranspose { symbolic, numeric } => {
+                let mut mem =
+                    scratch(symbolic.solve_transpose_in_place_scratch::<f64>(k, SOLVE_PAR))?;
+                LuRef::new_unchecked(symbolic, numeric).solve_transpose_in_place_with_conj(
+                    Conj::No,
+                    x.as_mut(),
+                    SOLVE_PAR,
+                    MemStack::new(&mut mem),
+                );
+            }
+        }
+        Ok(())
+    }
+
+    /// `A x = b` for every `b` in `rhs` (lengths validated by the dispatcher),
+    /// then up to [`MAX_REFINEMENT_STEPS`] steps of iterative refinement
+    /// `x += A^{-1} (b - A x)` for as long as some relative residual is above
+    /// `tol`. Returns the solutions and their relative residuals.
+    ///
+    /// Errors: [`SparseError::Singular`] if a solution is not finite (a zero
+    /// pivot in LU; Cholesky reports its zero pivots when factoring).
+    pub(crate) fn solve(
+        &self,
+        a: &CsrMatrix,
+        rhs: &[Vec<f64>],
+        tol: f64,
+    ) -> Result<(Vec<Vec<f64>>, Vec<f64>), SparseError> {
+        guarded("sparse triangular solve", || {
+            let n = a.n_rows();
+            let k = rhs.len();
+            let mut x = Mat::from_fn(n, k, |i, j| rhs[j][i]);
+            self.solve_in_place(&mut x)?;
+            let mut sol: Vec<Vec<f64>> =
+                (0..k).map(|j| x.col(j).iter().copied().collect()).collect();
+            let scales: Vec<f64> = rhs.iter().map(|b| residual_scale(b)).collect();
+            let mut r = vec![vec![0.0; n]; k];
+            let mut residuals = vec![0.0; k];
+            for step in 0..=MAX_REFINEMENT_STEPS {
+                for j in 0..k {
+                    if sol[j].iter().any(|v| !v.is_finite()) {
+                        return Err(SparseError::Singular {
+                            detail: "numerically singular, the solution is not finite".into(),
+                        });
+                    }
+                    residuals[j] = residual_into(a, &rhs[j], &sol[j], &mut r[j], scales[j]);
+                }
+                if step == MAX_REFINEMENT_STEPS || residuals.iter().all(|&res| res <= tol) {
+                    break;
+                }
+                let mut d = Mat::from_fn(n, k, |i, j| r[j][i]);
+                self.solve_in_place(&mut d)?;
+                for (j, s) in sol.iter_mut().enumerate() {
+                    for (si, di) in s.iter_mut().zip(d.col(j).iter()) {
+                        *si += di;
+                    }
+                }
+            }
+            Ok((sol, residuals))
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::test_support::{
+        dense_solve, grid_laplacian, mean_value_like, random_spd, rel_err,
+    };
+
+    #[test]
+    fn cholesky_matches_dense() {
+        for a in [grid_laplacian(7, 9), random_spd(50, 4, 0.5)] {
+            let n = a.n_rows();
+            let b1: Vec<f64> = (0..n).map(|i| (i as f64 * 0.7).cos()).collect();
+            let b2: Vec<f64> = (0..n).map(|i| (i % 3) as f64).collect();
+            let f = Factor::cholesky(&a).unwrap();
+            let (x, res) = f.solve(&a, &[b1.clone(), b2.clone()], 1e-12).unwrap();
+            assert!(rel_err(&x[0], &dense_solve(&a, &b1)) < 1e-10);
+            assert!(rel_err(&x[1], &dense_solve(&a, &b2)) < 1e-10);
+            assert!(res.iter().all(|&r| r < 1e-12));
+        }
+    }
+
+    #[test]
+    fn lu_matches_dense_on_nonsymmetric() {
+        let (a, b) = mean_value_like(80, 5);
+        let f = Factor::lu(&a).unwrap();
+        let (x, _) = f.solve(&a, std::slice::from_ref(&b), 1e-12).unwrap();
+        assert!(rel_err(&x[0], &dense_solve(&a, &b)) < 1e-10);
+    }
+
+    #[test]
+    fn indefinite_cholesky_and_singular_lu_are_errors() {
+        let a = CsrMatrix::from_triplets(2, 2, &[0, 1], &[0, 1], &[1.0, -1.0]).unwrap();
+        assert!(matches!(Factor::cholesky(&a), Err(SparseError::NotPositiveDefinite { .. })));
+        // Structurally singular: row 1 is empty.
+        let s = CsrMatrix::from_triplets(2, 2, &[0, 0], &[0, 1], &[1.0, 1.0]).unwrap();
+        let r = Factor::lu(&s).and_then(|f| f.solve(&s, &[vec![1.0, 1.0]], 1e-10));
+        assert!(matches!(r, Err(SparseError::Singular { .. })), "{r:?}");
+        // Numerically singular: two equal rows.
+        let s = CsrMatrix::from_triplets(2, 2, &[0, 0, 1, 1], &[0, 1, 0, 1], &[1.0, 2.0, 1.0, 2.0])
+            .unwrap();
+        let r = Factor::lu(&s).and_then(|f| f.solve(&s, &[vec![1.0, 1.0]], 1e-10));
+        assert!(matches!(r, Err(SparseError::Singular { .. })), "{r:?}");
+    }
+}
