@@ -11,7 +11,9 @@ from ._errors import (ConvergenceError, FormatError, MeshError, SpherifyError, S
                       TopologyError)
 from ._mesh import Mesh, check, check_sphere, dijkstra, load, orient, save, shortest_path
 from ._report import MeshReport, SphereReport
+from ._spheremap import SphereMap
 from ._tutte import TutteInfo, boundary_loop, tutte
+from ._embed import embed, methods
 
 __all__ = [
     "ConvergenceError",
@@ -19,6 +21,7 @@ __all__ = [
     "Mesh",
     "MeshError",
     "MeshReport",
+    "SphereMap",
     "SphereReport",
     "SpherifyError",
     "SpherifyWarning",
@@ -30,7 +33,9 @@ __all__ = [
     "check_sphere",
     "datasets",
     "dijkstra",
+    "embed",
     "load",
+    "methods",
     "orient",
     "save",
     "shortest_path",

@@ -5,6 +5,7 @@
 use pyo3::prelude::*;
 
 mod convert;
+mod embed;
 mod errors;
 mod graph;
 mod io;
@@ -26,6 +27,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(tutte::tutte, m)?)?;
     m.add_function(wrap_pyfunction!(graph::dijkstra, m)?)?;
     m.add_function(wrap_pyfunction!(graph::shortest_path, m)?)?;
+    // Spherical methods (one file each) register below.
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

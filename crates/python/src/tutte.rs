@@ -76,6 +76,29 @@ pub fn tutte_error(py: Python<'_>, err: TutteError) -> PyErr {
                 Err(e) => e,
             }
         }
+        TutteError::Solve(s) => sparse_error(py, s),
+        other => mesh_error(py, other.to_string()),
+    }
+}
+
+/// A solver failure: running out of iterations is a `ConvergenceError`
+/// (with the last iterate), anything else a `MeshError`.
+pub fn sparse_error(py: Python<'_>, err: spherify_sparse::SparseError) -> PyErr {
+    match err {
+        spherify_sparse::SparseError::NoConvergence { iterations, residual, ref last } => {
+            let message = err.to_string();
+            let state = PyDict::new(py);
+            let filled = (|| -> PyResult<()> {
+                state.set_item("iterations", iterations)?;
+                state.set_item("residual", residual)?;
+                state.set_item("last", last.clone())?;
+                Ok(())
+            })();
+            match filled {
+                Ok(()) => spherify_error(py, "ConvergenceError", (message, state)),
+                Err(e) => e,
+            }
+        }
         other => mesh_error(py, other.to_string()),
     }
 }

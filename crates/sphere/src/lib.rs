@@ -15,8 +15,10 @@
 //! conformal, area and stretch distortion), and point maps between surface and
 //! sphere (3.3, 6.6).
 
+pub mod embedding;
 pub mod validity;
 
 pub use spherify_mesh::predicates;
 pub use spherify_mesh::predicates::Sign;
+pub use embedding::{SphereEmbedding, SphereError, Status};
 pub use validity::{check_sphere, SphereReport};

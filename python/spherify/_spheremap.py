@@ -1,0 +1,69 @@
+"""SphereMap: the result of :func:`spherify.embed`."""
+
+from __future__ import annotations
+
+from typing import Any, Dict, List
+
+import numpy as np
+
+from ._mesh import Mesh, check_sphere
+from ._report import SphereReport
+
+
+class SphereMap:
+    """Points on the unit sphere, one per vertex, and the verdict on them.
+
+    Attributes
+    ----------
+    mesh : Mesh
+        The (consistently, outward oriented) mesh the map belongs to.
+    points : (n, 3) float64
+        One point on the unit sphere per input vertex, in the input's order.
+    method : str
+        The method that made the map.
+    iterations : int
+        Iterations of an iterative method (0 for direct methods).
+    converged : bool
+        Whether the method reached its own stopping criterion.
+    status : str
+        ``"converged"``, ``"direct"``, ``"max_iterations"`` or ``"collapsed"``.
+    message : str
+        Why the method stopped, in words.
+    seconds : dict of str to float
+        Time per stage.
+    report : SphereReport
+        The exact validity verdict of thesis 3.4 on ``points``.
+    notes : list of str
+        What was done to the input on the way (e.g. faces reoriented).
+    """
+
+    def __init__(self, mesh: Mesh, points: np.ndarray, method: str, info: Dict[str, Any],
+                 notes: List[str]) -> None:
+        self.mesh = mesh
+        self.points = points
+        self.points.flags.writeable = False
+        self.method = method
+        self.iterations = int(info.get("iterations", 0))
+        self.converged = bool(info.get("converged", True))
+        self.status = str(info.get("status", "direct"))
+        self.message = str(info.get("message", ""))
+        self.seconds: Dict[str, float] = dict(info.get("seconds", {}))
+        self.notes = list(notes)
+        self.report: SphereReport = check_sphere(mesh, points)
+
+    @property
+    def valid(self) -> bool:
+        """True when the points with minor-arc edges form a valid GC-embedding
+        (thesis 3.1), proven by the exact orientation test and the area test:
+        the map from the mesh to the sphere is then a bijection."""
+        return self.report.valid
+
+    @property
+    def flipped(self) -> int:
+        """Faces failing the orientation test (3.9): upside down or collapsed."""
+        return self.report.n_negative + self.report.n_zero
+
+    def __repr__(self) -> str:
+        return (f"SphereMap(method={self.method!r}, n_vertices={len(self.points)}, "
+                f"valid={self.valid}, flipped={self.flipped}, status={self.status!r}, "
+                f"iterations={self.iterations})")
