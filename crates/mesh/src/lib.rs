@@ -5,9 +5,11 @@
 //! * [`halfedge::HalfEdgeMesh`]: connectivity of an oriented manifold mesh.
 //! * [`orient`]: consistent, outward orientation (thesis Alg. 2.9, seedless).
 //! * [`io`]: OBJ, OFF, PLY and STL read and write.
+//! * [`cut`]: cutting a closed mesh open along a path into a disk (thesis 6.3).
 //! * [`dijkstra`]: single-source shortest paths on the vertex graph (thesis App. A).
 //! * [`predicates`]: exact orientation signs on which every validity decision rests.
 
+pub mod cut;
 pub mod dijkstra;
 pub mod edge_table;
 pub mod error;
