@@ -2,10 +2,11 @@
 
 from __future__ import annotations
 
+import warnings
 from typing import Any, Callable, Dict, List
 
 from . import _core
-from ._errors import MeshError, TopologyError
+from ._errors import MeshError, SpherifyWarning, TopologyError
 from ._mesh import MeshLike, as_mesh, check, orient
 from ._spheremap import SphereMap
 
@@ -22,7 +23,7 @@ def methods() -> List[str]:
     return sorted(_methods())
 
 
-def embed(mesh: MeshLike, method: str, **options: Any) -> SphereMap:
+def embed(mesh: MeshLike, method: str = "theta_phi", **options: Any) -> SphereMap:
     """Map a closed genus-0 mesh onto the unit sphere.
 
     Parameters
@@ -31,7 +32,11 @@ def embed(mesh: MeshLike, method: str, **options: Any) -> SphereMap:
         Closed, connected, manifold, genus 0. Faces that are not consistently
         outward are reoriented first (noted in ``SphereMap.notes``).
     method : str
-        One of :func:`methods`; see each method's options in the README.
+        One of :func:`methods`; see each method's options in the README. The
+        default, ``"theta_phi"`` (thesis ch. 6), is a bijection for every
+        genus-0 mesh; its options are ``poles`` ("fast_graph", "graph",
+        "physical" or a ``(north, south)`` pair), ``weights`` ("uniform",
+        "chord" with ``rho``, "mean_value") and ``max_refinements``.
     **options
         Passed to the method (for example ``center="kernel"`` for ``"radial"``,
         ``max_iter=`` and ``strict=`` for the iterative methods).
@@ -68,4 +73,7 @@ def embed(mesh: MeshLike, method: str, **options: Any) -> SphereMap:
         points, info = available[method](mesh._core, **options)
     except TypeError as err:
         raise MeshError(f"method {method!r}: {err}") from None
-    return SphereMap(mesh, points, method, info, notes)
+    result = SphereMap(mesh, points, method, info, notes)
+    if method == "theta_phi" and not result.tp_valid:
+        warnings.warn(f"theta-phi: {result.message}", SpherifyWarning, stacklevel=2)
+    return result

@@ -35,6 +35,28 @@ class SphereMap:
         The exact validity verdict of thesis 3.4 on ``points``.
     notes : list of str
         What was done to the input on the way (e.g. faces reoriented).
+
+    Theta-phi maps (``method="theta_phi"``) also have
+
+    poles : (int, int)
+        The north and south pole vertex ids (thesis 6.2).
+    cut_path : (k + 2,) int64
+        The path the mesh was cut open along, from north to south pole.
+    cut_mesh : Mesh
+        The mesh cut open into a disk (thesis 6.3): the input's vertices, then
+        one duplicate per inner path vertex; ``cut_original`` maps each of its
+        vertices to the input vertex it stands for.
+    theta_phi : (n + k, 2) float64
+        The (theta, phi) embedding of ``cut_mesh`` in the rectangle
+        [0, pi] x [0, 2 pi] (thesis 6.4).
+    tp_valid : bool
+        The rectangle embedding has no flipped and no zero-area triangle under
+        exact predicates: the thesis's bijectivity guarantee, checked in
+        floating point. False means double precision could not hold it.
+    details : dict
+        Refinement steps, pole-fan monotonicity and re-embedding (6.5.1), the
+        thinnest triangle relative to the rectangle, and the rectangle's
+        flipped / collapsed triangle ids.
     """
 
     def __init__(self, mesh: Mesh, points: np.ndarray, method: str, info: Dict[str, Any],
@@ -50,6 +72,16 @@ class SphereMap:
         self.seconds: Dict[str, float] = dict(info.get("seconds", {}))
         self.notes = list(notes)
         self.report: SphereReport = check_sphere(mesh, points)
+        if "theta_phi" in info:
+            self.poles = tuple(int(p) for p in info["poles"])
+            self.cut_path = info["cut_path"]
+            self.theta_phi = info["theta_phi"]
+            self.cut_mesh = Mesh(info["cut_vertices"], info["cut_faces"])
+            self.cut_original = info["cut_original"]
+            self.tp_valid = bool(info["tp_valid"])
+            self.details = {key: info[key] for key in (
+                "refinements", "re_embedded", "fans_monotone", "min_area_ratio",
+                "tp_flipped_faces", "tp_degenerate_faces", "cut_boundary")}
 
     @property
     def valid(self) -> bool:

@@ -11,6 +11,7 @@ mod graph;
 mod io;
 mod mesh;
 mod sphere;
+mod theta_phi;
 mod tutte;
 mod validate;
 
@@ -28,6 +29,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(graph::dijkstra, m)?)?;
     m.add_function(wrap_pyfunction!(graph::shortest_path, m)?)?;
     // Spherical methods (one file each) register below.
+    m.add_function(wrap_pyfunction!(theta_phi::embed_theta_phi, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

@@ -15,6 +15,7 @@
 
 pub mod csr;
 pub mod error;
+pub mod refine;
 pub mod tutte;
 pub mod weights;
 
@@ -29,4 +30,4 @@ mod vector;
 
 pub use csr::CsrMatrix;
 pub use error::SparseError;
-pub use solve::{solve, SolveInfo, SolveParams, SolverKind};
+pub use solve::{solve, Factorization, SolveInfo, SolveParams, SolverKind};

@@ -570,3 +570,38 @@ mod tests {
         }
     }
 }
+
+/// A matrix factorised once for many solves: sparse Cholesky when it is
+/// symmetric (and positive definite), LU otherwise. Used by iterative
+/// refinement ([`crate::refine`]), which solves again and again with one factor.
+pub struct Factorization {
+    factor: Factor,
+    n: usize,
+}
+
+impl Factorization {
+    /// Factorises `a` (square and finite; checked).
+    pub fn new(a: &CsrMatrix) -> Result<Factorization, SparseError> {
+        validate(a, &[], &SolveParams::default())?;
+        let factor = match find_asymmetry(a) {
+            None => match Factor::cholesky(a) {
+                Ok(f) => f,
+                Err(SparseError::NotPositiveDefinite { .. }) => Factor::lu(a)?,
+                Err(e) => return Err(e),
+            },
+            Some(_) => Factor::lu(a)?,
+        };
+        Ok(Factorization { factor, n: a.n_rows() })
+    }
+
+    /// Solves `A x = b` for every `b`, with no refinement.
+    pub fn solve(&self, a: &CsrMatrix, rhs: &[Vec<f64>]) -> Result<Vec<Vec<f64>>, SparseError> {
+        for b in rhs {
+            if b.len() != self.n {
+                return Err(SparseError::LengthMismatch { what: "right-hand side", got: b.len(), expected: self.n });
+            }
+        }
+        // A tolerance of infinity turns the factor's own refinement off.
+        self.factor.solve(a, rhs, f64::INFINITY).map(|(x, _)| x)
+    }
+}

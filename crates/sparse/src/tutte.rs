@@ -150,56 +150,85 @@ pub fn embed_with_fixed(
     solver: SolverKind,
     params: &SolveParams,
 ) -> Result<(Vec<[f64; 2]>, SolveInfo), TutteError> {
-    let n = he.n_vertices();
-    // Unknown index of each free vertex.
-    let mut unknown = vec![u32::MAX; n];
-    let mut free = Vec::new();
-    for v in 0..n {
-        if fixed[v].is_none() {
-            unknown[v] = free.len() as u32;
-            free.push(v as u32);
-        }
-    }
-    let (mut rows, mut cols, mut vals) = (Vec::new(), Vec::new(), Vec::new());
-    let mut rhs = vec![vec![0.0; free.len()]; 2];
-    for (row, &i) in free.iter().enumerate() {
-        let mut diagonal = 0.0;
-        for h in he.rotation(i) {
-            let w = weights[h as usize];
-            let j = he.head(h);
-            diagonal += w;
-            match fixed[j as usize] {
-                Some(p) => {
-                    rhs[0][row] += w * p[0];
-                    rhs[1][row] += w * p[1];
-                }
-                None => {
-                    rows.push(row as u32);
-                    cols.push(unknown[j as usize]);
-                    vals.push(-w);
-                }
-            }
-        }
-        rows.push(row as u32);
-        cols.push(row as u32);
-        vals.push(diagonal);
-    }
-    let mut uv: Vec<[f64; 2]> = fixed.iter().map(|p| p.unwrap_or([0.0, 0.0])).collect();
-    if free.is_empty() {
+    let system = FixedSystem::assemble(he, weights, fixed)?;
+    let mut uv = system.fixed_positions(fixed);
+    if system.free.is_empty() {
         let info = SolveInfo { solver: SolverKind::Direct, iterations: 0, residual: 0.0, seconds: 0.0 };
         return Ok((uv, info));
     }
-    let matrix = CsrMatrix::from_triplets(free.len(), free.len(), &rows, &cols, &vals)?;
-    let (solution, info) = match solve(&matrix, &rhs, solver, params) {
+    let (solution, info) = match solve(&system.matrix, &system.rhs, solver, params) {
         Ok(solved) => solved,
         Err(SparseError::NoConvergence { iterations, residual, last }) => {
-            scatter(&mut uv, &free, &last);
+            scatter(&mut uv, &system.free, &last);
             return Err(TutteError::NoConvergence { solver, iterations, residual, uv });
         }
         Err(other) => return Err(other.into()),
     };
-    scatter(&mut uv, &free, &solution);
+    scatter(&mut uv, &system.free, &solution);
     Ok((uv, info))
+}
+
+/// The linear system of a Tutte embedding with some vertices fixed: one row
+/// sum_j w_ij (u_i - u_j) = 0 per free vertex i (thesis eq. 4.27 in the form
+/// B = D A of eq. 4.53), and two right-hand sides (x and y) carrying the fixed
+/// neighbours.
+#[derive(Debug, Clone)]
+pub struct FixedSystem {
+    pub matrix: CsrMatrix,
+    pub rhs: Vec<Vec<f64>>,
+    /// The vertex of each unknown, in order.
+    pub free: Vec<u32>,
+}
+
+impl FixedSystem {
+    /// Assembles the system; weights are per half-edge (row of the tail).
+    pub fn assemble(he: &HalfEdgeMesh, weights: &[f64], fixed: &[Option<[f64; 2]>]) -> Result<FixedSystem, TutteError> {
+        let n = he.n_vertices();
+        let mut unknown = vec![u32::MAX; n];
+        let mut free = Vec::new();
+        for v in 0..n {
+            if fixed[v].is_none() {
+                unknown[v] = free.len() as u32;
+                free.push(v as u32);
+            }
+        }
+        let (mut rows, mut cols, mut vals) = (Vec::new(), Vec::new(), Vec::new());
+        let mut rhs = vec![vec![0.0; free.len()]; 2];
+        for (row, &i) in free.iter().enumerate() {
+            let mut diagonal = 0.0;
+            for h in he.rotation(i) {
+                let w = weights[h as usize];
+                let j = he.head(h);
+                diagonal += w;
+                match fixed[j as usize] {
+                    Some(p) => {
+                        rhs[0][row] += w * p[0];
+                        rhs[1][row] += w * p[1];
+                    }
+                    None => {
+                        rows.push(row as u32);
+                        cols.push(unknown[j as usize]);
+                        vals.push(-w);
+                    }
+                }
+            }
+            rows.push(row as u32);
+            cols.push(row as u32);
+            vals.push(diagonal);
+        }
+        let matrix = CsrMatrix::from_triplets(free.len(), free.len(), &rows, &cols, &vals)?;
+        Ok(FixedSystem { matrix, rhs, free })
+    }
+
+    /// Positions with the fixed vertices in place and the free ones at the origin.
+    pub fn fixed_positions(&self, fixed: &[Option<[f64; 2]>]) -> Vec<[f64; 2]> {
+        fixed.iter().map(|p| p.unwrap_or([0.0, 0.0])).collect()
+    }
+
+    /// Writes solutions (x, y) of the free vertices into `uv`.
+    pub fn scatter(&self, uv: &mut [[f64; 2]], solution: &[Vec<f64>]) {
+        scatter(uv, &self.free, solution)
+    }
 }
 
 /// Writes the x and y solutions of the free vertices into `uv`.

@@ -16,6 +16,8 @@
 //! sphere (3.3, 6.6).
 
 pub mod embedding;
+pub mod poles;
+pub mod theta_phi;
 pub mod validity;
 
 pub use spherify_mesh::predicates;

@@ -1,0 +1,462 @@
+//! The theta-phi method (thesis ch. 6): a spherical parameterisation that is a
+//! bijection for every closed genus-0 mesh.
+//!
+//! 1. Poles n and s ([`crate::poles`], thesis 6.2) and a shortest path between
+//!    them (6.2.4), made chordless and at least 4 vertices long (the thesis
+//!    assumes k >= 2; we lengthen shorter paths so the tetrahedron works too).
+//! 2. The mesh is cut open along the path into a disk (6.3, `spherify_mesh::cut`).
+//! 3. The disk is Tutte-embedded in the theta-phi rectangle [0, pi] x [0, 2 pi]
+//!    with the boundary of eq. 6.31 (6.4), and every triangle is checked with an
+//!    exact orientation predicate. Where double precision flipped or collapsed a
+//!    triangle, the solution is refined with residuals in double-double
+//!    (`spherify_sparse::refine`) and checked again.
+//! 4. The phi values around each pole must increase strictly (6.5.1); where they
+//!    do not, the disk is re-embedded with the pole's neighbours pinned as in
+//!    eq. 6.36-6.38.
+//! 5. The fold m(theta, phi) = (sin t cos p, sin t sin p, cos t) (eq. 6.35)
+//!    puts every vertex on the sphere.
+//!
+//! `tp_valid` certifies step 3 in floating point: the rectangle embedding has
+//! no flipped or zero-area triangle under exact predicates. That is the
+//! thesis's guarantee (6.4) made concrete; when double precision cannot hold
+//! the embedding it says so. Whether the pole fans are monotone (step 4) is
+//! reported separately in `fans_monotone`.
+
+use std::time::Instant;
+
+use spherify_mesh::cut::{cut_open, CutError, CutMesh};
+use spherify_mesh::dijkstra::{dijkstra, dijkstra_to, EdgeWeights};
+use spherify_mesh::{validate, Adjacency, HalfEdgeMesh, Mesh, TopologyError, TopologyProblem};
+use spherify_sparse::refine::refine_step;
+use spherify_sparse::tutte::{inverted_faces, FixedSystem, InvertedFaces, TutteError};
+use spherify_sparse::weights::{half_edge_weights, Weights};
+use spherify_sparse::Factorization;
+
+use crate::embedding::{SphereEmbedding, SphereError, Status};
+use crate::poles::{self, Poles};
+
+use std::f64::consts::PI;
+
+/// How to choose the poles (thesis 6.2).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum PoleChoice {
+    /// Two Dijkstra sweeps (6.2.3); the default.
+    FastGraph,
+    /// Exact graph diameter (6.2.2), O(N^2 log N).
+    Graph,
+    /// Farthest pair in space (6.2.1), exact.
+    Physical,
+    /// The caller's pair.
+    Explicit(u32, u32),
+}
+
+/// Parameters of [`theta_phi`].
+#[derive(Debug, Clone)]
+pub struct ThetaPhiParams {
+    pub poles: PoleChoice,
+    pub weights: Weights,
+    /// Most double-double refinement steps per embedding.
+    pub max_refinements: usize,
+}
+
+impl Default for ThetaPhiParams {
+    fn default() -> Self {
+        ThetaPhiParams { poles: PoleChoice::FastGraph, weights: Weights::Uniform, max_refinements: 8 }
+    }
+}
+
+/// Everything the theta-phi method computed.
+#[derive(Debug, Clone)]
+pub struct ThetaPhi {
+    /// One point per input vertex.
+    pub embedding: SphereEmbedding,
+    pub poles: Poles,
+    pub cut_path: Vec<u32>,
+    pub cut: CutMesh,
+    /// (theta, phi) of every vertex of the cut mesh (6.31-6.32).
+    pub theta_phi: Vec<[f64; 2]>,
+    /// The rectangle embedding is flip-free: no clockwise and no zero-area
+    /// triangle under exact predicates (the thesis's guarantee, 6.4).
+    pub tp_valid: bool,
+    /// Triangles of the cut mesh that are clockwise or collapsed in the rectangle.
+    pub inverted: InvertedFaces,
+    /// Refinement steps taken (over all embeddings).
+    pub refinements: usize,
+    /// Whether the north / south pole fan had to be re-embedded (6.36-6.38).
+    pub re_embedded: [bool; 2],
+    /// Whether the north / south pole fans are strictly monotone in the end.
+    pub fans_monotone: [bool; 2],
+    /// Smallest triangle area in the rectangle divided by the rectangle's area (2 pi^2).
+    pub min_area_ratio: f64,
+}
+
+fn topology(mesh: &Mesh, problem: TopologyProblem) -> SphereError {
+    SphereError::Topology(TopologyError { problem, report: Box::new(validate::check(mesh)) })
+}
+
+fn from_tutte(err: TutteError) -> SphereError {
+    match err {
+        TutteError::Topology(t) => SphereError::Topology(t),
+        TutteError::Solve(s) => SphereError::Solve(s),
+        other => SphereError::InvalidParameter { name: "theta-phi embedding", value: other.to_string(), expected: "a solvable Tutte system" },
+    }
+}
+
+fn from_cut(mesh: &Mesh, err: CutError) -> SphereError {
+    match err {
+        CutError::Topology(t) => SphereError::Topology(t),
+        other => {
+            let _ = mesh;
+            SphereError::InvalidParameter { name: "cut path", value: other.to_string(), expected: "a simple path along mesh edges" }
+        }
+    }
+}
+
+/// Maps a closed genus-0 mesh (consistently oriented, counter-clockwise seen
+/// from outside) onto the sphere with the theta-phi method.
+pub fn theta_phi(mesh: &Mesh, params: &ThetaPhiParams) -> Result<ThetaPhi, SphereError> {
+    let mut seconds = Vec::new();
+    let mut clock = Instant::now();
+    let mut lap = |name: &'static str, seconds: &mut Vec<(&'static str, f64)>| {
+        seconds.push((name, clock.elapsed().as_secs_f64()));
+        clock = Instant::now();
+    };
+    let he = HalfEdgeMesh::new(mesh)?;
+    let euler = he.n_vertices() as i64 - he.n_edges() as i64 + he.n_faces() as i64;
+    if !he.boundary_loops().is_empty() || euler != 2 {
+        return Err(topology(mesh, TopologyProblem::NotSphere));
+    }
+    let graph = he.adjacency();
+    let lengths = EdgeWeights::Length(mesh.positions());
+    let chosen = match params.poles {
+        PoleChoice::FastGraph => poles::fast_graph(&graph, 0, lengths),
+        PoleChoice::Graph => poles::graph(&graph, lengths, &|_, _| {}),
+        PoleChoice::Physical => poles::physical(mesh.positions()),
+        PoleChoice::Explicit(n, s) => {
+            if n == s || n as usize >= mesh.n_vertices() || s as usize >= mesh.n_vertices() {
+                return Err(SphereError::InvalidParameter {
+                    name: "poles",
+                    value: format!("({n}, {s})"),
+                    expected: "two different vertex ids of the mesh",
+                });
+            }
+            Some(Poles { north: n, south: s, distance: f64::NAN })
+        }
+    }
+    .ok_or_else(|| topology(mesh, TopologyProblem::NotSphere))?;
+    lap("poles", &mut seconds);
+
+    let path = cut_path(&graph, chosen.north, chosen.south, lengths).ok_or_else(|| topology(mesh, TopologyProblem::NotSphere))?;
+    let cut = cut_open(mesh, &path).map_err(|e| from_cut(mesh, e))?;
+    lap("cut", &mut seconds);
+
+    let cut_he = HalfEdgeMesh::new(&cut.mesh)?;
+    let weights = half_edge_weights(cut.mesh.positions(), &cut_he, params.weights).map_err(|e| from_tutte(e.into()))?;
+    let k = path.len() - 2;
+    let n_vertices = mesh.n_vertices();
+    let north_fan = pole_fan(&cut_he, chosen.north, false);
+    let south_fan = pole_fan(&cut_he, chosen.south, true);
+
+    let mut fixed = rectangle_boundary(&cut.boundary, k, n_vertices);
+    let mut refinements = 0;
+    let mut uv = solve_refined(&cut_he, &weights, &fixed, cut.mesh.faces(), params.max_refinements, &mut refinements)?;
+    lap("embed", &mut seconds);
+
+    // Pole fans (6.5.1): re-embed with the fan pinned (6.38) where phi is not
+    // strictly increasing. Eq. 6.38 needs the fan's inner vertices to be free;
+    // when the poles are adjacent to other path vertices (tiny meshes such as
+    // the tetrahedron, where every vertex is on the boundary) there is nothing
+    // to pin, and the fan is reported as it is.
+    let mut re_embedded = [false; 2];
+    for (side, fan) in [&north_fan, &south_fan].into_iter().enumerate() {
+        let inner = &fan[1..fan.len().saturating_sub(1).max(1)];
+        if !strictly_increasing_phi(&uv, fan) && inner.iter().all(|&v| fixed[v as usize].is_none()) {
+            pin_fan(&mut fixed, fan, k, side == 1);
+            re_embedded[side] = true;
+        }
+    }
+    if re_embedded.iter().any(|&r| r) {
+        uv = solve_refined(&cut_he, &weights, &fixed, cut.mesh.faces(), params.max_refinements, &mut refinements)?;
+        lap("re-embed poles", &mut seconds);
+    }
+    let fans_monotone = [strictly_increasing_phi(&uv, &north_fan), strictly_increasing_phi(&uv, &south_fan)];
+    let inverted = inverted_faces(cut.mesh.faces(), &uv);
+    let tp_valid = inverted.is_empty();
+
+    // The fold (6.35); originals keep their labels in the cut mesh.
+    let mut points: Vec<[f64; 3]> = uv[..n_vertices].iter().map(|&[t, p]| [t.sin() * p.cos(), t.sin() * p.sin(), t.cos()]).collect();
+    points[chosen.north as usize] = [0.0, 0.0, 1.0];
+    points[chosen.south as usize] = [0.0, 0.0, -1.0];
+    lap("fold", &mut seconds);
+
+    let min_area_ratio = cut
+        .mesh
+        .faces()
+        .iter()
+        .map(|&[a, b, c]| {
+            let (a, b, c) = (uv[a as usize], uv[b as usize], uv[c as usize]);
+            0.5 * ((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]))
+        })
+        .fold(f64::INFINITY, f64::min)
+        / (2.0 * PI * PI);
+    let message = if tp_valid {
+        format!(
+            "theta-phi embedding certified flip-free in double precision ({refinements} refinement steps, thinnest triangle {min_area_ratio:.3e} of the rectangle)"
+        )
+    } else {
+        format!(
+            "double precision cannot hold this embedding: {} flipped and {} collapsed triangles in the theta-phi rectangle after {refinements} refinement steps; pole fans monotone: north {}, south {}",
+            inverted.flipped.len(),
+            inverted.degenerate.len(),
+            fans_monotone[0],
+            fans_monotone[1]
+        )
+    };
+    let embedding = SphereEmbedding { points, iterations: refinements, status: Status::Direct, message, seconds };
+    Ok(ThetaPhi {
+        embedding,
+        poles: chosen,
+        cut_path: path,
+        cut,
+        theta_phi: uv,
+        tp_valid,
+        inverted,
+        refinements,
+        re_embedded,
+        fans_monotone,
+        min_area_ratio,
+    })
+}
+
+/// Solves the Tutte system with `fixed` boundary, then refines in double-double
+/// while triangles are inverted and refinement still changes the solution.
+fn solve_refined(
+    he: &HalfEdgeMesh,
+    weights: &[f64],
+    fixed: &[Option<[f64; 2]>],
+    faces: &[[u32; 3]],
+    max_refinements: usize,
+    refinements: &mut usize,
+) -> Result<Vec<[f64; 2]>, SphereError> {
+    let system = FixedSystem::assemble(he, weights, fixed).map_err(from_tutte)?;
+    let mut uv = system.fixed_positions(fixed);
+    if system.free.is_empty() {
+        return Ok(uv);
+    }
+    let factor = Factorization::new(&system.matrix)?;
+    let mut x = factor.solve(&system.matrix, &system.rhs)?;
+    system.scatter(&mut uv, &x);
+    // One refinement step always: the plain solve leaves cond(A) * eps behind.
+    for step in 0..max_refinements {
+        if step > 0 && inverted_faces(faces, &uv).is_empty() {
+            break;
+        }
+        let change = refine_step(&system.matrix, &factor, &system.rhs, &mut x)?;
+        *refinements += 1;
+        system.scatter(&mut uv, &x);
+        if change == 0.0 {
+            break;
+        }
+    }
+    Ok(uv)
+}
+
+/// The boundary of eq. 6.31: u_n = (0, pi), u_{p_i} = (i h, 0), u_s = (pi, pi),
+/// u_{N+i} = ((k + 1 - i) h, 2 pi), h = pi / (k + 1), as (theta, phi).
+fn rectangle_boundary(boundary: &[u32], k: usize, n_original: usize) -> Vec<Option<[f64; 2]>> {
+    let h = PI / (k as f64 + 1.0);
+    let mut fixed = vec![None; n_original + k];
+    fixed[boundary[0] as usize] = Some([0.0, PI]);
+    for i in 1..=k {
+        fixed[boundary[i] as usize] = Some([i as f64 * h, 0.0]);
+        fixed[boundary[k + 1 + i] as usize] = Some([(k + 1 - i) as f64 * h, 2.0 * PI]);
+    }
+    fixed[boundary[k + 1] as usize] = Some([PI, PI]);
+    fixed
+}
+
+/// The neighbours of a pole in the cut mesh, ordered by increasing phi in a
+/// valid embedding: P_n = (p_1, v_1, ..., v_l, N+k) for the north pole, and
+/// (p_k, ..., N+1) for the south pole (thesis 6.5.1).
+fn pole_fan(he: &HalfEdgeMesh, pole: u32, south: bool) -> Vec<u32> {
+    let ring = he.vertex_ring(pole);
+    if south {
+        ring.into_iter().rev().collect()
+    } else {
+        ring
+    }
+}
+
+fn strictly_increasing_phi(uv: &[[f64; 2]], fan: &[u32]) -> bool {
+    fan.windows(2).all(|w| uv[w[0] as usize][1] < uv[w[1] as usize][1])
+}
+
+/// Eq. 6.38: the fan's inner vertices pinned at theta = h1 (north) or
+/// pi - h1 (south), evenly in phi; the pole itself is then cut off from the
+/// free vertices, which is the graph H = G - n of eq. 6.36.
+fn pin_fan(fixed: &mut [Option<[f64; 2]>], fan: &[u32], k: usize, south: bool) {
+    let h1 = PI / (k as f64 + 1.0);
+    let inner = &fan[1..fan.len() - 1];
+    let h2 = 2.0 * PI / (inner.len() as f64 + 1.0);
+    let theta = if south { PI - h1 } else { h1 };
+    for (j, &v) in inner.iter().enumerate() {
+        fixed[v as usize] = Some([theta, (j + 1) as f64 * h2]);
+    }
+}
+
+/// A shortest path from n to s (6.2.4) without chords between its inner
+/// vertices and with at least two of them (k >= 2).
+fn cut_path(graph: &Adjacency, north: u32, south: u32, weights: EdgeWeights) -> Option<Vec<u32>> {
+    let (_, mut path) = dijkstra_to(graph, north, south, weights)?;
+    shortcut_chords(graph, &mut path);
+    if path.len() >= 4 {
+        return Some(path);
+    }
+    lengthen(graph, north, south, weights)
+}
+
+/// Replaces p_i ... p_j by the edge p_i p_j wherever two inner path vertices
+/// more than one step apart are adjacent: such a chord would lie along one side
+/// of the rectangle.
+fn shortcut_chords(graph: &Adjacency, path: &mut Vec<u32>) {
+    'again: loop {
+        let last = path.len() - 1;
+        for i in 1..last {
+            for j in (i + 2..last).rev() {
+                if graph.neighbors(path[i]).contains(&path[j]) {
+                    path.drain(i + 1..j);
+                    continue 'again;
+                }
+            }
+        }
+        return;
+    }
+}
+
+/// A path n, a, ..., s with at least two inner vertices: through a neighbour a
+/// of n not adjacent to s, then a shortest path to s avoiding n; failing that,
+/// n, a, b, s with a ~ n, b ~ a, b ~ s.
+fn lengthen(graph: &Adjacency, north: u32, south: u32, weights: EdgeWeights) -> Option<Vec<u32>> {
+    let n = graph.n_vertices();
+    // The graph without the north pole: drop its edges.
+    let offsets_ok = graph.neighbors(north).iter().any(|&a| a != south);
+    if !offsets_ok {
+        return None;
+    }
+    let mut best: Option<(f64, Vec<u32>)> = None;
+    let without_north = remove_vertex(graph, north);
+    let from_south = dijkstra(&without_north, south, weights)?;
+    for &a in graph.neighbors(north) {
+        if a == south || graph.neighbors(a).contains(&south) {
+            continue;
+        }
+        if let Some(mut tail) = from_south.path_to(a) {
+            tail.reverse(); // a ... s
+            let length = from_south.distances[a as usize];
+            let mut path = vec![north];
+            path.extend(tail);
+            shortcut_chords(graph, &mut path);
+            if path.len() >= 4 && best.as_ref().is_none_or(|(l, _)| length < *l) {
+                best = Some((length, path));
+            }
+        }
+    }
+    if let Some((_, path)) = best {
+        return Some(path);
+    }
+    for &a in graph.neighbors(north) {
+        if a == south {
+            continue;
+        }
+        for &b in graph.neighbors(a) {
+            if b != north && b != south && graph.neighbors(b).contains(&south) {
+                return Some(vec![north, a, b, south]);
+            }
+        }
+    }
+    let _ = n;
+    None
+}
+
+fn remove_vertex(graph: &Adjacency, removed: u32) -> Adjacency {
+    let mut offsets = Vec::with_capacity(graph.offsets.len());
+    let mut neighbors = Vec::with_capacity(graph.neighbors.len());
+    offsets.push(0);
+    for v in 0..graph.n_vertices() as u32 {
+        if v != removed {
+            neighbors.extend(graph.neighbors(v).iter().filter(|&&u| u != removed));
+        }
+        offsets.push(neighbors.len());
+    }
+    Adjacency { offsets, neighbors }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::validity::check_sphere;
+
+    fn uv_sphere(rings: usize, segments: usize) -> Mesh {
+        let mut p = vec![[0.0, 0.0, 1.0]];
+        for i in 1..rings {
+            let t = PI * i as f64 / rings as f64;
+            for j in 0..segments {
+                let f = 2.0 * PI * j as f64 / segments as f64;
+                p.push([t.sin() * f.cos() * (1.0 + 0.3 * (3.0 * f).sin()), t.sin() * f.sin(), t.cos() * 2.0]);
+            }
+        }
+        p.push([0.0, 0.0, -2.0]);
+        let south = (p.len() - 1) as u32;
+        let at = |i: usize, j: usize| (1 + (i - 1) * segments + j % segments) as u32;
+        let mut f = Vec::new();
+        for j in 0..segments {
+            f.push([0, at(1, j), at(1, j + 1)]);
+            f.push([south, at(rings - 1, j + 1), at(rings - 1, j)]);
+        }
+        for i in 1..rings - 1 {
+            for j in 0..segments {
+                f.push([at(i, j), at(i + 1, j), at(i + 1, j + 1)]);
+                f.push([at(i, j), at(i + 1, j + 1), at(i, j + 1)]);
+            }
+        }
+        Mesh::new(p, f).unwrap()
+    }
+
+    #[test]
+    fn sphere_like_mesh_is_certified_and_bijective() {
+        let mesh = uv_sphere(12, 16);
+        for poles in [PoleChoice::FastGraph, PoleChoice::Graph, PoleChoice::Physical, PoleChoice::Explicit(0, 5)] {
+            let params = ThetaPhiParams { poles, ..ThetaPhiParams::default() };
+            let tp = theta_phi(&mesh, &params).unwrap();
+            assert!(tp.tp_valid, "{poles:?}: {}", tp.embedding.message);
+            let k = tp.cut_path.len() - 2;
+            assert!(k >= 2);
+            assert_eq!(tp.theta_phi.len(), mesh.n_vertices() + k);
+            for p in &tp.embedding.points {
+                assert!(((p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt() - 1.0).abs() < 1e-12);
+            }
+            // The fold of a flip-free rectangle covers the sphere once.
+            let report = check_sphere(mesh.faces(), &tp.embedding.points);
+            assert_eq!(report.covering_degree, 1, "{poles:?}");
+        }
+    }
+
+    #[test]
+    fn tetrahedron_works_with_a_lengthened_path() {
+        let mesh = Mesh::new(
+            vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+            vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]],
+        )
+        .unwrap();
+        let tp = theta_phi(&mesh, &ThetaPhiParams::default()).unwrap();
+        assert_eq!(tp.cut_path.len(), 4);
+        assert!(tp.tp_valid, "{}", tp.embedding.message);
+    }
+
+    #[test]
+    fn explicit_poles_are_checked() {
+        let mesh = uv_sphere(6, 8);
+        let params = ThetaPhiParams { poles: PoleChoice::Explicit(3, 3), ..ThetaPhiParams::default() };
+        assert!(matches!(theta_phi(&mesh, &params), Err(SphereError::InvalidParameter { .. })));
+    }
+}
