@@ -131,3 +131,29 @@ def test_orient_requires_an_output(tmp_path: Path, capsys: pytest.CaptureFixture
     with pytest.raises(SystemExit) as info:
         cli.main(["orient", str(source)])
     assert info.value.code == 2
+
+
+def test_map_writes_the_sphere_and_the_npz(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    out = tmp_path / "sphere.ply"
+    code = cli.main(["map", "--dataset", "helix_tube", "--n-vertices", "500", "-o", str(out)])
+    text = capsys.readouterr().out
+    assert code == 0, text
+    assert "certified flip-free" in text and "GC-embedding" in text
+    sphere = sp.load(out)
+    np.testing.assert_allclose(np.linalg.norm(sphere.vertices, axis=1), 1.0, atol=1e-12)
+    data = np.load(tmp_path / "sphere.npz")
+    np.testing.assert_array_equal(data["points"], sphere.vertices)
+    assert data["theta_phi"].shape[1] == 2
+    assert data["poles"].shape == (2,) and data["cut_path"][0] == data["poles"][0]
+
+
+def test_map_refuses_broken_input_and_missing_folders(tmp_path: Path,
+                                                      capsys: pytest.CaptureFixture[str]) -> None:
+    V = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])
+    F = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2]])
+    broken = tmp_path / "open.obj"
+    sp.save(sp.Mesh(V, F), broken)
+    assert cli.main(["map", str(broken), "-o", str(tmp_path / "x.ply")]) == 1
+    assert "refusing" in capsys.readouterr().out
+    assert cli.main(["map", "--dataset", "icosphere", "-o", str(tmp_path / "no" / "x.ply")]) == 2
+    assert not (tmp_path / "x.ply").exists()

@@ -1,22 +1,32 @@
 """The ``spherify`` command line.
 
+    spherify map MESH -o OUT [--method theta_phi] [--poles fast_graph]
+                                   map a mesh onto the sphere, print the certificate,
+                                   write OUT (the sphere as a mesh) and OUT's .npz
     spherify check MESH            load, validate, orient and print the report
-    spherify check --dataset NAME  the same on a built-in generated shape
     spherify orient MESH -o OUT    write a consistently, outward-oriented copy
 
-Exit status: 0 for a valid genus-0 mesh, 1 when the mesh has problems that
-orientation cannot repair, 2 for unreadable input or bad arguments.
+Every command takes ``--dataset NAME [--n-vertices N]`` instead of MESH to
+use a generated shape. Exit status: 0 for success (a valid mesh; a certified
+map), 1 when the mesh has problems or the map could not be certified, 2 for
+unreadable input or bad arguments.
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 import time
+import warnings
+from pathlib import Path
 from typing import List, Optional
 
+import numpy as np
+
 from . import datasets
-from ._errors import SpherifyError, TopologyError
+from ._embed import embed, methods
+from ._errors import SpherifyError, SpherifyWarning, TopologyError
 from ._mesh import Mesh, check, load, orient, save
 
 
@@ -63,18 +73,81 @@ def _cmd_orient(args: argparse.Namespace) -> int:
     return 0
 
 
+def _save_npz(path: Path, **arrays: np.ndarray) -> None:
+    """Write an .npz under a temporary name, then rename it into place."""
+    temporary = path.with_name(f".{path.name}.tmp-{os.getpid()}")
+    try:
+        with open(temporary, "wb") as handle:
+            np.savez(handle, **arrays)
+        os.replace(temporary, path)
+    finally:
+        if temporary.exists():
+            temporary.unlink()
+
+
+def _cmd_map(args: argparse.Namespace) -> int:
+    out = Path(args.output)
+    if not out.parent.is_dir():
+        raise SpherifyError(f"the output folder {out.parent} does not exist")
+    start = time.perf_counter()
+    mesh = _load(args)
+    loaded = time.perf_counter()
+    report = check(mesh)
+    source = args.mesh or f"dataset {args.dataset!r}"
+    print(f"{source}: {mesh.n_vertices} vertices, {mesh.n_faces} faces")
+    if not report.is_sphere_topology:
+        print(report)
+        print("refusing to map: the mesh is not a closed, connected, manifold genus-0 surface")
+        return 1
+    options = {}
+    if args.method == "theta_phi":
+        options = {"poles": args.poles, "weights": args.weights}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", SpherifyWarning)  # reported below instead
+        m = embed(mesh, args.method, **options)
+    mapped = time.perf_counter()
+    for note in m.notes:
+        print(f"note: {note}")
+    print(f"method: {m.method} ({m.status}, {m.iterations} iterations): {m.message}")
+    certified = m.valid
+    if m.method == "theta_phi":
+        print(f"poles: {m.poles[0]} (north), {m.poles[1]} (south); cut path of {len(m.cut_path)} vertices")
+        print(f"theta-phi rectangle (the bijection h): "
+              f"{'certified flip-free' if m.tp_valid else 'NOT certified'} under exact predicates")
+        certified = m.tp_valid
+    print(f"GC-embedding (minor-arc edges): {'valid' if m.valid else 'not valid'}, "
+          f"{m.flipped} faces flipped or collapsed; area sum {m.report.area_sum:.12f} "
+          f"(4 pi = {4 * np.pi:.12f})")
+    stages = ", ".join(f"{k} {v:.3f}" for k, v in m.seconds.items())
+    print(f"seconds: load {loaded - start:.3f}; {stages}; total {mapped - start:.3f}")
+    save(Mesh(m.points, m.mesh.faces), out)
+    arrays = {"points": m.points, "faces": m.mesh.faces}
+    if m.method == "theta_phi":
+        arrays.update(theta_phi=m.theta_phi, poles=np.array(m.poles), cut_path=m.cut_path,
+                      cut_faces=m.cut_mesh.faces, cut_original=m.cut_original)
+    npz = out.with_suffix(".npz")
+    _save_npz(npz, **arrays)
+    print(f"wrote {out} (the sphere as a mesh) and {npz}")
+    return 0 if certified else 1
+
+
 def main(argv: Optional[List[str]] = None) -> int:
     parser = argparse.ArgumentParser(prog="spherify", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = parser.add_subparsers(dest="command", required=True)
-    for name, func, text in [("check", _cmd_check, "validate a mesh, orient it, print the report"),
+    for name, func, text in [("map", _cmd_map, "map a mesh onto the sphere and certify it"),
+                             ("check", _cmd_check, "validate a mesh, orient it, print the report"),
                              ("orient", _cmd_orient, "write a consistently outward-oriented copy")]:
         p = sub.add_parser(name, help=text)
         p.add_argument("mesh", nargs="?", help="mesh file (.obj .off .ply .stl)")
         p.add_argument("--dataset", choices=datasets.names(), help="use a generated shape instead")
         p.add_argument("--n-vertices", type=int, default=5000, help="size of the generated shape")
-        if name == "orient":
+        if name in ("orient", "map"):
             p.add_argument("-o", "--output", required=True, help="output mesh file")
+        if name == "map":
+            p.add_argument("--method", default="theta_phi", choices=methods())
+            p.add_argument("--poles", default="fast_graph", choices=["fast_graph", "graph", "physical"])
+            p.add_argument("--weights", default="uniform", choices=["uniform", "chord", "mean_value"])
         p.set_defaults(func=func)
     args = parser.parse_args(argv)
     try:
