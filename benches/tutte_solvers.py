@@ -74,6 +74,8 @@ def main() -> None:
     parser.add_argument("--sizes", type=int, nargs="+", default=[100_000, 1_000_000])
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--gs-max-iter", type=int, default=3000)
+    parser.add_argument("--solvers", nargs="+", default=["auto", "cg", "cg_jacobi", "gauss_seidel"],
+                        help="spherify solvers to time (default: all)")
     args = parser.parse_args()
     try:
         from sksparse.cholmod import cholesky
@@ -87,7 +89,7 @@ def main() -> None:
         A, B = laplacian_system(mesh)
         n = A.shape[0]
         rows: Dict[str, tuple] = {}
-        for solver in ["auto", "cg", "cg_jacobi", "gauss_seidel"]:
+        for solver in dict.fromkeys(["auto"] + args.solvers):
             max_iter = args.gs_max_iter if solver == "gauss_seidel" else 100_000
             state = {}
 
