@@ -874,7 +874,12 @@ def helix_tube(n_vertices: int = 5000, turns: float = 3.0, radius: float = 1.0,
 @_shape
 def urchin(n_vertices: int = 20000, spikes: int = 32, spike_length: float = 2.0,
            spike_radius: float = 0.05, seed: int = 0) -> "Mesh":
-    """A unit ball with long thin spikes, star-shaped from the origin.
+    """A unit ball with long thin spikes.
+
+    The spikes point away from the centre, but their tubes are triangulated
+    with rings turned by half a step, so some tube faces face slightly away
+    from the origin: the mesh is not star-shaped (radial projection from the
+    kernel refuses it), though it comes close.
 
     Parameters
     ----------

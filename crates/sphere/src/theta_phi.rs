@@ -425,7 +425,8 @@ mod tests {
     #[test]
     fn sphere_like_mesh_is_certified_and_bijective() {
         let mesh = uv_sphere(12, 16);
-        for poles in [PoleChoice::FastGraph, PoleChoice::Graph, PoleChoice::Physical, PoleChoice::Explicit(0, 5)] {
+        let last = mesh.n_vertices() as u32 - 1;
+        for poles in [PoleChoice::FastGraph, PoleChoice::Graph, PoleChoice::Physical, PoleChoice::Explicit(3, last)] {
             let params = ThetaPhiParams { poles, ..ThetaPhiParams::default() };
             let tp = theta_phi(&mesh, &params).unwrap();
             assert!(tp.tp_valid, "{poles:?}: {}", tp.embedding.message);
