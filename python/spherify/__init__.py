@@ -14,6 +14,7 @@ from ._report import MeshReport, SphereReport
 from ._spheremap import SphereMap
 from ._tutte import TutteInfo, boundary_loop, tutte
 from ._embed import embed, methods
+from ._quality import quality
 
 __all__ = [
     "ConvergenceError",
@@ -37,6 +38,7 @@ __all__ = [
     "load",
     "methods",
     "orient",
+    "quality",
     "save",
     "shortest_path",
     "tutte",

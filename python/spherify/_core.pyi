@@ -7,7 +7,7 @@ import numpy.typing as npt
 
 from ._report import MeshReport, SphereReport
 
-__all__ = ["CoreMesh", "__version__", "boundary_loop", "check", "check_raw", "check_sphere", "dijkstra", "load", "orient", "save", "shortest_path", "tutte"]
+__all__ = ["CoreMesh", "__version__", "boundary_loop", "check", "check_raw", "check_sphere", "dijkstra", "embed_alexa", "embed_gotsman", "embed_radial", "embed_relaxation", "embed_theta_phi", "load", "orient", "quality", "save", "shortest_path", "tutte"]
 
 __version__: str
 
@@ -51,3 +51,42 @@ def tutte(
     tol: float = 1e-10,
     max_iter: int = 10000,
 ) -> Tuple[npt.NDArray[np.float64], Dict[str, Any]]: ...
+def embed_radial(mesh: CoreMesh, center: str | npt.ArrayLike = "kernel") -> Tuple[npt.NDArray[np.float64], Dict[str, Any]]: ...
+def embed_relaxation(
+    mesh: CoreMesh,
+    weights: str = "uniform",
+    rho: float = 1.0,
+    max_iter: int = 10000,
+    check_every: int = 10,
+    strict: bool = False,
+    tol: float = 1e-12,
+    center: Optional[str | npt.ArrayLike] = None,
+    initial: Optional[npt.NDArray[np.float64]] = None,
+) -> Tuple[npt.NDArray[np.float64], Dict[str, Any]]: ...
+def embed_alexa(
+    mesh: CoreMesh,
+    c: Optional[float] = None,
+    max_iter: int = 10000,
+    check_every: int = 10,
+    strict: bool = False,
+    tol: float = 1e-12,
+    center: Optional[str | npt.ArrayLike] = None,
+    initial: Optional[npt.NDArray[np.float64]] = None,
+) -> Tuple[npt.NDArray[np.float64], Dict[str, Any]]: ...
+def embed_gotsman(
+    mesh: CoreMesh,
+    weights: str = "uniform",
+    rho: float = 1.0,
+    max_iter: int = 50,
+    tol: float = 1e-10,
+    strict: bool = False,
+    initial: Optional[npt.NDArray[np.float64]] = None,
+) -> Tuple[npt.NDArray[np.float64], Dict[str, Any]]: ...
+def embed_theta_phi(
+    mesh: CoreMesh,
+    poles: Optional[str | Tuple[int, int]] = None,
+    weights: str = "uniform",
+    rho: float = 1.0,
+    max_refinements: int = 8,
+) -> Tuple[npt.NDArray[np.float64], Dict[str, Any]]: ...
+def quality(mesh: CoreMesh, points: npt.NDArray[np.float64]) -> Dict[str, Any]: ...

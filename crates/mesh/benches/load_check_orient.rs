@@ -55,8 +55,14 @@ fn pipeline(c: &mut Criterion) {
         eprintln!("../shared/meshes is absent: skipping the igea.ply bench");
     }
     let sphere = uv_sphere(708, 708); // 1,002,528 faces
-    let bytes = io::write_bytes(&sphere, &VertexAttributes::default(), FileFormat::Ply, &WriteOptions::default(), "sphere.ply")
-        .expect("writes");
+    let bytes = io::write_bytes(
+        &sphere,
+        &VertexAttributes::default(),
+        FileFormat::Ply,
+        &WriteOptions::default(),
+        "sphere.ply",
+    )
+    .expect("writes");
     group.throughput(Throughput::Elements(sphere.n_faces() as u64));
     group.bench_function("uv_sphere_1M_faces.ply", |b| {
         b.iter(|| {

@@ -56,7 +56,11 @@ pub fn cut_open(mesh: &Mesh, path: &[u32]) -> Result<CutMesh, CutError> {
     let he = HalfEdgeMesh::new(mesh)?;
     let euler = he.n_vertices() as i64 - he.n_edges() as i64 + he.n_faces() as i64;
     if !he.boundary_loops().is_empty() || euler != 2 {
-        return Err(TopologyError { problem: TopologyProblem::NotSphere, report: Box::new(validate::check(mesh)) }.into());
+        return Err(TopologyError {
+            problem: TopologyProblem::NotSphere,
+            report: Box::new(validate::check(mesh)),
+        }
+        .into());
     }
     if path.len() < 3 {
         return Err(CutError::TooShort(path.len()));
@@ -72,7 +76,10 @@ pub fn cut_open(mesh: &Mesh, path: &[u32]) -> Result<CutMesh, CutError> {
     }
     let mut steps = Vec::with_capacity(path.len() - 1);
     for pair in path.windows(2) {
-        steps.push(half_edge_between(&he, pair[0], pair[1]).ok_or(CutError::NotAdjacent(pair[0], pair[1]))?);
+        steps.push(
+            half_edge_between(&he, pair[0], pair[1])
+                .ok_or(CutError::NotAdjacent(pair[0], pair[1]))?,
+        );
     }
     let k = path.len() - 2;
     let mut faces = mesh.faces().to_vec();
@@ -82,8 +89,8 @@ pub fn cut_open(mesh: &Mesh, path: &[u32]) -> Result<CutMesh, CutError> {
     for i in 1..=k {
         let p = path[i];
         let duplicate = (n + k - i) as u32; // label N + k - i + 1, 0-based
-        // Turn clockwise from (p -> p_{i+1}) until (p -> p_{i-1}); each step
-        // crosses a face on the right of the path.
+                                            // Turn clockwise from (p -> p_{i+1}) until (p -> p_{i-1}); each step
+                                            // crosses a face on the right of the path.
         let forward = steps[i];
         let backward = he.twin(steps[i - 1]);
         let mut h = forward;
@@ -125,7 +132,16 @@ mod tests {
             [0.0, 0.0, 1.0],
             [0.0, 0.0, -1.0],
         ];
-        let f = vec![[0, 2, 4], [2, 1, 4], [1, 3, 4], [3, 0, 4], [2, 0, 5], [1, 2, 5], [3, 1, 5], [0, 3, 5]];
+        let f = vec![
+            [0, 2, 4],
+            [2, 1, 4],
+            [1, 3, 4],
+            [3, 0, 4],
+            [2, 0, 5],
+            [1, 2, 5],
+            [3, 1, 5],
+            [0, 3, 5],
+        ];
         Mesh::new(p, f).unwrap()
     }
 

@@ -56,10 +56,17 @@ impl HalfEdgeMesh {
                 let (tail, head) = corner_endpoints(faces, c);
                 let side = usize::from(tail != lo);
                 if group.len() > 2 {
-                    return Err(fail(TopologyProblem::NonManifoldEdge { a: lo, b: hi, faces: group.len() }));
+                    return Err(fail(TopologyProblem::NonManifoldEdge {
+                        a: lo,
+                        b: hi,
+                        faces: group.len(),
+                    }));
                 }
                 if taken[side] {
-                    return Err(fail(TopologyProblem::InconsistentOrientation { a: tail, b: head }));
+                    return Err(fail(TopologyProblem::InconsistentOrientation {
+                        a: tail,
+                        b: head,
+                    }));
                 }
                 taken[side] = true;
                 let h = 2 * e + side;
@@ -297,7 +304,13 @@ mod tests {
     #[test]
     fn open_fan_has_one_boundary_loop() {
         // Square split into four triangles around a centre vertex 4.
-        let p = vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0], [0.5, 0.5, 0.0]];
+        let p = vec![
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [1.0, 1.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.5, 0.5, 0.0],
+        ];
         let f = vec![[0, 1, 4], [1, 2, 4], [2, 3, 4], [3, 0, 4]];
         let he = HalfEdgeMesh::new(&Mesh::new(p, f).unwrap()).unwrap();
         let loops = he.boundary_loops();
@@ -314,8 +327,14 @@ mod tests {
         let p = vec![[0.0; 3]; 7];
         // Two tetrahedra sharing vertex 0: a bow-tie vertex.
         let f = vec![
-            [0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3],
-            [0, 5, 4], [0, 4, 6], [0, 6, 5], [4, 5, 6],
+            [0, 2, 1],
+            [0, 1, 3],
+            [0, 3, 2],
+            [1, 2, 3],
+            [0, 5, 4],
+            [0, 4, 6],
+            [0, 6, 5],
+            [4, 5, 6],
         ];
         let err = HalfEdgeMesh::new(&Mesh::new(p.clone(), f).unwrap()).unwrap_err();
         assert_eq!(err.problem, TopologyProblem::NonManifoldVertex { vertex: 0 });

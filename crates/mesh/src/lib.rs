@@ -20,6 +20,7 @@ pub mod mesh;
 pub mod orient;
 pub mod predicates;
 pub mod validate;
+pub mod vec3;
 mod volume;
 
 pub use error::{FormatError, Location, MeshError, TopologyError, TopologyProblem};

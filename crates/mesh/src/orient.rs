@@ -95,12 +95,14 @@ pub fn orient(mesh: &Mesh) -> Result<(Mesh, OrientInfo), TopologyError> {
     }
 
     // Turn inward-facing closed components outward (signed volume < 0).
-    let volume = component_volumes(mesh.positions(), faces, &component, n_components as usize, Some(&flip));
+    let volume =
+        component_volumes(mesh.positions(), faces, &component, n_components as usize, Some(&flip));
     let mut closed = vec![true; n_components as usize];
     for (f, &c) in component.iter().enumerate() {
         closed[c as usize] &= closed_face[f];
     }
-    let turn: Vec<bool> = volume.normalized.iter().zip(&closed).map(|(&v, &c)| c && v < 0.0).collect();
+    let turn: Vec<bool> =
+        volume.normalized.iter().zip(&closed).map(|(&v, &c)| c && v < 0.0).collect();
     for (f, fl) in flip.iter_mut().enumerate() {
         *fl ^= turn[component[f] as usize];
     }
@@ -110,7 +112,8 @@ pub fn orient(mesh: &Mesh) -> Result<(Mesh, OrientInfo), TopologyError> {
         components_turned_outward: turn.iter().filter(|&&x| x).count(),
     };
     // Already consistent and outward: keep the mesh (and its cached edge table).
-    let oriented = if info.flipped_faces == 0 { mesh.clone() } else { mesh.with_flipped_faces(&flip) };
+    let oriented =
+        if info.flipped_faces == 0 { mesh.clone() } else { mesh.with_flipped_faces(&flip) };
     Ok((oriented, info))
 }
 
@@ -152,10 +155,17 @@ mod tests {
     #[test]
     fn tiny_and_huge_meshes_turn_outward() {
         for scale in [1e-120, 1e103] {
-            let p: Vec<[f64; 3]> = [[1.0, 0.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, 1.0], [0.0, 0.0, -1.0]]
-                .iter()
-                .map(|q| q.map(|x| x * scale))
-                .collect();
+            let p: Vec<[f64; 3]> = [
+                [1.0, 0.0, 0.0],
+                [-1.0, 0.0, 0.0],
+                [0.0, 1.0, 0.0],
+                [0.0, -1.0, 0.0],
+                [0.0, 0.0, 1.0],
+                [0.0, 0.0, -1.0],
+            ]
+            .iter()
+            .map(|q| q.map(|x| x * scale))
+            .collect();
             let inward: Vec<[u32; 3]> = OCTA.iter().map(|&[a, b, c]| [a, c, b]).collect();
             let (fixed, info) = orient(&Mesh::new(p, inward).unwrap()).unwrap();
             assert_eq!(info.components_turned_outward, 1, "scale {scale}");

@@ -95,7 +95,8 @@ pub struct MeshReport {
 
 /// Validates a mesh whose arrays are already known to be finite and in range.
 pub fn check(mesh: &Mesh) -> MeshReport {
-    let (table, elements) = rayon::join(|| mesh.edge_table(), || element_pass(mesh.positions(), mesh.faces()));
+    let (table, elements) =
+        rayon::join(|| mesh.edge_table(), || element_pass(mesh.positions(), mesh.faces()));
     check_faces(mesh.positions(), mesh.faces(), table, elements)
 }
 
@@ -115,9 +116,11 @@ pub fn check_raw(positions: &[[f64; 3]], faces: &[[i64; 3]]) -> MeshReport {
             out_of_range.push(f as u32);
         }
     }
-    let (table, elements) = rayon::join(|| EdgeTable::new(positions.len(), &kept), || element_pass(positions, &kept));
+    let (table, elements) =
+        rayon::join(|| EdgeTable::new(positions.len(), &kept), || element_pass(positions, &kept));
     let mut report = check_faces(positions, &kept, &table, elements);
-    let remap = |list: &mut Capped<u32>| list.items.iter_mut().for_each(|f| *f = kept_ids[*f as usize]);
+    let remap =
+        |list: &mut Capped<u32>| list.items.iter_mut().for_each(|f| *f = kept_ids[*f as usize]);
     remap(&mut report.degenerate_faces);
     remap(&mut report.duplicate_faces);
     report.n_faces = faces.len();
@@ -139,7 +142,12 @@ pub fn check_raw(positions: &[[f64; 3]], faces: &[[i64; 3]]) -> MeshReport {
 
 /// The analysis behind [`check`] and [`check_raw`]; the edge table and the
 /// element pass are independent, so callers compute them in parallel.
-fn check_faces(positions: &[[f64; 3]], faces: &[[u32; 3]], table: &EdgeTable, elements: ElementFindings) -> MeshReport {
+fn check_faces(
+    positions: &[[f64; 3]],
+    faces: &[[u32; 3]],
+    table: &EdgeTable,
+    elements: ElementFindings,
+) -> MeshReport {
     let n = positions.len();
     let mut r = MeshReport { n_vertices: n, n_faces: faces.len(), ..Default::default() };
     r.n_edges = table.n_edges();
@@ -167,7 +175,8 @@ fn check_faces(positions: &[[f64; 3]], faces: &[[u32; 3]], table: &EdgeTable, el
 
     let n_referenced = elements.referenced.iter().filter(|&&x| x).count() as i64;
     r.euler_characteristic = n_referenced - r.n_edges as i64 + faces.len() as i64;
-    let twice_genus = 2 * r.n_components as i64 - r.boundary_loops.total as i64 - r.euler_characteristic;
+    let twice_genus =
+        2 * r.n_components as i64 - r.boundary_loops.total as i64 - r.euler_characteristic;
     let repeated_index = elements.repeated_index;
     if r.manifold && repeated_index == 0 && twice_genus >= 0 && twice_genus % 2 == 0 {
         r.genus = Some(twice_genus / 2);
@@ -207,7 +216,9 @@ fn element_pass(positions: &[[f64; 3]], faces: &[[u32; 3]]) -> ElementFindings {
         out.referenced[c as usize] = true;
         let repeats = a == b || b == c || a == c;
         out.repeated_index += repeats as usize;
-        if repeats || collinear3(positions[a as usize], positions[b as usize], positions[c as usize]) {
+        if repeats
+            || collinear3(positions[a as usize], positions[b as usize], positions[c as usize])
+        {
             out.degenerate.push(fi as u32);
         }
     }
@@ -312,7 +323,13 @@ fn count_fans(n: usize, faces: &[[u32; 3]], table: &EdgeTable) -> Capped<u32> {
         }
     }
     // Corner c runs from slot c's vertex to the next slot's vertex in its face.
-    let slot_at = |c: u32, v: u32| if corner_endpoints(faces, c).0 == v { c } else { c - c % 3 + (c + 1) % 3 };
+    let slot_at = |c: u32, v: u32| {
+        if corner_endpoints(faces, c).0 == v {
+            c
+        } else {
+            c - c % 3 + (c + 1) % 3
+        }
+    };
     for e in 0..table.n_edges() {
         let group = table.group(e);
         let (a, b) = corner_endpoints(faces, group[0]);
@@ -462,7 +479,9 @@ fn describe_problems(r: &mut MeshReport, repeated_index: usize) {
     if r.n_components > 1 {
         p.push(format!("the mesh has {} connected components", r.n_components));
     }
-    if r.manifold && r.euler_characteristic != 2 * r.n_components as i64 - r.boundary_loops.total as i64 {
+    if r.manifold
+        && r.euler_characteristic != 2 * r.n_components as i64 - r.boundary_loops.total as i64
+    {
         let genus = r.genus.map(|g| format!("genus {g}: ")).unwrap_or_default();
         p.push(format!(
             "{genus}Euler characteristic V - E + F = {} (a sphere has 2)",
@@ -567,8 +586,24 @@ mod tests {
     #[test]
     fn non_manifold_edge_and_vertex() {
         // Two tetrahedra sharing edge (0, 1).
-        let p = vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [0.0, -1.0, 0.0], [0.0, 0.0, -1.0]];
-        let f = vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3], [0, 1, 4], [0, 5, 1], [0, 4, 5], [1, 5, 4]];
+        let p = vec![
+            [0.0; 3],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, 0.0, 1.0],
+            [0.0, -1.0, 0.0],
+            [0.0, 0.0, -1.0],
+        ];
+        let f = vec![
+            [0, 2, 1],
+            [0, 1, 3],
+            [0, 3, 2],
+            [1, 2, 3],
+            [0, 1, 4],
+            [0, 5, 1],
+            [0, 4, 5],
+            [1, 5, 4],
+        ];
         let r = check(&mesh(p, f));
         assert_eq!(r.nonmanifold_edges.items, vec![[0, 1]]);
         assert!(r.nonmanifold_vertices.is_empty());

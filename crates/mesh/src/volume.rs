@@ -39,7 +39,8 @@ pub(crate) fn component_volumes(
         }
     }
     let half_size = (0..3).map(|i| hi[i] / 2.0 - lo[i] / 2.0).fold(0.0, f64::max);
-    let unit = if half_size > 0.0 && half_size.is_finite() { half_size.log2().ceil().exp2() } else { 1.0 };
+    let unit =
+        if half_size > 0.0 && half_size.is_finite() { half_size.log2().ceil().exp2() } else { 1.0 };
     // unit is a power of two, so multiplying by its inverse is exact.
     let inverse = 1.0 / unit;
     let centre: Vec<f64> = (0..3).map(|i| lo[i] * inverse / 2.0 + hi[i] * inverse / 2.0).collect();
@@ -69,10 +70,11 @@ mod tests {
     #[test]
     fn sign_survives_extreme_scales() {
         for scale in [1e-300, 1e-120, 1.0, 1e103, 1e300] {
-            let p: Vec<[f64; 3]> = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
-                .iter()
-                .map(|q| q.map(|x| x * scale))
-                .collect();
+            let p: Vec<[f64; 3]> =
+                [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
+                    .iter()
+                    .map(|q| q.map(|x| x * scale))
+                    .collect();
             let v = component_volumes(&p, &TETRA, &[0; 4], 1, None);
             assert!(v.normalized[0] > 0.0, "scale {scale}");
             let flipped = component_volumes(&p, &TETRA, &[0; 4], 1, Some(&[true; 4]));

@@ -28,7 +28,10 @@ pub fn rows<T: numpy::Element + Copy + Default, const K: usize>(
 }
 
 /// Rows as a new `(n, K)` numpy array.
-pub fn to_numpy<'py, T: numpy::Element + Copy, const K: usize>(py: Python<'py>, data: &[[T; K]]) -> Bound<'py, PyArray2<T>> {
+pub fn to_numpy<'py, T: numpy::Element + Copy, const K: usize>(
+    py: Python<'py>,
+    data: &[[T; K]],
+) -> Bound<'py, PyArray2<T>> {
     let flat: Vec<T> = data.iter().flatten().copied().collect();
     Array2::from_shape_vec((data.len(), K), flat)
         .expect("row count times K equals the flat length")

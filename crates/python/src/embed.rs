@@ -10,7 +10,10 @@ use crate::convert::to_numpy;
 use crate::errors::{mesh_error, spherify_error, to_py};
 
 /// `(points (n, 3), info dict)` with iterations, status, message and seconds.
-pub fn embedding_to_py<'py>(py: Python<'py>, e: &SphereEmbedding) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyDict>)> {
+pub fn embedding_to_py<'py>(
+    py: Python<'py>,
+    e: &SphereEmbedding,
+) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyDict>)> {
     let info = PyDict::new(py);
     info.set_item("iterations", e.iterations)?;
     info.set_item("status", e.status.name())?;

@@ -4,7 +4,8 @@
 
 use pyo3::call::PyCallArgs;
 use pyo3::exceptions::{
-    PyFileExistsError, PyFileNotFoundError, PyIsADirectoryError, PyNotADirectoryError, PyOSError, PyPermissionError,
+    PyFileExistsError, PyFileNotFoundError, PyIsADirectoryError, PyNotADirectoryError, PyOSError,
+    PyPermissionError,
 };
 use pyo3::prelude::*;
 use spherify_mesh::{Location, MeshError};

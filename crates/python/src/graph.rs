@@ -12,14 +12,19 @@ fn weights<'a>(py: Python<'_>, mesh: &'a CoreMesh, name: &str) -> PyResult<EdgeW
     match name {
         "uniform" => Ok(EdgeWeights::Uniform),
         "length" => Ok(EdgeWeights::Length(mesh.mesh.positions())),
-        other => Err(mesh_error(py, format!("weights must be 'length' or 'uniform', got {other:?}"))),
+        other => {
+            Err(mesh_error(py, format!("weights must be 'length' or 'uniform', got {other:?}")))
+        }
     }
 }
 
 fn check_vertex(py: Python<'_>, mesh: &CoreMesh, v: i64, what: &str) -> PyResult<u32> {
     let n = mesh.mesh.n_vertices();
     if v < 0 || v as u64 >= n as u64 {
-        return Err(mesh_error(py, format!("{what} vertex {v} is out of range (the mesh has {n} vertices)")));
+        return Err(mesh_error(
+            py,
+            format!("{what} vertex {v} is out of range (the mesh has {n} vertices)"),
+        ));
     }
     Ok(v as u32)
 }

@@ -11,7 +11,10 @@ use crate::mesh::CoreMesh;
 
 /// load(path) -> (CoreMesh, notes, attributes): reads OBJ, OFF, PLY or STL.
 #[pyfunction]
-pub fn load<'py>(py: Python<'py>, path: std::path::PathBuf) -> PyResult<(CoreMesh, Vec<String>, Bound<'py, PyDict>)> {
+pub fn load<'py>(
+    py: Python<'py>,
+    path: std::path::PathBuf,
+) -> PyResult<(CoreMesh, Vec<String>, Bound<'py, PyDict>)> {
     let loaded = py.detach(|| io::read(&path)).map_err(|e| to_py(py, e))?;
     let attributes = PyDict::new(py);
     if let Some(sphere) = &loaded.attributes.sphere {

@@ -7,9 +7,13 @@ use pyo3::prelude::*;
 mod convert;
 mod embed;
 mod errors;
+mod gotsman;
 mod graph;
 mod io;
 mod mesh;
+mod metrics;
+mod radial;
+mod relaxation;
 mod sphere;
 mod theta_phi;
 mod tutte;
@@ -29,6 +33,11 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(graph::dijkstra, m)?)?;
     m.add_function(wrap_pyfunction!(graph::shortest_path, m)?)?;
     // Spherical methods (one file each) register below.
+    m.add_function(wrap_pyfunction!(gotsman::embed_gotsman, m)?)?;
+    m.add_function(wrap_pyfunction!(metrics::quality, m)?)?;
+    m.add_function(wrap_pyfunction!(relaxation::embed_relaxation, m)?)?;
+    m.add_function(wrap_pyfunction!(relaxation::embed_alexa, m)?)?;
+    m.add_function(wrap_pyfunction!(radial::embed_radial, m)?)?;
     m.add_function(wrap_pyfunction!(theta_phi::embed_theta_phi, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())

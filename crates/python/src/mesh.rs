@@ -17,7 +17,11 @@ pub struct CoreMesh {
 impl CoreMesh {
     /// CoreMesh(vertices: (n, 3) float64, faces: (m, 3) int64); raises MeshError.
     #[new]
-    fn new(py: Python<'_>, vertices: PyReadonlyArrayDyn<'_, f64>, faces: PyReadonlyArrayDyn<'_, i64>) -> PyResult<Self> {
+    fn new(
+        py: Python<'_>,
+        vertices: PyReadonlyArrayDyn<'_, f64>,
+        faces: PyReadonlyArrayDyn<'_, i64>,
+    ) -> PyResult<Self> {
         let positions = rows::<f64, 3>(py, &vertices, "vertices")?;
         let faces = rows::<i64, 3>(py, &faces, "faces")?;
         let mesh = py.detach(|| Mesh::from_signed(positions, &faces)).map_err(|e| to_py(py, e))?;

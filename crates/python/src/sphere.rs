@@ -11,12 +11,20 @@ use crate::mesh::CoreMesh;
 
 /// check_sphere(mesh, points (n, 3) float64) -> SphereReport.
 #[pyfunction]
-pub fn check_sphere<'py>(py: Python<'py>, mesh: &CoreMesh, points: PyReadonlyArrayDyn<'_, f64>) -> PyResult<Bound<'py, PyAny>> {
+pub fn check_sphere<'py>(
+    py: Python<'py>,
+    mesh: &CoreMesh,
+    points: PyReadonlyArrayDyn<'_, f64>,
+) -> PyResult<Bound<'py, PyAny>> {
     let points = rows::<f64, 3>(py, &points, "points")?;
     if points.len() != mesh.mesh.n_vertices() {
         return Err(mesh_error(
             py,
-            format!("points has {} rows, but the mesh has {} vertices", points.len(), mesh.mesh.n_vertices()),
+            format!(
+                "points has {} rows, but the mesh has {} vertices",
+                points.len(),
+                mesh.mesh.n_vertices()
+            ),
         ));
     }
     let r = py.detach(|| check(mesh.mesh.faces(), &points));
@@ -25,7 +33,13 @@ pub fn check_sphere<'py>(py: Python<'py>, mesh: &CoreMesh, points: PyReadonlyArr
     d.set_item("n_positive", r.n_positive)?;
     d.set_item("n_negative", r.n_negative)?;
     d.set_item("n_zero", r.n_zero)?;
-    d.set_item("flipped_faces", numpy::IntoPyArray::into_pyarray(r.flipped_faces.iter().map(|&f| i64::from(f)).collect::<Vec<_>>(), py))?;
+    d.set_item(
+        "flipped_faces",
+        numpy::IntoPyArray::into_pyarray(
+            r.flipped_faces.iter().map(|&f| i64::from(f)).collect::<Vec<_>>(),
+            py,
+        ),
+    )?;
     d.set_item("area_sum", r.area_sum)?;
     d.set_item("area_error", r.area_error)?;
     d.set_item("covering_degree", r.covering_degree)?;

@@ -49,12 +49,12 @@ fn weights(py: Python<'_>, name: &str, rho: f64) -> PyResult<Weights> {
         }
         "mean_value" => Weights::MeanValue,
         "cotangent" => Weights::Cotangent,
-        other => {
-            return Err(mesh_error(
-                py,
-                format!("weights must be 'uniform', 'chord', 'mean_value' or 'cotangent', got {other:?}"),
-            ))
-        }
+        other => return Err(mesh_error(
+            py,
+            format!(
+                "weights must be 'uniform', 'chord', 'mean_value' or 'cotangent', got {other:?}"
+            ),
+        )),
     })
 }
 
@@ -146,7 +146,8 @@ pub fn tutte<'py>(
         solver: solver_kind(py, solver)?,
         solve: SolveParams { tol, max_iter, x0: None },
     };
-    let embedding = py.detach(|| core_tutte::tutte(&mesh.mesh, &params)).map_err(|e| tutte_error(py, e))?;
+    let embedding =
+        py.detach(|| core_tutte::tutte(&mesh.mesh, &params)).map_err(|e| tutte_error(py, e))?;
     let info = PyDict::new(py);
     info.set_item("solver", solver_name(embedding.info.solver))?;
     info.set_item("iterations", embedding.info.iterations)?;

@@ -33,7 +33,8 @@ pub fn check_raw<'py>(
 /// orient(mesh) -> (CoreMesh, info dict); raises TopologyError.
 #[pyfunction]
 pub fn orient<'py>(py: Python<'py>, mesh: &CoreMesh) -> PyResult<(CoreMesh, Bound<'py, PyDict>)> {
-    let (oriented, info) = py.detach(|| orient_mod::orient(&mesh.mesh)).map_err(|e| to_py(py, e.into()))?;
+    let (oriented, info) =
+        py.detach(|| orient_mod::orient(&mesh.mesh)).map_err(|e| to_py(py, e.into()))?;
     let dict = PyDict::new(py);
     dict.set_item("flipped_faces", info.flipped_faces)?;
     dict.set_item("components", info.components)?;
@@ -42,7 +43,13 @@ pub fn orient<'py>(py: Python<'py>, mesh: &CoreMesh) -> PyResult<(CoreMesh, Boun
 }
 
 fn pairs<'py>(py: Python<'py>, items: &[[u32; 2]]) -> PyResult<Bound<'py, PyList>> {
-    PyList::new(py, items.iter().map(|p| PyTuple::new(py, p.iter()).map(|t| t.unbind())).collect::<PyResult<Vec<_>>>()?)
+    PyList::new(
+        py,
+        items
+            .iter()
+            .map(|p| PyTuple::new(py, p.iter()).map(|t| t.unbind()))
+            .collect::<PyResult<Vec<_>>>()?,
+    )
 }
 
 /// Builds `spherify.MeshReport(**fields)`.

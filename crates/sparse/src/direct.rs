@@ -259,9 +259,7 @@ impl Factor {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::test_support::{
-        dense_solve, grid_laplacian, mean_value_like, random_spd, rel_err,
-    };
+    use crate::test_support::{dense_solve, grid_laplacian, mean_value_like, random_spd, rel_err};
 
     #[test]
     fn cholesky_matches_dense() {

@@ -39,9 +39,17 @@ fn residual_row(a: &CsrMatrix, i: usize, b: f64, x: &[f64]) -> f64 {
 }
 
 /// The residual b - A x with each row computed in double-double. O(nnz), parallel.
-pub fn residual_double_double(a: &CsrMatrix, b: &[f64], x: &[f64]) -> Result<Vec<f64>, SparseError> {
+pub fn residual_double_double(
+    a: &CsrMatrix,
+    b: &[f64],
+    x: &[f64],
+) -> Result<Vec<f64>, SparseError> {
     if b.len() != a.n_rows() || x.len() != a.n_cols() {
-        return Err(SparseError::LengthMismatch { what: "refinement vectors", got: b.len().min(x.len()), expected: a.n_rows() });
+        return Err(SparseError::LengthMismatch {
+            what: "refinement vectors",
+            got: b.len().min(x.len()),
+            expected: a.n_rows(),
+        });
     }
     Ok((0..a.n_rows()).into_par_iter().map(|i| residual_row(a, i, b[i], x)).collect())
 }
@@ -109,11 +117,17 @@ mod tests {
         b[0] = 1.0;
         let f = Factorization::new(&a).unwrap();
         let mut x = f.solve(&a, &[b.clone()]).unwrap();
-        let before = residual_double_double(&a, &b, &x[0]).unwrap().iter().fold(0.0f64, |m, r| m.max(r.abs()));
+        let before = residual_double_double(&a, &b, &x[0])
+            .unwrap()
+            .iter()
+            .fold(0.0f64, |m, r| m.max(r.abs()));
         for _ in 0..3 {
             refine_step(&a, &f, &[b.clone()], &mut x).unwrap();
         }
-        let after = residual_double_double(&a, &b, &x[0]).unwrap().iter().fold(0.0f64, |m, r| m.max(r.abs()));
+        let after = residual_double_double(&a, &b, &x[0])
+            .unwrap()
+            .iter()
+            .fold(0.0f64, |m, r| m.max(r.abs()));
         assert!(after <= before, "{after} > {before}");
         assert!(after < 1e-14, "{after}");
     }

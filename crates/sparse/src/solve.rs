@@ -598,7 +598,11 @@ impl Factorization {
     pub fn solve(&self, a: &CsrMatrix, rhs: &[Vec<f64>]) -> Result<Vec<Vec<f64>>, SparseError> {
         for b in rhs {
             if b.len() != self.n {
-                return Err(SparseError::LengthMismatch { what: "right-hand side", got: b.len(), expected: self.n });
+                return Err(SparseError::LengthMismatch {
+                    what: "right-hand side",
+                    got: b.len(),
+                    expected: self.n,
+                });
             }
         }
         // A tolerance of infinity turns the factor's own refinement off.

@@ -80,7 +80,9 @@ impl InvertedFaces {
 pub enum TutteError {
     #[error(transparent)]
     Topology(#[from] TopologyError),
-    #[error("the boundary polygon has {got} points, but the boundary loop has {expected} vertices")]
+    #[error(
+        "the boundary polygon has {got} points, but the boundary loop has {expected} vertices"
+    )]
     BoundaryLength { got: usize, expected: usize },
     #[error("the boundary polygon has a non-finite coordinate at point {index}")]
     BoundaryNotFinite { index: usize },
@@ -108,7 +110,10 @@ pub fn boundary_loop(mesh: &Mesh, he: &HalfEdgeMesh) -> Result<Vec<u32>, Topolog
     let loops = he.boundary_loops();
     let euler = he.n_vertices() as i64 - he.n_edges() as i64 + he.n_faces() as i64;
     if loops.len() != 1 || euler != 1 {
-        return Err(TopologyError { problem: TopologyProblem::NotDisk, report: Box::new(validate::check(mesh)) });
+        return Err(TopologyError {
+            problem: TopologyProblem::NotDisk,
+            report: Box::new(validate::check(mesh)),
+        });
     }
     // Boundary half-edges run against their faces' direction: reverse them.
     let mut cycle = loops.into_iter().next().unwrap_or_default();
@@ -122,7 +127,9 @@ pub fn boundary_loop(mesh: &Mesh, he: &HalfEdgeMesh) -> Result<Vec<u32>, Topolog
 
 /// Tutte embedding of a disk-topology mesh with the given weights and boundary.
 pub fn tutte(mesh: &Mesh, params: &TutteParams) -> Result<TutteEmbedding, TutteError> {
-    if params.weights == Weights::MeanValue && matches!(params.solver, SolverKind::CgIc0 | SolverKind::CgJacobi) {
+    if params.weights == Weights::MeanValue
+        && matches!(params.solver, SolverKind::CgIc0 | SolverKind::CgJacobi)
+    {
         return Err(TutteError::SolverNeedsSymmetricWeights { solver: params.solver });
     }
     let he = HalfEdgeMesh::new(mesh)?;
@@ -153,7 +160,8 @@ pub fn embed_with_fixed(
     let system = FixedSystem::assemble(he, weights, fixed)?;
     let mut uv = system.fixed_positions(fixed);
     if system.free.is_empty() {
-        let info = SolveInfo { solver: SolverKind::Direct, iterations: 0, residual: 0.0, seconds: 0.0 };
+        let info =
+            SolveInfo { solver: SolverKind::Direct, iterations: 0, residual: 0.0, seconds: 0.0 };
         return Ok((uv, info));
     }
     let (solution, info) = match solve(&system.matrix, &system.rhs, solver, params) {
@@ -182,7 +190,11 @@ pub struct FixedSystem {
 
 impl FixedSystem {
     /// Assembles the system; weights are per half-edge (row of the tail).
-    pub fn assemble(he: &HalfEdgeMesh, weights: &[f64], fixed: &[Option<[f64; 2]>]) -> Result<FixedSystem, TutteError> {
+    pub fn assemble(
+        he: &HalfEdgeMesh,
+        weights: &[f64],
+        fixed: &[Option<[f64; 2]>],
+    ) -> Result<FixedSystem, TutteError> {
         let n = he.n_vertices();
         let mut unknown = vec![u32::MAX; n];
         let mut free = Vec::new();
@@ -255,7 +267,11 @@ pub fn inverted_faces(faces: &[[u32; 3]], uv: &[[f64; 2]]) -> InvertedFaces {
 
 /// Points for the boundary loop: a circle (evenly or by edge length) or the
 /// caller's polygon, which must be convex and counter-clockwise.
-fn boundary_points(positions: &[[f64; 3]], boundary: &[u32], shape: &BoundaryShape) -> Result<Vec<[f64; 2]>, TutteError> {
+fn boundary_points(
+    positions: &[[f64; 3]],
+    boundary: &[u32],
+    shape: &BoundaryShape,
+) -> Result<Vec<[f64; 2]>, TutteError> {
     let m = boundary.len();
     let on_circle = |t: &[f64]| t.iter().map(|&a| [a.cos(), a.sin()]).collect::<Vec<_>>();
     match shape {
@@ -265,7 +281,8 @@ fn boundary_points(positions: &[[f64; 3]], boundary: &[u32], shape: &BoundarySha
         }
         BoundaryShape::CircleByLength => {
             let length = |k: usize| {
-                let (a, b) = (positions[boundary[k] as usize], positions[boundary[(k + 1) % m] as usize]);
+                let (a, b) =
+                    (positions[boundary[k] as usize], positions[boundary[(k + 1) % m] as usize]);
                 ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
             };
             let lengths: Vec<f64> = (0..m).map(length).collect();
@@ -288,7 +305,8 @@ fn boundary_points(positions: &[[f64; 3]], boundary: &[u32], shape: &BoundarySha
             if points.len() != m {
                 return Err(TutteError::BoundaryLength { got: points.len(), expected: m });
             }
-            if let Some(index) = points.iter().position(|p| !(p[0].is_finite() && p[1].is_finite())) {
+            if let Some(index) = points.iter().position(|p| !(p[0].is_finite() && p[1].is_finite()))
+            {
                 return Err(TutteError::BoundaryNotFinite { index });
             }
             check_convex(points)?;
@@ -332,7 +350,10 @@ pub fn check_convex(points: &[[f64; 2]]) -> Result<(), TutteError> {
     }
     // The turning is a whole number of turns; anything but one means it winds twice or more.
     if (turning / std::f64::consts::TAU - 1.0).abs() > 0.25 {
-        return fail(format!("it winds {:.0} times around its inside", turning / std::f64::consts::TAU));
+        return fail(format!(
+            "it winds {:.0} times around its inside",
+            turning / std::f64::consts::TAU
+        ));
     }
     Ok(())
 }
@@ -365,9 +386,15 @@ mod tests {
     #[test]
     fn every_positive_weight_gives_a_flip_free_embedding() {
         let mesh = grid(12);
-        for weights in [Weights::Uniform, Weights::Chord { rho: -1.0 }, Weights::Chord { rho: 1.0 }, Weights::MeanValue] {
+        for weights in [
+            Weights::Uniform,
+            Weights::Chord { rho: -1.0 },
+            Weights::Chord { rho: 1.0 },
+            Weights::MeanValue,
+        ] {
             for boundary in [BoundaryShape::Circle, BoundaryShape::CircleByLength] {
-                let params = TutteParams { weights, boundary: boundary.clone(), ..TutteParams::default() };
+                let params =
+                    TutteParams { weights, boundary: boundary.clone(), ..TutteParams::default() };
                 let e = tutte(&mesh, &params).unwrap();
                 assert!(e.inverted.is_empty(), "{weights:?} {boundary:?}: {:?}", e.inverted);
                 assert_eq!(e.boundary.len(), 48);
@@ -404,11 +431,17 @@ mod tests {
     fn solvers_agree() {
         let mesh = grid(10);
         let run = |solver| {
-            let params = TutteParams { solver, weights: Weights::Chord { rho: -1.0 }, ..TutteParams::default() };
+            let params = TutteParams {
+                solver,
+                weights: Weights::Chord { rho: -1.0 },
+                ..TutteParams::default()
+            };
             tutte(&mesh, &params).unwrap().uv
         };
         let reference = run(SolverKind::Direct);
-        for solver in [SolverKind::Auto, SolverKind::CgJacobi, SolverKind::CgIc0, SolverKind::GaussSeidel] {
+        for solver in
+            [SolverKind::Auto, SolverKind::CgJacobi, SolverKind::CgIc0, SolverKind::GaussSeidel]
+        {
             let uv = run(solver);
             let worst = uv
                 .iter()
@@ -424,7 +457,10 @@ mod tests {
         let mesh = grid(2); // 8 boundary vertices
         let square: Vec<[f64; 2]> =
             vec![[0., 0.], [1., 0.], [2., 0.], [2., 1.], [2., 2.], [1., 2.], [0., 2.], [0., 1.]];
-        let params = |points: Vec<[f64; 2]>| TutteParams { boundary: BoundaryShape::Polygon(points), ..TutteParams::default() };
+        let params = |points: Vec<[f64; 2]>| TutteParams {
+            boundary: BoundaryShape::Polygon(points),
+            ..TutteParams::default()
+        };
         let e = tutte(&mesh, &params(square.clone())).unwrap();
         assert!(e.inverted.is_empty());
         let mut dented = square.clone();
@@ -432,8 +468,14 @@ mod tests {
         assert!(matches!(tutte(&mesh, &params(dented)), Err(TutteError::BoundaryNotConvex { .. })));
         let mut clockwise = square.clone();
         clockwise.reverse();
-        assert!(matches!(tutte(&mesh, &params(clockwise)), Err(TutteError::BoundaryNotConvex { .. })));
-        assert!(matches!(tutte(&mesh, &params(square[..7].to_vec())), Err(TutteError::BoundaryLength { got: 7, expected: 8 })));
+        assert!(matches!(
+            tutte(&mesh, &params(clockwise)),
+            Err(TutteError::BoundaryNotConvex { .. })
+        ));
+        assert!(matches!(
+            tutte(&mesh, &params(square[..7].to_vec())),
+            Err(TutteError::BoundaryLength { got: 7, expected: 8 })
+        ));
     }
 
     #[test]
@@ -444,10 +486,14 @@ mod tests {
         )
         .unwrap();
         let err = tutte(&tetra, &TutteParams::default()).unwrap_err();
-        assert!(matches!(err, TutteError::Topology(TopologyError { problem: TopologyProblem::NotDisk, .. })));
+        assert!(matches!(
+            err,
+            TutteError::Topology(TopologyError { problem: TopologyProblem::NotDisk, .. })
+        ));
         // The grid without its middle square's two triangles: two boundary loops.
         let mesh = grid(3);
-        let faces: Vec<[u32; 3]> = mesh.faces().iter().enumerate().filter(|(f, _)| *f / 2 != 4).map(|(_, &f)| f).collect();
+        let faces: Vec<[u32; 3]> =
+            mesh.faces().iter().enumerate().filter(|(f, _)| *f / 2 != 4).map(|(_, &f)| f).collect();
         let annulus = Mesh::new(mesh.positions().to_vec(), faces).unwrap();
         assert!(matches!(tutte(&annulus, &TutteParams::default()), Err(TutteError::Topology(_))));
     }

@@ -5,6 +5,7 @@
 //! matrix assembly (thesis eq. 4.24 divides by wdeg(i), eq. 4.48), so only ratios
 //! within a row matter.
 
+use spherify_mesh::vec3::{cross, dot, norm, sub};
 use spherify_mesh::HalfEdgeMesh;
 
 /// Which weights to use.
@@ -49,7 +50,11 @@ impl Weights {
 
 /// Weight of every half-edge; boundary half-edges (no face) get the weight of
 /// their one triangle only where the formula needs triangles. O(E).
-pub fn half_edge_weights(positions: &[[f64; 3]], he: &HalfEdgeMesh, weights: Weights) -> Result<Vec<f64>, BadWeight> {
+pub fn half_edge_weights(
+    positions: &[[f64; 3]],
+    he: &HalfEdgeMesh,
+    weights: Weights,
+) -> Result<Vec<f64>, BadWeight> {
     let p = |v: u32| positions[v as usize];
     // Third vertex of the face of h, if h has a face.
     let apex = |h: u32| he.face(h).map(|_| he.head(he.next(h)));
@@ -79,22 +84,6 @@ pub fn half_edge_weights(positions: &[[f64; 3]], he: &HalfEdgeMesh, weights: Wei
         w[h as usize] = value;
     }
     Ok(w)
-}
-
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
-}
-
-fn norm(a: [f64; 3]) -> f64 {
-    dot(a, a).sqrt()
 }
 
 /// tan(theta / 2) for the angle theta between a and b, as |a x b| / (|a||b| + a.b),
@@ -153,7 +142,8 @@ mod tests {
         let p = vec![[0.0; 3], [0.0; 3], [0.0, 1.0, 0.0]];
         let mesh = Mesh::new(p, vec![[0, 1, 2]]).unwrap();
         let he = HalfEdgeMesh::new(&mesh).unwrap();
-        let err = half_edge_weights(mesh.positions(), &he, Weights::Chord { rho: -1.0 }).unwrap_err();
+        let err =
+            half_edge_weights(mesh.positions(), &he, Weights::Chord { rho: -1.0 }).unwrap_err();
         assert!(!err.value.is_finite());
         assert!(half_edge_weights(mesh.positions(), &he, Weights::Uniform).is_ok());
     }

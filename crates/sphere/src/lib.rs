@@ -15,12 +15,17 @@
 //! conformal, area and stretch distortion), and point maps between surface and
 //! sphere (3.3, 6.6).
 
+pub mod alexa;
 pub mod embedding;
+pub mod gotsman;
+pub mod metrics;
 pub mod poles;
+pub mod radial;
+pub mod relaxation;
 pub mod theta_phi;
 pub mod validity;
 
+pub use embedding::{SphereEmbedding, SphereError, Status};
 pub use spherify_mesh::predicates;
 pub use spherify_mesh::predicates::Sign;
-pub use embedding::{SphereEmbedding, SphereError, Status};
 pub use validity::{check_sphere, SphereReport};

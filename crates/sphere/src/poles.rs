@@ -97,7 +97,11 @@ pub fn fast_graph(graph: &Adjacency, start: u32, weights: EdgeWeights) -> Option
 /// The exact graph diameter (thesis eq. 6.5): Dijkstra from every vertex, in
 /// parallel. `progress(done, total)` is called as sources finish (from worker
 /// threads; keep it cheap). Ties go to the lexicographically smallest pair.
-pub fn graph(graph: &Adjacency, weights: EdgeWeights, progress: &(dyn Fn(usize, usize) + Sync)) -> Option<Poles> {
+pub fn graph(
+    graph: &Adjacency,
+    weights: EdgeWeights,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Option<Poles> {
     let n = graph.n_vertices();
     let done = AtomicUsize::new(0);
     (0..n as u32)
@@ -115,7 +119,9 @@ pub fn graph(graph: &Adjacency, weights: EdgeWeights, progress: &(dyn Fn(usize, 
             best.map(|(v, d)| Poles { north: source, south: v, distance: d })
         })
         .reduce_with(|p, q| {
-            if q.distance > p.distance || (q.distance == p.distance && (q.north, q.south) < (p.north, p.south)) {
+            if q.distance > p.distance
+                || (q.distance == p.distance && (q.north, q.south) < (p.north, p.south))
+            {
                 q
             } else {
                 p

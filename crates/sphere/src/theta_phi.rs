@@ -61,7 +61,11 @@ pub struct ThetaPhiParams {
 
 impl Default for ThetaPhiParams {
     fn default() -> Self {
-        ThetaPhiParams { poles: PoleChoice::FastGraph, weights: Weights::Uniform, max_refinements: 8 }
+        ThetaPhiParams {
+            poles: PoleChoice::FastGraph,
+            weights: Weights::Uniform,
+            max_refinements: 8,
+        }
     }
 }
 
@@ -98,7 +102,11 @@ fn from_tutte(err: TutteError) -> SphereError {
     match err {
         TutteError::Topology(t) => SphereError::Topology(t),
         TutteError::Solve(s) => SphereError::Solve(s),
-        other => SphereError::InvalidParameter { name: "theta-phi embedding", value: other.to_string(), expected: "a solvable Tutte system" },
+        other => SphereError::InvalidParameter {
+            name: "theta-phi embedding",
+            value: other.to_string(),
+            expected: "a solvable Tutte system",
+        },
     }
 }
 
@@ -107,7 +115,11 @@ fn from_cut(mesh: &Mesh, err: CutError) -> SphereError {
         CutError::Topology(t) => SphereError::Topology(t),
         other => {
             let _ = mesh;
-            SphereError::InvalidParameter { name: "cut path", value: other.to_string(), expected: "a simple path along mesh edges" }
+            SphereError::InvalidParameter {
+                name: "cut path",
+                value: other.to_string(),
+                expected: "a simple path along mesh edges",
+            }
         }
     }
 }
@@ -146,12 +158,14 @@ pub fn theta_phi(mesh: &Mesh, params: &ThetaPhiParams) -> Result<ThetaPhi, Spher
     .ok_or_else(|| topology(mesh, TopologyProblem::NotSphere))?;
     lap("poles", &mut seconds);
 
-    let path = cut_path(&graph, chosen.north, chosen.south, lengths).ok_or_else(|| topology(mesh, TopologyProblem::NotSphere))?;
+    let path = cut_path(&graph, chosen.north, chosen.south, lengths)
+        .ok_or_else(|| topology(mesh, TopologyProblem::NotSphere))?;
     let cut = cut_open(mesh, &path).map_err(|e| from_cut(mesh, e))?;
     lap("cut", &mut seconds);
 
     let cut_he = HalfEdgeMesh::new(&cut.mesh)?;
-    let weights = half_edge_weights(cut.mesh.positions(), &cut_he, params.weights).map_err(|e| from_tutte(e.into()))?;
+    let weights = half_edge_weights(cut.mesh.positions(), &cut_he, params.weights)
+        .map_err(|e| from_tutte(e.into()))?;
     let k = path.len() - 2;
     let n_vertices = mesh.n_vertices();
     let north_fan = pole_fan(&cut_he, chosen.north, false);
@@ -159,7 +173,14 @@ pub fn theta_phi(mesh: &Mesh, params: &ThetaPhiParams) -> Result<ThetaPhi, Spher
 
     let mut fixed = rectangle_boundary(&cut.boundary, k, n_vertices);
     let mut refinements = 0;
-    let mut uv = solve_refined(&cut_he, &weights, &fixed, cut.mesh.faces(), params.max_refinements, &mut refinements)?;
+    let mut uv = solve_refined(
+        &cut_he,
+        &weights,
+        &fixed,
+        cut.mesh.faces(),
+        params.max_refinements,
+        &mut refinements,
+    )?;
     lap("embed", &mut seconds);
 
     // Pole fans (6.5.1): re-embed with the fan pinned (6.38) where phi is not
@@ -170,21 +191,33 @@ pub fn theta_phi(mesh: &Mesh, params: &ThetaPhiParams) -> Result<ThetaPhi, Spher
     let mut re_embedded = [false; 2];
     for (side, fan) in [&north_fan, &south_fan].into_iter().enumerate() {
         let inner = &fan[1..fan.len().saturating_sub(1).max(1)];
-        if !strictly_increasing_phi(&uv, fan) && inner.iter().all(|&v| fixed[v as usize].is_none()) {
+        if !strictly_increasing_phi(&uv, fan) && inner.iter().all(|&v| fixed[v as usize].is_none())
+        {
             pin_fan(&mut fixed, fan, k, side == 1);
             re_embedded[side] = true;
         }
     }
     if re_embedded.iter().any(|&r| r) {
-        uv = solve_refined(&cut_he, &weights, &fixed, cut.mesh.faces(), params.max_refinements, &mut refinements)?;
+        uv = solve_refined(
+            &cut_he,
+            &weights,
+            &fixed,
+            cut.mesh.faces(),
+            params.max_refinements,
+            &mut refinements,
+        )?;
         lap("re-embed poles", &mut seconds);
     }
-    let fans_monotone = [strictly_increasing_phi(&uv, &north_fan), strictly_increasing_phi(&uv, &south_fan)];
+    let fans_monotone =
+        [strictly_increasing_phi(&uv, &north_fan), strictly_increasing_phi(&uv, &south_fan)];
     let inverted = inverted_faces(cut.mesh.faces(), &uv);
     let tp_valid = inverted.is_empty();
 
     // The fold (6.35); originals keep their labels in the cut mesh.
-    let mut points: Vec<[f64; 3]> = uv[..n_vertices].iter().map(|&[t, p]| [t.sin() * p.cos(), t.sin() * p.sin(), t.cos()]).collect();
+    let mut points: Vec<[f64; 3]> = uv[..n_vertices]
+        .iter()
+        .map(|&[t, p]| [t.sin() * p.cos(), t.sin() * p.sin(), t.cos()])
+        .collect();
     points[chosen.north as usize] = [0.0, 0.0, 1.0];
     points[chosen.south as usize] = [0.0, 0.0, -1.0];
     lap("fold", &mut seconds);
@@ -212,7 +245,13 @@ pub fn theta_phi(mesh: &Mesh, params: &ThetaPhiParams) -> Result<ThetaPhi, Spher
             fans_monotone[1]
         )
     };
-    let embedding = SphereEmbedding { points, iterations: refinements, status: Status::Direct, message, seconds };
+    let embedding = SphereEmbedding {
+        points,
+        iterations: refinements,
+        status: Status::Direct,
+        message,
+        seconds,
+    };
     Ok(ThetaPhi {
         embedding,
         poles: chosen,
@@ -402,7 +441,11 @@ mod tests {
             let t = PI * i as f64 / rings as f64;
             for j in 0..segments {
                 let f = 2.0 * PI * j as f64 / segments as f64;
-                p.push([t.sin() * f.cos() * (1.0 + 0.3 * (3.0 * f).sin()), t.sin() * f.sin(), t.cos() * 2.0]);
+                p.push([
+                    t.sin() * f.cos() * (1.0 + 0.3 * (3.0 * f).sin()),
+                    t.sin() * f.sin(),
+                    t.cos() * 2.0,
+                ]);
             }
         }
         p.push([0.0, 0.0, -2.0]);
@@ -426,7 +469,12 @@ mod tests {
     fn sphere_like_mesh_is_certified_and_bijective() {
         let mesh = uv_sphere(12, 16);
         let last = mesh.n_vertices() as u32 - 1;
-        for poles in [PoleChoice::FastGraph, PoleChoice::Graph, PoleChoice::Physical, PoleChoice::Explicit(3, last)] {
+        for poles in [
+            PoleChoice::FastGraph,
+            PoleChoice::Graph,
+            PoleChoice::Physical,
+            PoleChoice::Explicit(3, last),
+        ] {
             let params = ThetaPhiParams { poles, ..ThetaPhiParams::default() };
             let tp = theta_phi(&mesh, &params).unwrap();
             assert!(tp.tp_valid, "{poles:?}: {}", tp.embedding.message);
@@ -457,7 +505,8 @@ mod tests {
     #[test]
     fn explicit_poles_are_checked() {
         let mesh = uv_sphere(6, 8);
-        let params = ThetaPhiParams { poles: PoleChoice::Explicit(3, 3), ..ThetaPhiParams::default() };
+        let params =
+            ThetaPhiParams { poles: PoleChoice::Explicit(3, 3), ..ThetaPhiParams::default() };
         assert!(matches!(theta_phi(&mesh, &params), Err(SphereError::InvalidParameter { .. })));
     }
 }

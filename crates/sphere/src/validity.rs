@@ -13,6 +13,7 @@
 
 use rayon::prelude::*;
 use spherify_mesh::predicates::{det3_sign, Sign};
+use spherify_mesh::vec3::{cross, dot, norm, scale};
 
 /// What [`check_sphere`] finds.
 #[derive(Debug, Clone, PartialEq)]
@@ -83,8 +84,11 @@ pub fn check_sphere(faces: &[[u32; 3]], points: &[[f64; 3]]) -> SphereReport {
     }
     let full = 4.0 * std::f64::consts::PI;
     report.area_error = (report.area_sum - full).abs();
-    report.covering_degree = if report.area_sum.is_finite() { (report.area_sum / full).round() as i64 } else { 0 };
-    report.valid = report.flipped_faces.is_empty() && report.bad_points.is_empty() && report.covering_degree == 1;
+    report.covering_degree =
+        if report.area_sum.is_finite() { (report.area_sum / full).round() as i64 } else { 0 };
+    report.valid = report.flipped_faces.is_empty()
+        && report.bad_points.is_empty()
+        && report.covering_degree == 1;
     report
 }
 
@@ -93,22 +97,6 @@ pub fn check_sphere(faces: &[[u32; 3]], points: &[[f64; 3]]) -> SphereReport {
 pub fn signed_area(a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> f64 {
     let det = dot(cross(a, b), c);
     2.0 * det.atan2(1.0 + dot(a, b) + dot(b, c) + dot(c, a))
-}
-
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
-}
-
-fn norm(a: [f64; 3]) -> f64 {
-    dot(a, a).sqrt()
-}
-
-fn scale(a: [f64; 3], s: f64) -> [f64; 3] {
-    [a[0] * s, a[1] * s, a[2] * s]
 }
 
 #[cfg(test)]
@@ -124,7 +112,16 @@ mod tests {
             [0.0, 0.0, 1.0],
             [0.0, 0.0, -1.0],
         ];
-        let f = vec![[0, 2, 4], [2, 1, 4], [1, 3, 4], [3, 0, 4], [2, 0, 5], [1, 2, 5], [3, 1, 5], [0, 3, 5]];
+        let f = vec![
+            [0, 2, 4],
+            [2, 1, 4],
+            [1, 3, 4],
+            [3, 0, 4],
+            [2, 0, 5],
+            [1, 2, 5],
+            [3, 1, 5],
+            [0, 3, 5],
+        ];
         (p, f)
     }
 
@@ -155,7 +152,8 @@ mod tests {
     #[test]
     fn scaling_points_keeps_the_verdict_and_collapse_is_zero() {
         let (p, f) = octahedron();
-        let scaled: Vec<[f64; 3]> = p.iter().enumerate().map(|(i, &q)| scale(q, 1.0 + i as f64)).collect();
+        let scaled: Vec<[f64; 3]> =
+            p.iter().enumerate().map(|(i, &q)| scale(q, 1.0 + i as f64)).collect();
         let r = check_sphere(&f, &scaled);
         assert!(r.valid && r.max_norm_error > 1.0);
         let mut collapsed = p.clone();

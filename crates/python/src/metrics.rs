@@ -1,0 +1,31 @@
+//! `quality`: the distortion measures of `spherify_sphere::metrics` as a dict.
+
+use numpy::PyReadonlyArrayDyn;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use spherify_sphere::metrics;
+
+use crate::convert::rows;
+use crate::errors::mesh_error;
+use crate::mesh::CoreMesh;
+
+/// quality(mesh, points (n, 3) float64) -> dict of str to float (counts as
+/// int); MeshError for wrong shapes, non-finite points or all faces degenerate.
+#[pyfunction]
+pub fn quality<'py>(
+    py: Python<'py>,
+    mesh: &CoreMesh,
+    points: PyReadonlyArrayDyn<'_, f64>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let points = rows::<f64, 3>(py, &points, "points")?;
+    let q = py
+        .detach(|| metrics::quality(&mesh.mesh, &points))
+        .map_err(|e| mesh_error(py, e.to_string()))?;
+    let d = PyDict::new(py);
+    for (name, value) in q.fields() {
+        d.set_item(name, value)?;
+    }
+    d.set_item("degenerate_faces", q.degenerate_faces)?;
+    d.set_item("n_faces", q.n_faces)?;
+    Ok(d)
+}

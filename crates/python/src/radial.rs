@@ -1,0 +1,73 @@
+//! `embed_radial`: radial projection from a point, the vertex mean or the
+//! kernel (thesis 3.5, eq. 3.17).
+
+use pyo3::prelude::*;
+use pyo3::types::{PyByteArray, PyBytes, PyDict, PyString};
+use spherify_sphere::radial::{radial_map, Center};
+
+use crate::embed::{embedding_to_py, sphere_error};
+use crate::errors::mesh_error;
+use crate::mesh::CoreMesh;
+
+const EXPECTED: &str =
+    "center must be 'kernel', 'centroid' or a point (x, y, z) of three finite numbers";
+
+/// "kernel", "centroid", or any length-3 sequence of numbers (a tuple, list or
+/// 1-D array); anything else is a MeshError.
+fn center_choice(py: Python<'_>, center: &Bound<'_, PyAny>) -> PyResult<Center> {
+    if let Ok(name) = center.cast::<PyString>() {
+        return match name.to_str()? {
+            "kernel" => Ok(Center::Kernel),
+            "centroid" => Ok(Center::Centroid),
+            other => Err(mesh_error(py, format!("{EXPECTED}, got {other:?}"))),
+        };
+    }
+    // Bytes are sequences of small ints; as a centre they are surely a mistake.
+    if center.is_instance_of::<PyBytes>() || center.is_instance_of::<PyByteArray>() {
+        return Err(mesh_error(py, format!("{EXPECTED}, got bytes")));
+    }
+    let bad = || {
+        mesh_error(
+            py,
+            format!("{EXPECTED}, got {}", center.repr().map(|r| r.to_string()).unwrap_or_default()),
+        )
+    };
+    let mut point = Vec::with_capacity(3);
+    for item in center.try_iter().map_err(|_| bad())? {
+        point.push(item.and_then(|x| x.extract::<f64>()).map_err(|_| bad())?);
+        if point.len() > 3 {
+            return Err(bad());
+        }
+    }
+    match point[..] {
+        [x, y, z] if point.iter().all(|v| v.is_finite()) => Ok(Center::Point([x, y, z])),
+        _ => Err(bad()),
+    }
+}
+
+/// embed_radial(mesh, center="kernel") -> (points (n, 3) float64, info dict).
+///
+/// `center` is "kernel" (the deepest point of the kernel, found by a linear
+/// program; MeshError "not star-shaped" when the kernel is empty), "centroid"
+/// (the vertex mean, eq. 3.18), or a point (x, y, z). `info` adds `center`
+/// (the point used) and, for "kernel", `kernel_depth` and `lp_pivots`.
+#[pyfunction]
+#[pyo3(signature = (mesh, center=None), text_signature = "(mesh, center=\"kernel\")")]
+pub fn embed_radial<'py>(
+    py: Python<'py>,
+    mesh: &CoreMesh,
+    center: Option<&Bound<'py, PyAny>>,
+) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyDict>)> {
+    let center = match center {
+        Some(c) => center_choice(py, c)?,
+        None => Center::Kernel,
+    };
+    let r = py.detach(|| radial_map(&mesh.mesh, center)).map_err(|e| sphere_error(py, e))?;
+    let (points, info) = embedding_to_py(py, &r.embedding)?;
+    info.set_item("center", (r.center[0], r.center[1], r.center[2]))?;
+    if let Some(k) = &r.kernel {
+        info.set_item("kernel_depth", k.depth)?;
+        info.set_item("lp_pivots", k.pivots)?;
+    }
+    Ok((points, info))
+}

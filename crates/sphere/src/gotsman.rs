@@ -1,0 +1,1030 @@
+//! Gotsman, Gu and Sheffer's spherical Tutte embedding (thesis 5.1, eq. 5.10;
+//! Gotsman, Gu and Sheffer 2003, "Fundamentals of spherical parameterization
+//! for 3D meshes").
+//!
+//! Every vertex sits at the radial projection of a convex combination of its
+//! neighbours: with row-stochastic weights `W` (eq. 5.3-5.4) the unknowns are
+//! the points `v_i` and dilations `alpha_i` of
+//!
+//! ```text
+//! F_i = sum_j w_ij v_j - alpha_i v_i = 0      (3 equations per vertex)
+//! G_i = (|v_i|^2 - 1) / 2             = 0      (1 equation per vertex)
+//! ```
+//!
+//! `4n` equations in `4n` unknowns (eq. 5.10; `G` is halved so that its
+//! Jacobian row is `v_i^T`). By Theorem 5.1 any solution whose points are
+//! distinct is a valid GC-embedding; the trivial solution `v_i = q`,
+//! `alpha_i = 1` is the one to avoid.
+//!
+//! # How it is solved
+//!
+//! The thesis ran MATLAB's `fsolve` with a dense Jacobian: 17 minutes for 453
+//! vertices and out of memory beyond (5.1.3, 7.2). Here the Jacobian `J` is
+//! a sparse `4n x 4n` [`CsrMatrix`] with about `3 (d + 2) + 3` entries per
+//! vertex (`d` the degree), and the iteration is Newton's method on `(F, G)`.
+//!
+//! The Newton step `J delta = -(F, G)` is solved exactly, but on `2n`
+//! unknowns instead of `4n`: the `G` row fixes the component of `delta v_i`
+//! along `v_i`, the `F` rows projected on `v_i` give `delta alpha_i`, and
+//! what remains are the two tangential components `t_i` per vertex, coupled by
+//! `w_ij T_i^T T_j` (2x2 blocks, `T_i` an orthonormal tangent basis at `v_i`)
+//! with `-alpha_i I` on the diagonal (`newton_step`). That matrix has the
+//! sparsity of `W`, a non-zero diagonal and half the unknowns, and one sparse
+//! LU of it through [`spherify_sparse::solve`] (`Auto`; it is not symmetric)
+//! costs about 2.5 times less than the LU of `J` (0.7 s against 1.7 s at
+//! 16k vertices; a test checks that both give the same step). `J` itself
+//! is still assembled for the trust-region model below.
+//!
+//! Globalisation is Powell's dogleg trust region on `|F|_2` (Nocedal and
+//! Wright, *Numerical Optimization*, 2nd ed., Alg. 4.1 and 11.5), the default
+//! of `fsolve` that the thesis used: each step moves along the path from the
+//! Cauchy point (steepest descent of `|F|^2`, `-J^T F` scaled) to the Newton
+//! point, cut at the trust radius. That is the Levenberg-Marquardt curve from
+//! large to zero damping, approximated by two segments, at the price of one
+//! LU per iteration; true Levenberg-Marquardt needs `J^T J + lambda D`, whose
+//! 2-ring sparsity fills the factor several times more, and in a prototype it
+//! converged far more slowly here (the damping fights the rotation freedom
+//! below). Rejected steps reuse the factorisation. When the LU finds the
+//! matrix singular the step falls back to the Cauchy point.
+//!
+//! Why Newton and not a descent method: with symmetric weights eq. 5.10 says
+//! that the tangential part of `sum_j omega_ij (v_i - v_j)` vanishes at every
+//! vertex, i.e. the points are a critical point of the spring energy
+//! `sum_edges omega_ij |v_i - v_j|^2` on the product of spheres. The trivial
+//! solution is that energy's global minimum (zero), which is where the
+//! relaxation of 5.2 drifts; the embeddings are other critical points, which
+//! Newton's method finds because it looks for zeros, not for low energy.
+//!
+//! The solutions are not isolated: a rotation of a solution is a solution, so
+//! `J` is singular at the solution and nearly singular close to it. The
+//! Newton step there carries an arbitrary, large infinitesimal rotation that
+//! stalls the iteration around `|F| ~ 1e-10` (seen on a 2,000-vertex blob).
+//! We remove it: the part `omega x v_i` of the step that best fits a rigid
+//! rotation (least squares, a 3x3 system) is subtracted. The steepest-descent
+//! direction `J^T F` has no rotation part to begin with
+//! (`F . (omega x F) = 0`).
+//!
+//! # Start
+//!
+//! [`Initial::Centroid`] is eq. 5.11: `v_i = (x_i - m) / |x_i - m|` with `m`
+//! the mean vertex. It works when `m` sees the surface well; for shapes such
+//! as a helix tube it does not (thesis 9.3.1) and the iteration stalls in a
+//! local minimum of `|F|`: pass a better start ([`Initial::Points`], e.g. the
+//! result of another method). The dilations start at their least-squares
+//! values `alpha_i = v_i . u_i`. Eq. 5.12's `4 pi / (sqrt(3) N)` is the size of
+//! `1 - alpha_i` (GGS write the system with the Laplacian `I - W`, whose
+//! eigenvalue that is); measured `mean(1 - v_i . u_i)` agrees with it to 1% on
+//! icospheres.
+//!
+//! # End
+//!
+//! Converged when every one of the `4n` equations holds to `tol` (the max
+//! norm of `(F, G)`). The returned points are then normalised exactly: `G`
+//! already puts them within about `tol` of the sphere, the normalisation only
+//! removes that last error. Collapse onto the trivial solution is detected by
+//! the spread of the points, `sqrt(mean |v_i - c|^2 / mean |v_i|^2)` with `c`
+//! their mean: 1 for points spread evenly over the sphere, 0 for the trivial
+//! solution. Below [`COLLAPSE_SPREAD`] the iteration stops with
+//! [`Status::Collapsed`]: Newton's method converges quadratically onto the
+//! trivial solution from there, and no valid embedding has its points that
+//! close together (they cannot all lie in an open hemisphere).
+
+use std::time::Instant;
+
+use rayon::prelude::*;
+use spherify_mesh::{HalfEdgeMesh, Mesh, TopologyError, TopologyProblem};
+use spherify_sparse::weights::{half_edge_weights, Weights};
+use spherify_sparse::{solve, CsrMatrix, SolveParams, SolverKind, SparseError};
+
+use crate::embedding::{normalize, SphereEmbedding, SphereError, Status};
+
+/// Spread (see the module documentation) below which the points count as
+/// collapsed: their RMS distance from their mean is below 1% of the radius.
+pub const COLLAPSE_SPREAD: f64 = 1e-2;
+
+/// Acceptance threshold on the ratio of actual to predicted reduction of
+/// `|F|^2` (Nocedal and Wright's eta): any real decrease is taken.
+const ACCEPT_RATIO: f64 = 1e-4;
+
+/// The trust radius, relative to `|x|`, below which no further progress is
+/// possible in double precision: the iteration has stalled.
+const MIN_RADIUS: f64 = 1e-15;
+
+/// Where the iteration starts.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Initial {
+    /// Thesis eq. 5.11: each vertex projected radially from the mean vertex.
+    /// A vertex exactly at the mean takes the direction of its neighbours'.
+    Centroid,
+    /// One point per vertex (normalised here; none may be zero or non-finite),
+    /// for example the result of another method.
+    Points(Vec<[f64; 3]>),
+}
+
+/// Parameters of [`gotsman`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct GotsmanParams {
+    /// Edge weights `omega_ij` (thesis 4.4), normalised so that each row sums
+    /// to 1 (eq. 5.4, 4.46). Uniform (Tutte) or chord length: they must be
+    /// positive (eq. 5.3) and symmetric, `omega_ij = omega_ji`. Then
+    /// `W = D^-1 Omega` and eq. 5.10 reads `(D A - Omega) V = 0` with a
+    /// symmetric matrix whose 3-dimensional null space holds the points
+    /// (GGS 2003); counting dimensions, the solutions form the 3-dimensional
+    /// family of rotations. For non-symmetric weights (mean value) the same
+    /// count leaves no solution in general, and the iteration only drifts
+    /// (seen on a bumpy octahedron), so they are refused, as are the
+    /// cotangent weights, which can be negative. Default uniform.
+    pub weights: Weights,
+    /// Most Newton (trust-region) iterations, each one sparse LU. Default 50.
+    pub max_iter: usize,
+    /// Converged when `max(|F_i|, |G_i|) <= tol` over all equations. Default 1e-10.
+    pub tol: f64,
+    /// Return [`SphereError::NoConvergence`] instead of an unconverged or
+    /// collapsed embedding. Default false.
+    pub strict: bool,
+    /// Default [`Initial::Centroid`].
+    pub initial: Initial,
+}
+
+impl Default for GotsmanParams {
+    fn default() -> GotsmanParams {
+        GotsmanParams {
+            weights: Weights::Uniform,
+            max_iter: 50,
+            tol: 1e-10,
+            strict: false,
+            initial: Initial::Centroid,
+        }
+    }
+}
+
+/// Solves eq. 5.10 for a closed genus-0 mesh (see the module documentation).
+/// Cost per iteration: one sparse LU of a `2n x 2n` matrix with `O(n)`
+/// entries (the Newton system of the `4n x 4n` Jacobian on tangent unknowns),
+/// near-linear in `n` on meshes; typically 3-4 iterations for uniform weights
+/// on a star-shaped mesh, 10-30 for chord weights, whose embedding lies
+/// further from the start.
+///
+/// Errors: [`SphereError::Topology`] unless the mesh is a closed, connected,
+/// manifold, consistently oriented genus-0 surface;
+/// [`SphereError::InvalidParameter`] for a bad `tol`, weights other than
+/// uniform and chord or not positive and finite on this mesh, or a bad
+/// initial guess;
+/// [`SphereError::Solve`] if the sparse LU fails other than by singularity;
+/// [`SphereError::NoConvergence`] (with the last iterate) when `strict` and the
+/// iteration did not converge or collapsed.
+pub fn gotsman(mesh: &Mesh, params: &GotsmanParams) -> Result<SphereEmbedding, SphereError> {
+    let start = Instant::now();
+    if !(params.tol >= 0.0 && params.tol.is_finite()) {
+        return Err(SphereError::InvalidParameter {
+            name: "tol",
+            value: params.tol.to_string(),
+            expected: "a finite number >= 0",
+        });
+    }
+    if matches!(params.weights, Weights::Cotangent | Weights::MeanValue) {
+        return Err(SphereError::InvalidParameter {
+            name: "weights",
+            value: format!("{:?}", params.weights),
+            expected: "uniform or chord: eq. 5.10 needs positive (5.3), symmetric edge weights",
+        });
+    }
+    let n = mesh.n_vertices();
+    if n > (u32::MAX / 4) as usize {
+        return Err(SphereError::InvalidParameter {
+            name: "mesh",
+            value: format!("{n} vertices"),
+            expected: "at most 2^30 vertices (4 unknowns each, 32-bit indices)",
+        });
+    }
+    let he = sphere_connectivity(mesh)?;
+    let w = weight_matrix(mesh, &he, params.weights)?;
+    let points = initial_points(mesh, &w, &params.initial)?;
+    let mut seconds = vec![("setup", start.elapsed().as_secs_f64())];
+
+    let mut x = vec![0.0; 4 * n];
+    for (i, p) in points.iter().enumerate() {
+        x[4 * i..4 * i + 3].copy_from_slice(p);
+    }
+    // alpha_i = v_i . u_i minimises |u_i - alpha_i v_i| for the start points.
+    let u = neighbour_means(&w, &x);
+    for i in 0..n {
+        x[4 * i + 3] = dot3(&x[4 * i..4 * i + 3], &u[3 * i..3 * i + 3]);
+    }
+
+    let run = newton(&w, x, params)?;
+    seconds.push(("solve", run.solve_seconds));
+    seconds.push(("iterate", run.iterate_seconds));
+    let embedding = SphereEmbedding { seconds, ..finish(run, &points, params) };
+    if params.strict && embedding.status != Status::Converged {
+        return Err(SphereError::NoConvergence { last: Box::new(embedding) });
+    }
+    Ok(embedding)
+}
+
+/// The half-edge structure of a closed genus-0 mesh, or why it is not one.
+fn sphere_connectivity(mesh: &Mesh) -> Result<HalfEdgeMesh, SphereError> {
+    let report = spherify_mesh::validate::check(mesh);
+    if !report.is_sphere_topology {
+        return Err(TopologyError {
+            problem: TopologyProblem::NotSphere,
+            report: Box::new(report),
+        }
+        .into());
+    }
+    Ok(HalfEdgeMesh::new(mesh)?)
+}
+
+/// `W` as an `n x n` CSR matrix with rows summing to 1 (eq. 5.4).
+fn weight_matrix(
+    mesh: &Mesh,
+    he: &HalfEdgeMesh,
+    weights: Weights,
+) -> Result<CsrMatrix, SphereError> {
+    let bad = |value: String| SphereError::InvalidParameter {
+        name: "weights",
+        value,
+        expected: "positive, finite weights on every edge (eq. 5.3)",
+    };
+    let w = half_edge_weights(mesh.positions(), he, weights).map_err(|e| bad(e.to_string()))?;
+    let n = mesh.n_vertices();
+    let (mut rows, mut cols, mut values) = (Vec::new(), Vec::new(), Vec::new());
+    for i in 0..n as u32 {
+        let first = values.len();
+        for h in he.rotation(i) {
+            let value = w[h as usize];
+            if value.is_nan() || value <= 0.0 {
+                return Err(bad(format!("{value} on edge ({i}, {})", he.head(h))));
+            }
+            rows.push(i);
+            cols.push(he.head(h));
+            values.push(value);
+        }
+        let sum: f64 = values[first..].iter().sum();
+        if !(sum > 0.0 && sum.is_finite()) {
+            return Err(bad(format!("row {i} sums to {sum}")));
+        }
+        values[first..].iter_mut().for_each(|v| *v /= sum);
+    }
+    Ok(CsrMatrix::from_triplets(n, n, &rows, &cols, &values)?)
+}
+
+/// Unit start points, one per vertex.
+fn initial_points(
+    mesh: &Mesh,
+    w: &CsrMatrix,
+    initial: &Initial,
+) -> Result<Vec<[f64; 3]>, SphereError> {
+    let n = mesh.n_vertices();
+    match initial {
+        Initial::Points(p) => {
+            if p.len() != n {
+                return Err(SphereError::InvalidParameter {
+                    name: "initial",
+                    value: format!("{} points", p.len()),
+                    expected: "one point per vertex",
+                });
+            }
+            p.iter()
+                .enumerate()
+                .map(|(i, &q)| {
+                    normalize(q).ok_or_else(|| SphereError::InvalidParameter {
+                        name: "initial",
+                        value: format!("point {i} = {q:?}"),
+                        expected: "finite, non-zero points",
+                    })
+                })
+                .collect()
+        }
+        Initial::Centroid => {
+            let pos = mesh.positions();
+            let mut m = [0.0; 3];
+            for p in pos {
+                (0..3).for_each(|k| m[k] += p[k]);
+            }
+            let m = m.map(|s| s / n as f64);
+            let d: Vec<[f64; 3]> =
+                pos.iter().map(|p| [p[0] - m[0], p[1] - m[1], p[2] - m[2]]).collect();
+            Ok((0..n)
+                .map(|i| {
+                    normalize(d[i]).unwrap_or_else(|| {
+                        // A vertex at the mean has no direction of its own:
+                        // borrow its neighbours' (any start will do; Newton
+                        // moves it), and the north pole if even that is zero.
+                        let mut s = [0.0; 3];
+                        for &j in w.row(i).0 {
+                            if let Some(q) = normalize(d[j as usize]) {
+                                (0..3).for_each(|k| s[k] += q[k]);
+                            }
+                        }
+                        normalize(s).unwrap_or([0.0, 0.0, 1.0])
+                    })
+                })
+                .collect())
+        }
+    }
+}
+
+/// `u_i = sum_j w_ij v_j` for the points of the interleaved state `x`
+/// (`(v_i, alpha_i)` per vertex), as `3n` values.
+fn neighbour_means(w: &CsrMatrix, x: &[f64]) -> Vec<f64> {
+    let mut u = vec![0.0; 3 * w.n_rows()];
+    u.par_chunks_mut(3).enumerate().for_each(|(i, ui)| {
+        let (cols, vals) = w.row(i);
+        for (&j, &wij) in cols.iter().zip(vals) {
+            let j = j as usize;
+            (0..3).for_each(|k| ui[k] += wij * x[4 * j + k]);
+        }
+    });
+    u
+}
+
+/// `(F_i, G_i)` for every vertex, interleaved like the unknowns.
+fn residual(w: &CsrMatrix, x: &[f64]) -> Vec<f64> {
+    let u = neighbour_means(w, x);
+    let mut f = vec![0.0; x.len()];
+    f.par_chunks_mut(4).enumerate().for_each(|(i, fi)| {
+        let (v, alpha) = (&x[4 * i..4 * i + 3], x[4 * i + 3]);
+        (0..3).for_each(|k| fi[k] = u[3 * i + k] - alpha * v[k]);
+        fi[3] = 0.5 * (dot3(v, v) - 1.0);
+    });
+    f
+}
+
+/// The Jacobian of [`residual`]: unknowns and equations are both ordered
+/// `(x_i, y_i, z_i, alpha_i)` per vertex, which keeps each vertex's block
+/// together. Row `4i + k` (k < 3): `w_ij` at `4j + k`, `-alpha_i` at `4i + k`,
+/// `-v_ik` at `4i + 3`; row `4i + 3`: `v_i^T` at `4i..4i + 3`.
+fn jacobian(w: &CsrMatrix, x: &[f64]) -> Result<CsrMatrix, SparseError> {
+    let n = w.n_rows();
+    let nnz = 3 * w.nnz() + 9 * n;
+    let (mut rows, mut cols, mut values) =
+        (Vec::with_capacity(nnz), Vec::with_capacity(nnz), Vec::with_capacity(nnz));
+    let mut push = |r: usize, c: usize, v: f64| {
+        rows.push(r as u32);
+        cols.push(c as u32);
+        values.push(v);
+    };
+    for i in 0..n {
+        let (nbrs, ws) = w.row(i);
+        for k in 0..3 {
+            for (&j, &wij) in nbrs.iter().zip(ws) {
+                push(4 * i + k, 4 * j as usize + k, wij);
+            }
+            push(4 * i + k, 4 * i + k, -x[4 * i + 3]);
+            push(4 * i + k, 4 * i + 3, -x[4 * i + k]);
+            push(4 * i + 3, 4 * i + k, x[4 * i + k]);
+        }
+    }
+    CsrMatrix::from_triplets(4 * n, 4 * n, &rows, &cols, &values)
+}
+
+/// The Newton step `-J^-1 (F, G)` of eq. 5.10, computed on the `2n` tangent
+/// unknowns instead of the `4n` of `J` (module documentation, "How it is
+/// solved"). Returns `None` when the reduced matrix is singular or the step
+/// is not finite.
+fn newton_step(w: &CsrMatrix, x: &[f64], f: &[f64]) -> Result<Option<Vec<f64>>, SparseError> {
+    let n = w.n_rows();
+    let v = |i: usize| [x[4 * i], x[4 * i + 1], x[4 * i + 2]];
+    // Orthonormal tangent basis (t1, t2) at each point.
+    let bases: Vec<[[f64; 3]; 2]> = (0..n).into_par_iter().map(|i| tangent_basis(v(i))).collect();
+    // c_i: the part of the step along v_i that the G row fixes.
+    let normal: Vec<[f64; 3]> = (0..n)
+        .into_par_iter()
+        .map(|i| {
+            let vi = v(i);
+            let s = -f[4 * i + 3] / dot3(&vi, &vi);
+            vi.map(|c| s * c)
+        })
+        .collect();
+    // b_i = -F_i - sum_j w_ij c_j + alpha_i c_i; the right-hand side is T_i^T b_i.
+    let b: Vec<[f64; 3]> = (0..n)
+        .into_par_iter()
+        .map(|i| {
+            let (cols, ws) = w.row(i);
+            let mut bi = [0.0; 3];
+            for (&j, &wij) in cols.iter().zip(ws) {
+                (0..3).for_each(|k| bi[k] -= wij * normal[j as usize][k]);
+            }
+            (0..3).for_each(|k| bi[k] += x[4 * i + 3] * normal[i][k] - f[4 * i + k]);
+            bi
+        })
+        .collect();
+    let rhs: Vec<f64> =
+        (0..n).flat_map(|i| [dot3(&bases[i][0], &b[i]), dot3(&bases[i][1], &b[i])]).collect();
+    let nnz = 4 * w.nnz() + 2 * n;
+    let (mut rows, mut cols, mut values) =
+        (Vec::with_capacity(nnz), Vec::with_capacity(nnz), Vec::with_capacity(nnz));
+    for i in 0..n {
+        let (nbrs, ws) = w.row(i);
+        for a in 0..2 {
+            let row = (2 * i + a) as u32;
+            for (&j, &wij) in nbrs.iter().zip(ws) {
+                for c in 0..2 {
+                    rows.push(row);
+                    cols.push(2 * j + c as u32);
+                    values.push(wij * dot3(&bases[i][a], &bases[j as usize][c]));
+                }
+            }
+            rows.push(row);
+            cols.push(row);
+            values.push(-x[4 * i + 3]);
+        }
+    }
+    let reduced = CsrMatrix::from_triplets(2 * n, 2 * n, &rows, &cols, &values)?;
+    let t = match solve(&reduced, &[rhs], SolverKind::Auto, &SolveParams::default()) {
+        Ok((mut t, _)) => match t.pop() {
+            Some(t) if t.len() == 2 * n => t,
+            _ => return Ok(None),
+        },
+        // Singular, or not finite because a point reached the origin (no
+        // tangent plane): no Newton step here, the Cauchy point remains.
+        Err(SparseError::Singular { .. } | SparseError::NonFinite { .. }) => return Ok(None),
+        Err(e) => return Err(e),
+    };
+    // delta v_i = c_i + T_i t_i; delta alpha_i from the F row along v_i.
+    let mut step = vec![0.0; 4 * n];
+    for i in 0..n {
+        let [t1, t2] = bases[i];
+        (0..3)
+            .for_each(|k| step[4 * i + k] = normal[i][k] + t[2 * i] * t1[k] + t[2 * i + 1] * t2[k]);
+    }
+    let alpha_steps: Vec<f64> = (0..n)
+        .into_par_iter()
+        .map(|i| {
+            let vi = v(i);
+            let (cols, ws) = w.row(i);
+            let mut along = 0.0;
+            for (&j, &wij) in cols.iter().zip(ws) {
+                let j = j as usize;
+                along += wij
+                    * dot3(
+                        &vi,
+                        &[
+                            step[4 * j] - normal[j][0],
+                            step[4 * j + 1] - normal[j][1],
+                            step[4 * j + 2] - normal[j][2],
+                        ],
+                    );
+            }
+            (along - dot3(&vi, &b[i])) / dot3(&vi, &vi)
+        })
+        .collect();
+    for (i, a) in alpha_steps.into_iter().enumerate() {
+        step[4 * i + 3] = a;
+    }
+    Ok(step.iter().all(|s| s.is_finite()).then_some(step))
+}
+
+/// An orthonormal basis of the plane perpendicular to `v` (not zero).
+fn tangent_basis(v: [f64; 3]) -> [[f64; 3]; 2] {
+    let len = dot3(&v, &v).sqrt();
+    let u = v.map(|c| c / len);
+    // Cross with the axis least aligned with u, which is never parallel to it.
+    let k = (0..3).min_by(|&a, &b| u[a].abs().total_cmp(&u[b].abs())).unwrap_or(0);
+    let mut axis = [0.0; 3];
+    axis[k] = 1.0;
+    let t1 = cross(&axis, &u);
+    let l1 = dot3(&t1, &t1).sqrt();
+    let t1 = t1.map(|c| c / l1);
+    [t1, cross(&u, &t1)]
+}
+
+/// What the iteration ended with.
+struct Run {
+    x: Vec<f64>,
+    iterations: usize,
+    rejected: usize,
+    residual: f64,
+    spread: f64,
+    status: Status,
+    stalled: bool,
+    solve_seconds: f64,
+    iterate_seconds: f64,
+}
+
+/// The dogleg trust-region Newton iteration (module documentation).
+fn newton(w: &CsrMatrix, mut x: Vec<f64>, params: &GotsmanParams) -> Result<Run, SphereError> {
+    let start = Instant::now();
+    let mut solve_seconds = 0.0;
+    let mut f = residual(w, &x);
+    let mut f2 = dot(&f, &f);
+    let mut radius = dot(&x, &x).sqrt();
+    let (mut iterations, mut rejected, mut stalled) = (0, 0, false);
+    let status = loop {
+        if max_abs(&f) <= params.tol {
+            break if spread(&x) < COLLAPSE_SPREAD { Status::Collapsed } else { Status::Converged };
+        }
+        if spread(&x) < COLLAPSE_SPREAD {
+            break Status::Collapsed;
+        }
+        if iterations >= params.max_iter || stalled {
+            break Status::MaxIterations;
+        }
+        iterations += 1;
+        let jac = jacobian(w, &x)?;
+        let t = Instant::now();
+        // None: the reduced matrix is singular (at or near a trivial or
+        // degenerate configuration); the Cauchy point still decreases |F|.
+        let newton_step = newton_step(w, &x, &f)?.map(|mut p| {
+            remove_rotation(&x, &mut p);
+            p
+        });
+        solve_seconds += t.elapsed().as_secs_f64();
+        let dog = Dogleg::new(&jac, &f, newton_step)?;
+        loop {
+            let Some((p, jp)) = dog.step(radius) else {
+                // The gradient J^T F vanished with F != 0: a critical point of
+                // |F|^2 that is not a root.
+                stalled = true;
+                break;
+            };
+            let p_norm = dot(&p, &p).sqrt();
+            let trial: Vec<f64> = x.iter().zip(&p).map(|(a, b)| a + b).collect();
+            let f_trial = residual(w, &trial);
+            let f2_trial = dot(&f_trial, &f_trial);
+            let linear: f64 = f.iter().zip(&jp).map(|(a, b)| (a + b) * (a + b)).sum();
+            let predicted = f2 - linear;
+            let ratio = if predicted > 0.0 && f2_trial.is_finite() {
+                (f2 - f2_trial) / predicted
+            } else {
+                -1.0
+            };
+            if ratio < 0.25 {
+                radius = 0.25 * p_norm;
+            } else if ratio > 0.75 && p_norm >= 0.99 * radius {
+                radius *= 2.0;
+            }
+            if ratio > ACCEPT_RATIO {
+                (x, f, f2) = (trial, f_trial, f2_trial);
+                break;
+            }
+            rejected += 1;
+            if radius <= MIN_RADIUS * dot(&x, &x).sqrt() {
+                stalled = true;
+                break;
+            }
+        }
+    };
+    let solve_part = solve_seconds;
+    Ok(Run {
+        residual: max_abs(&f),
+        spread: spread(&x),
+        x,
+        iterations,
+        rejected,
+        status,
+        stalled,
+        solve_seconds: solve_part,
+        iterate_seconds: start.elapsed().as_secs_f64() - solve_part,
+    })
+}
+
+/// The two ends of the dogleg path and their images under `J`.
+struct Dogleg {
+    /// Cauchy point `-(|g|^2 / |J g|^2) g`, `g = J^T F`, and `J` times it.
+    cauchy: Option<(Vec<f64>, Vec<f64>)>,
+    /// Newton point `-J^-1 F` (rotation removed) and `J` times it.
+    newton: Option<(Vec<f64>, Vec<f64>)>,
+}
+
+impl Dogleg {
+    fn new(jac: &CsrMatrix, f: &[f64], newton: Option<Vec<f64>>) -> Result<Dogleg, SparseError> {
+        let n = f.len();
+        let mut g = vec![0.0; n];
+        jac.transpose().mul_vec(f, &mut g)?;
+        let mut jg = vec![0.0; n];
+        jac.mul_vec(&g, &mut jg)?;
+        let (gg, jgjg) = (dot(&g, &g), dot(&jg, &jg));
+        let cauchy = (gg > 0.0 && jgjg > 0.0 && (gg / jgjg).is_finite()).then(|| {
+            let s = -gg / jgjg;
+            (g.iter().map(|v| s * v).collect(), jg.iter().map(|v| s * v).collect())
+        });
+        let newton = match newton {
+            Some(p) => {
+                let mut jp = vec![0.0; n];
+                jac.mul_vec(&p, &mut jp)?;
+                Some((p, jp))
+            }
+            None => None,
+        };
+        Ok(Dogleg { cauchy, newton })
+    }
+
+    /// The dogleg step for trust radius `radius` and `J` times it; `None` when
+    /// there is no direction to move in.
+    fn step(&self, radius: f64) -> Option<(Vec<f64>, Vec<f64>)> {
+        let scaled = |(p, jp): &(Vec<f64>, Vec<f64>), s: f64| -> (Vec<f64>, Vec<f64>) {
+            (p.iter().map(|v| s * v).collect(), jp.iter().map(|v| s * v).collect())
+        };
+        match (&self.cauchy, &self.newton) {
+            (_, Some(nt)) if dot(&nt.0, &nt.0).sqrt() <= radius => Some(nt.clone()),
+            (Some(c), newton) => {
+                let c_norm = dot(&c.0, &c.0).sqrt();
+                match newton {
+                    Some(nt) if c_norm < radius => {
+                        // p = c + tau (n - c) with |p| = radius, tau in [0, 1].
+                        let d: Vec<f64> = nt.0.iter().zip(&c.0).map(|(a, b)| a - b).collect();
+                        let (a, b, cc) =
+                            (dot(&d, &d), 2.0 * dot(&c.0, &d), c_norm * c_norm - radius * radius);
+                        let tau = (-b + (b * b - 4.0 * a * cc).max(0.0).sqrt()) / (2.0 * a);
+                        let tau = if tau.is_finite() { tau.clamp(0.0, 1.0) } else { 0.0 };
+                        let p = c.0.iter().zip(&d).map(|(ci, di)| ci + tau * di).collect();
+                        let jp =
+                            c.1.iter().zip(&nt.1).map(|(jc, jn)| jc + tau * (jn - jc)).collect();
+                        Some((p, jp))
+                    }
+                    _ => Some(scaled(c, (radius / c_norm).min(1.0))),
+                }
+            }
+            // No Cauchy point (the gradient vanished) but a Newton step longer
+            // than the radius: shorten it.
+            (None, Some(nt)) => Some(scaled(nt, radius / dot(&nt.0, &nt.0).sqrt())),
+            (None, None) => None,
+        }
+    }
+}
+
+/// Subtracts from the point part of the step `p` the infinitesimal rotation
+/// `omega x v_i` that fits it best in least squares:
+/// `sum_i (|v_i|^2 I - v_i v_i^T) omega = sum_i v_i x p_i`. Rotating a
+/// solution gives a solution, so this part of a Newton step is arbitrary
+/// (J is singular along it at the solution) and only harms.
+fn remove_rotation(x: &[f64], p: &mut [f64]) {
+    let mut m = [[0.0; 3]; 3];
+    let mut rhs = [0.0; 3];
+    for (v, d) in x.chunks_exact(4).zip(p.chunks_exact(4)) {
+        let vv = dot3(&v[..3], &v[..3]);
+        for r in 0..3 {
+            for c in 0..3 {
+                m[r][c] -= v[r] * v[c];
+            }
+            m[r][r] += vv;
+        }
+        let c = cross(&v[..3], &d[..3]);
+        (0..3).for_each(|k| rhs[k] += c[k]);
+    }
+    let Some(omega) = solve3(m, rhs) else { return };
+    for (v, d) in x.chunks_exact(4).zip(p.chunks_exact_mut(4)) {
+        let r = cross(&omega, &v[..3]);
+        (0..3).for_each(|k| d[k] -= r[k]);
+    }
+}
+
+/// Cramer's rule for a symmetric positive semi-definite 3x3 system; `None`
+/// when it is (nearly) singular, as for collinear points (all at one point or
+/// two antipodes), where there is no rotation to remove reliably.
+fn solve3(m: [[f64; 3]; 3], b: [f64; 3]) -> Option<[f64; 3]> {
+    let det = |a: &[[f64; 3]; 3]| {
+        a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1])
+            - a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0])
+            + a[0][2] * (a[1][0] * a[2][1] - a[1][1] * a[2][0])
+    };
+    let d = det(&m);
+    let trace = m[0][0] + m[1][1] + m[2][2];
+    if d.is_nan() || d <= 1e-12 * trace * trace * trace {
+        return None;
+    }
+    let mut out = [0.0; 3];
+    for (k, o) in out.iter_mut().enumerate() {
+        let mut mk = m;
+        (0..3).for_each(|r| mk[r][k] = b[r]);
+        *o = det(&mk) / d;
+    }
+    Some(out)
+}
+
+/// `sqrt(mean |v_i - c|^2 / mean |v_i|^2)`, `c` the mean point: 1 for points
+/// spread evenly over a sphere, 0 when they coincide.
+fn spread(x: &[f64]) -> f64 {
+    let n = (x.len() / 4).max(1) as f64;
+    let (mut c, mut sq) = ([0.0; 3], 0.0);
+    for v in x.chunks_exact(4) {
+        (0..3).for_each(|k| c[k] += v[k] / n);
+        sq += dot3(&v[..3], &v[..3]) / n;
+    }
+    // mean |v - c|^2 = mean |v|^2 - |c|^2.
+    let s = ((sq - dot3(&c, &c)) / sq).max(0.0).sqrt();
+    if s.is_finite() {
+        s
+    } else {
+        0.0
+    }
+}
+
+/// Unit points and the account of the run.
+fn finish(run: Run, start_points: &[[f64; 3]], params: &GotsmanParams) -> SphereEmbedding {
+    let n = start_points.len();
+    let mut lost = 0;
+    let points: Vec<[f64; 3]> = (0..n)
+        .map(|i| {
+            let v = [run.x[4 * i], run.x[4 * i + 1], run.x[4 * i + 2]];
+            normalize(v).unwrap_or_else(|| {
+                lost += 1;
+                start_points[i]
+            })
+        })
+        .collect();
+    let alphas = run.x.chunks_exact(4).map(|v| v[3]);
+    let (lo, hi) =
+        alphas.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), a| (lo.min(a), hi.max(a)));
+    let steps = format!(
+        "{} Newton steps ({} trust-region rejections), max residual {:.3e}, alpha in [{lo:.6}, {hi:.6}], spread {:.3}",
+        run.iterations, run.rejected, run.residual, run.spread
+    );
+    let mut message = match run.status {
+        Status::Converged => format!("gotsman: converged to tol {:e} after {steps}", params.tol),
+        Status::Collapsed => format!(
+            "gotsman: collapsed towards the trivial solution (all points at one place, alpha = 1; thesis 5.1.1) after {steps}: \
+             try another start or weights"
+        ),
+        _ if run.stalled => format!(
+            "gotsman: stalled at a local minimum of the residual (the trust region shrank to nothing) after {steps}: \
+             the start is too far from a solution; try initial points from another method"
+        ),
+        _ => format!("gotsman: reached max_iter = {} with {steps}", params.max_iter),
+    };
+    if lost > 0 {
+        message.push_str(&format!(
+            "; {lost} points reached the origin and were put back at their start"
+        ));
+    }
+    SphereEmbedding {
+        points,
+        iterations: run.iterations,
+        status: run.status,
+        message,
+        seconds: Vec::new(),
+    }
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+fn dot3(a: &[f64], b: &[f64]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+fn cross(a: &[f64], b: &[f64]) -> [f64; 3] {
+    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+}
+
+/// Largest absolute value; NaN if any value is NaN (so that it never passes
+/// `<= tol`).
+fn max_abs(v: &[f64]) -> f64 {
+    v.iter()
+        .fold(0.0, |m: f64, &x| if x.is_nan() || m.is_nan() { f64::NAN } else { m.max(x.abs()) })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::validity::check_sphere;
+    use std::collections::HashMap;
+
+    /// The octahedron split `levels` times into four (edge midpoints), with
+    /// every vertex moved to radius `radius(direction)`: a star-shaped
+    /// genus-0 mesh, counter-clockwise from outside.
+    fn subdivided_octahedron(levels: usize, radius: impl Fn([f64; 3]) -> f64) -> Mesh {
+        let mut p: Vec<[f64; 3]> = vec![
+            [1., 0., 0.],
+            [-1., 0., 0.],
+            [0., 1., 0.],
+            [0., -1., 0.],
+            [0., 0., 1.],
+            [0., 0., -1.],
+        ];
+        let mut f: Vec<[u32; 3]> = vec![
+            [0, 2, 4],
+            [2, 1, 4],
+            [1, 3, 4],
+            [3, 0, 4],
+            [2, 0, 5],
+            [1, 2, 5],
+            [3, 1, 5],
+            [0, 3, 5],
+        ];
+        for _ in 0..levels {
+            let mut mid: HashMap<(u32, u32), u32> = HashMap::new();
+            let mut split = |a: u32, b: u32, p: &mut Vec<[f64; 3]>| {
+                *mid.entry((a.min(b), a.max(b))).or_insert_with(|| {
+                    let (x, y) = (p[a as usize], p[b as usize]);
+                    p.push(normalize([x[0] + y[0], x[1] + y[1], x[2] + y[2]]).unwrap());
+                    (p.len() - 1) as u32
+                })
+            };
+            let mut next = Vec::with_capacity(4 * f.len());
+            for &[a, b, c] in &f {
+                let (ab, bc, ca) = (split(a, b, &mut p), split(b, c, &mut p), split(c, a, &mut p));
+                next.extend([[a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca]]);
+            }
+            f = next;
+        }
+        let p = p.into_iter().map(|d| d.map(|x| x * radius(d))).collect();
+        Mesh::new(p, f).unwrap()
+    }
+
+    fn bumpy(d: [f64; 3]) -> f64 {
+        1.0 + 0.3 * (3.0 * d[0]).sin() * (2.0 * d[1]).cos() + 0.2 * d[2] * d[2]
+    }
+
+    /// max_i |u_i x v_i| / |u_i|: zero when every point is the projection of
+    /// its neighbours' weighted mean (eq. 5.5).
+    fn projection_error(mesh: &Mesh, points: &[[f64; 3]]) -> f64 {
+        let he = HalfEdgeMesh::new(mesh).unwrap();
+        let w = weight_matrix(mesh, &he, Weights::Uniform).unwrap();
+        let x: Vec<f64> = points.iter().flat_map(|p| [p[0], p[1], p[2], 0.0]).collect();
+        let u = neighbour_means(&w, &x);
+        (0..points.len())
+            .map(|i| {
+                let ui = &u[3 * i..3 * i + 3];
+                norm3(cross(ui, &points[i])) / dot3(ui, ui).sqrt()
+            })
+            .fold(0.0, f64::max)
+    }
+
+    fn norm3(a: [f64; 3]) -> f64 {
+        dot3(&a, &a).sqrt()
+    }
+
+    #[test]
+    fn sphere_and_bumpy_meshes_converge_to_valid_embeddings() {
+        for mesh in [subdivided_octahedron(3, |_| 1.0), subdivided_octahedron(4, bumpy)] {
+            for weights in
+                [Weights::Uniform, Weights::Chord { rho: 1.0 }, Weights::Chord { rho: -1.0 }]
+            {
+                let e = gotsman(&mesh, &GotsmanParams { weights, ..Default::default() }).unwrap();
+                assert_eq!(e.status, Status::Converged, "{weights:?}: {}", e.message);
+                assert!(e.iterations <= 40, "{}", e.message);
+                assert!(e.points.iter().all(|p| (norm3(*p) - 1.0).abs() < 1e-14));
+                assert!(check_sphere(mesh.faces(), &e.points).valid, "{weights:?}");
+                if weights == Weights::Uniform {
+                    assert!(projection_error(&mesh, &e.points) < 1e-9);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn same_input_same_bits() {
+        let mesh = subdivided_octahedron(3, bumpy);
+        let a = gotsman(&mesh, &GotsmanParams::default()).unwrap();
+        let b = gotsman(&mesh, &GotsmanParams::default()).unwrap();
+        assert_eq!(a.points, b.points);
+    }
+
+    #[test]
+    fn strict_reports_no_convergence_with_the_last_iterate() {
+        let mesh = subdivided_octahedron(3, bumpy);
+        let params = GotsmanParams { max_iter: 1, strict: true, ..Default::default() };
+        match gotsman(&mesh, &params) {
+            Err(SphereError::NoConvergence { last }) => {
+                assert_eq!((last.iterations, last.status), (1, Status::MaxIterations));
+                assert_eq!(last.points.len(), mesh.n_vertices());
+            }
+            other => panic!("{other:?}"),
+        }
+        let relaxed = gotsman(&mesh, &GotsmanParams { max_iter: 1, ..Default::default() }).unwrap();
+        assert_eq!(relaxed.status, Status::MaxIterations);
+    }
+
+    #[test]
+    fn clustered_start_collapses_and_says_so() {
+        let mesh = subdivided_octahedron(2, |_| 1.0);
+        // Every point within ~3 degrees of the north pole, in a fixed pattern.
+        let start: Vec<[f64; 3]> = (0..mesh.n_vertices())
+            .map(|i| [0.05 * (i as f64).sin(), 0.05 * (1.7 * i as f64).cos(), 1.0])
+            .collect();
+        let params =
+            GotsmanParams { initial: Initial::Points(start.clone()), ..Default::default() };
+        let e = gotsman(&mesh, &params).unwrap();
+        assert_eq!(e.status, Status::Collapsed, "{}", e.message);
+        assert!(e.message.contains("trivial"));
+        let strict =
+            GotsmanParams { initial: Initial::Points(start), strict: true, ..Default::default() };
+        assert!(matches!(gotsman(&mesh, &strict), Err(SphereError::NoConvergence { .. })));
+    }
+
+    #[test]
+    fn a_converged_start_needs_no_iteration() {
+        let mesh = subdivided_octahedron(2, bumpy);
+        let first = gotsman(&mesh, &GotsmanParams::default()).unwrap();
+        let params = GotsmanParams {
+            initial: Initial::Points(first.points.clone()),
+            tol: 1e-9,
+            ..Default::default()
+        };
+        let again = gotsman(&mesh, &params).unwrap();
+        assert_eq!((again.iterations, again.status), (0, Status::Converged));
+    }
+
+    #[test]
+    fn bad_input_is_an_error() {
+        let mesh = subdivided_octahedron(1, |_| 1.0);
+        for weights in [Weights::Cotangent, Weights::MeanValue] {
+            let p = GotsmanParams { weights, ..Default::default() };
+            assert!(matches!(
+                gotsman(&mesh, &p),
+                Err(SphereError::InvalidParameter { name: "weights", .. })
+            ));
+        }
+        let tol = GotsmanParams { tol: f64::NAN, ..Default::default() };
+        assert!(matches!(
+            gotsman(&mesh, &tol),
+            Err(SphereError::InvalidParameter { name: "tol", .. })
+        ));
+        let short = GotsmanParams {
+            initial: Initial::Points(vec![[0.0, 0.0, 1.0]; 3]),
+            ..Default::default()
+        };
+        assert!(matches!(
+            gotsman(&mesh, &short),
+            Err(SphereError::InvalidParameter { name: "initial", .. })
+        ));
+        let mut zero = vec![[0.0, 0.0, 1.0]; mesh.n_vertices()];
+        zero[4] = [0.0; 3];
+        let zero = GotsmanParams { initial: Initial::Points(zero), ..Default::default() };
+        assert!(matches!(
+            gotsman(&mesh, &zero),
+            Err(SphereError::InvalidParameter { name: "initial", .. })
+        ));
+        // An open mesh (one face removed) is not a sphere.
+        let (p, mut f) = mesh.into_parts();
+        f.pop();
+        let open = Mesh::new(p, f).unwrap();
+        assert!(matches!(gotsman(&open, &GotsmanParams::default()), Err(SphereError::Topology(_))));
+    }
+
+    #[test]
+    fn jacobian_matches_finite_differences() {
+        let mesh = subdivided_octahedron(1, bumpy);
+        let he = HalfEdgeMesh::new(&mesh).unwrap();
+        let w = weight_matrix(&mesh, &he, Weights::Chord { rho: 1.0 }).unwrap();
+        let x: Vec<f64> =
+            (0..4 * mesh.n_vertices()).map(|k| ((k * 7 % 13) as f64 * 0.37).sin()).collect();
+        let jac = jacobian(&w, &x).unwrap();
+        let h = 1e-6;
+        for col in 0..x.len() {
+            let (mut plus, mut minus) = (x.clone(), x.clone());
+            plus[col] += h;
+            minus[col] -= h;
+            let (fp, fm) = (residual(&w, &plus), residual(&w, &minus));
+            for row in 0..x.len() {
+                let fd = (fp[row] - fm[row]) / (2.0 * h);
+                assert!(
+                    (fd - jac.get(row, col)).abs() < 1e-8,
+                    "({row}, {col}): {fd} vs {}",
+                    jac.get(row, col)
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn the_tangent_step_is_the_newton_step_of_the_full_jacobian() {
+        let mesh = subdivided_octahedron(2, bumpy);
+        let he = HalfEdgeMesh::new(&mesh).unwrap();
+        let w = weight_matrix(&mesh, &he, Weights::Chord { rho: 1.0 }).unwrap();
+        // Points off the sphere and off any solution.
+        let x: Vec<f64> = mesh
+            .positions()
+            .iter()
+            .enumerate()
+            .flat_map(|(i, p)| {
+                [p[0], p[1] + 0.1 * (i as f64).sin(), p[2], 0.9 + 0.01 * (i % 7) as f64]
+            })
+            .collect();
+        let f = residual(&w, &x);
+        let minus_f: Vec<f64> = f.iter().map(|v| -v).collect();
+        let (full, _) = solve(
+            &jacobian(&w, &x).unwrap(),
+            &[minus_f],
+            SolverKind::Auto,
+            &SolveParams::default(),
+        )
+        .unwrap();
+        let reduced = newton_step(&w, &x, &f).unwrap().unwrap();
+        let err = full[0].iter().zip(&reduced).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+        assert!(err < 1e-10, "{err}");
+    }
+
+    #[test]
+    fn removing_the_rotation_leaves_a_rotation_free_step() {
+        let mesh = subdivided_octahedron(1, |_| 1.0);
+        let x: Vec<f64> = mesh.positions().iter().flat_map(|p| [p[0], p[1], p[2], 1.0]).collect();
+        // A pure rotation about (1, 2, 3) plus an alpha change: only the latter stays.
+        let omega = [1.0, 2.0, 3.0];
+        let mut p: Vec<f64> = x
+            .chunks(4)
+            .flat_map(|v| {
+                let r = cross(&omega, &v[..3]);
+                [r[0], r[1], r[2], 0.5]
+            })
+            .collect();
+        remove_rotation(&x, &mut p);
+        for d in p.chunks(4) {
+            assert!(norm3([d[0], d[1], d[2]]) < 1e-14 && d[3] == 0.5);
+        }
+    }
+}
