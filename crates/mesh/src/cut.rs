@@ -124,24 +124,10 @@ mod tests {
     use crate::validate::check;
 
     fn octahedron() -> Mesh {
-        let p = vec![
-            [1.0, 0.0, 0.0],
-            [-1.0, 0.0, 0.0],
-            [0.0, 1.0, 0.0],
-            [0.0, -1.0, 0.0],
-            [0.0, 0.0, 1.0],
-            [0.0, 0.0, -1.0],
-        ];
-        let f = vec![
-            [0, 2, 4],
-            [2, 1, 4],
-            [1, 3, 4],
-            [3, 0, 4],
-            [2, 0, 5],
-            [1, 2, 5],
-            [3, 1, 5],
-            [0, 3, 5],
-        ];
+        let (p, f) = (
+            crate::solids::OCTAHEDRON_POSITIONS.to_vec(),
+            crate::solids::OCTAHEDRON_FACES.to_vec(),
+        );
         Mesh::new(p, f).unwrap()
     }
 

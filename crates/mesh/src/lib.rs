@@ -19,6 +19,7 @@ pub mod io;
 pub mod mesh;
 pub mod orient;
 pub mod predicates;
+pub mod solids;
 pub mod validate;
 pub mod vec3;
 mod volume;

@@ -122,19 +122,10 @@ mod tests {
     use super::*;
 
     fn cube_like_octahedron(faces: Vec<[u32; 3]>) -> Mesh {
-        let p = vec![
-            [1.0, 0.0, 0.0],
-            [-1.0, 0.0, 0.0],
-            [0.0, 1.0, 0.0],
-            [0.0, -1.0, 0.0],
-            [0.0, 0.0, 1.0],
-            [0.0, 0.0, -1.0],
-        ];
-        Mesh::new(p, faces).unwrap()
+        Mesh::new(crate::solids::OCTAHEDRON_POSITIONS.to_vec(), faces).unwrap()
     }
 
-    const OCTA: [[u32; 3]; 8] =
-        [[0, 2, 4], [2, 1, 4], [1, 3, 4], [3, 0, 4], [2, 0, 5], [1, 2, 5], [3, 1, 5], [0, 3, 5]];
+    const OCTA: [[u32; 3]; 8] = crate::solids::OCTAHEDRON_FACES;
 
     #[test]
     fn repairs_random_flips_and_inward_meshes() {

@@ -47,12 +47,14 @@ pub fn embed_theta_phi<'py>(
         "uniform" => Weights::Uniform,
         "chord" if rho.is_finite() => Weights::Chord { rho },
         "mean_value" => Weights::MeanValue,
-        other => return Err(mesh_error(
-            py,
-            format!(
+        other => {
+            return Err(mesh_error(
+                py,
+                format!(
                 "weights must be 'uniform', 'chord' (finite rho) or 'mean_value', got {other:?}"
             ),
-        )),
+            ))
+        }
     };
     let params = ThetaPhiParams { poles, weights, max_refinements };
     let tp = py.detach(|| theta_phi(&mesh.mesh, &params)).map_err(|e| sphere_error(py, e))?;

@@ -49,12 +49,14 @@ fn weights(py: Python<'_>, name: &str, rho: f64) -> PyResult<Weights> {
         }
         "mean_value" => Weights::MeanValue,
         "cotangent" => Weights::Cotangent,
-        other => return Err(mesh_error(
-            py,
-            format!(
+        other => {
+            return Err(mesh_error(
+                py,
+                format!(
                 "weights must be 'uniform', 'chord', 'mean_value' or 'cotangent', got {other:?}"
             ),
-        )),
+            ))
+        }
     })
 }
 

@@ -687,24 +687,10 @@ mod tests {
     }
 
     fn octahedron(shift: [f64; 3]) -> Mesh {
-        let p = [
-            [1.0, 0.0, 0.0],
-            [-1.0, 0.0, 0.0],
-            [0.0, 1.0, 0.0],
-            [0.0, -1.0, 0.0],
-            [0.0, 0.0, 1.0],
-            [0.0, 0.0, -1.0],
-        ];
-        let f = vec![
-            [0, 2, 4],
-            [2, 1, 4],
-            [1, 3, 4],
-            [3, 0, 4],
-            [2, 0, 5],
-            [1, 2, 5],
-            [3, 1, 5],
-            [0, 3, 5],
-        ];
+        let (p, f) = (
+            spherify_mesh::solids::OCTAHEDRON_POSITIONS,
+            spherify_mesh::solids::OCTAHEDRON_FACES.to_vec(),
+        );
         mesh(p.iter().map(|q| [0, 1, 2].map(|k| q[k] + shift[k])).collect(), f)
     }
 

@@ -104,24 +104,10 @@ mod tests {
     use super::*;
 
     fn octahedron() -> (Vec<[f64; 3]>, Vec<[u32; 3]>) {
-        let p = vec![
-            [1.0, 0.0, 0.0],
-            [-1.0, 0.0, 0.0],
-            [0.0, 1.0, 0.0],
-            [0.0, -1.0, 0.0],
-            [0.0, 0.0, 1.0],
-            [0.0, 0.0, -1.0],
-        ];
-        let f = vec![
-            [0, 2, 4],
-            [2, 1, 4],
-            [1, 3, 4],
-            [3, 0, 4],
-            [2, 0, 5],
-            [1, 2, 5],
-            [3, 1, 5],
-            [0, 3, 5],
-        ];
+        let (p, f) = (
+            spherify_mesh::solids::OCTAHEDRON_POSITIONS.to_vec(),
+            spherify_mesh::solids::OCTAHEDRON_FACES.to_vec(),
+        );
         (p, f)
     }
 
