@@ -4,7 +4,6 @@
 use numpy::PyReadonlyArrayDyn;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use spherify_sparse::weights::Weights;
 use spherify_sphere::gotsman::{gotsman, GotsmanParams, Initial};
 
 use crate::convert::rows;
@@ -34,17 +33,13 @@ pub fn embed_gotsman<'py>(
     strict: bool,
     initial: Option<PyReadonlyArrayDyn<'_, f64>>,
 ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyDict>)> {
-    let weights = match weights {
-        "uniform" => Weights::Uniform,
-        "chord" if rho.is_finite() => Weights::Chord { rho },
-        "chord" => return Err(mesh_error(py, format!("rho must be finite, got {rho}"))),
-        other => {
-            return Err(mesh_error(
-                py,
-                format!("weights must be 'uniform' or 'chord' (eq. 5.10 needs symmetric weights), got {other:?}"),
-            ))
-        }
-    };
+    let weights = crate::convert::weights(
+        py,
+        weights,
+        rho,
+        &["uniform", "chord"],
+        " (eq. 5.10 needs symmetric weights)",
+    )?;
     if max_iter < 0 {
         return Err(mesh_error(py, format!("max_iter must be an integer >= 0, got {max_iter}")));
     }

@@ -4,7 +4,6 @@
 use numpy::PyReadonlyArrayDyn;
 use pyo3::prelude::*;
 use pyo3::types::{PyByteArray, PyBytes, PyDict, PyString};
-use spherify_sparse::weights::Weights;
 use spherify_sphere::alexa::{alexa, AlexaParams, AlexaStep};
 use spherify_sphere::relaxation::{relaxation, Initial, RelaxationParams};
 
@@ -14,24 +13,6 @@ use crate::errors::mesh_error;
 use crate::mesh::CoreMesh;
 
 type Embedded<'py> = (Bound<'py, PyAny>, Bound<'py, PyDict>);
-
-fn weights(py: Python<'_>, name: &str, rho: f64) -> PyResult<Weights> {
-    Ok(match name {
-        "uniform" => Weights::Uniform,
-        "chord" if rho.is_finite() => Weights::Chord { rho },
-        "chord" => return Err(mesh_error(py, format!("rho must be finite, got {rho}"))),
-        "mean_value" => Weights::MeanValue,
-        "cotangent" => Weights::Cotangent,
-        other => {
-            return Err(mesh_error(
-                py,
-                format!(
-                "weights must be 'uniform', 'chord', 'mean_value' or 'cotangent', got {other:?}"
-            ),
-            ))
-        }
-    })
-}
 
 /// A count from Python that must be >= `minimum` (taken as i64 so that a
 /// negative value is a MeshError rather than an OverflowError).
@@ -106,7 +87,7 @@ pub fn embed_relaxation<'py>(
     initial: Option<PyReadonlyArrayDyn<'py, f64>>,
 ) -> PyResult<Embedded<'py>> {
     let params = RelaxationParams {
-        weights: self::weights(py, weights, rho)?,
+        weights: crate::convert::weights(py, weights, rho, &crate::convert::ALL_WEIGHTS, "")?,
         max_iter: count(py, "max_iter", max_iter, 0)?,
         check_every: count(py, "check_every", check_every, 1)?,
         tol,

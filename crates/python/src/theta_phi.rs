@@ -2,7 +2,6 @@
 
 use numpy::IntoPyArray;
 use pyo3::prelude::*;
-use spherify_sparse::weights::Weights;
 use spherify_sphere::theta_phi::{theta_phi, PoleChoice, ThetaPhiParams};
 
 use crate::convert::{to_i64_rows, to_numpy};
@@ -43,19 +42,8 @@ pub fn embed_theta_phi<'py>(
         Some(p) => pole_choice(py, p)?,
         None => PoleChoice::FastGraph,
     };
-    let weights = match weights {
-        "uniform" => Weights::Uniform,
-        "chord" if rho.is_finite() => Weights::Chord { rho },
-        "mean_value" => Weights::MeanValue,
-        other => {
-            return Err(mesh_error(
-                py,
-                format!(
-                "weights must be 'uniform', 'chord' (finite rho) or 'mean_value', got {other:?}"
-            ),
-            ))
-        }
-    };
+    let weights =
+        crate::convert::weights(py, weights, rho, &["uniform", "chord", "mean_value"], "")?;
     let params = ThetaPhiParams { poles, weights, max_refinements };
     let tp = py.detach(|| theta_phi(&mesh.mesh, &params)).map_err(|e| sphere_error(py, e))?;
     let (points, info) = embedding_to_py(py, &tp.embedding)?;

@@ -5,10 +5,9 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use spherify_mesh::HalfEdgeMesh;
 use spherify_sparse::tutte::{self as core_tutte, BoundaryShape, TutteError, TutteParams};
-use spherify_sparse::weights::Weights;
 use spherify_sparse::{SolveParams, SolverKind};
 
-use crate::convert::{rows, to_numpy};
+use crate::convert::{rows, to_numpy, ALL_WEIGHTS};
 use crate::errors::{mesh_error, spherify_error, to_py};
 use crate::mesh::CoreMesh;
 
@@ -36,28 +35,6 @@ pub fn solver_name(kind: SolverKind) -> &'static str {
         SolverKind::CgJacobi => "cg_jacobi",
         SolverKind::GaussSeidel => "gauss_seidel",
     }
-}
-
-fn weights(py: Python<'_>, name: &str, rho: f64) -> PyResult<Weights> {
-    Ok(match name {
-        "uniform" => Weights::Uniform,
-        "chord" => {
-            if !rho.is_finite() {
-                return Err(mesh_error(py, format!("rho must be finite, got {rho}")));
-            }
-            Weights::Chord { rho }
-        }
-        "mean_value" => Weights::MeanValue,
-        "cotangent" => Weights::Cotangent,
-        other => {
-            return Err(mesh_error(
-                py,
-                format!(
-                "weights must be 'uniform', 'chord', 'mean_value' or 'cotangent', got {other:?}"
-            ),
-            ))
-        }
-    })
 }
 
 pub fn tutte_error(py: Python<'_>, err: TutteError) -> PyErr {
@@ -143,7 +120,7 @@ pub fn tutte<'py>(
         }
     };
     let params = TutteParams {
-        weights: self::weights(py, weights, rho)?,
+        weights: crate::convert::weights(py, weights, rho, &ALL_WEIGHTS, "")?,
         boundary,
         solver: solver_kind(py, solver)?,
         solve: SolveParams { tol, max_iter, x0: None },
