@@ -7,8 +7,8 @@ from __future__ import annotations
 
 from . import datasets
 from ._core import __version__
-from ._errors import (ConvergenceError, FormatError, MeshError, SpherifyError, SpherifyWarning,
-                      TopologyError)
+from ._errors import (ConvergenceError, FormatError, MapError, MeshError, SpherifyError,
+                      SpherifyWarning, TopologyError)
 from ._mesh import Mesh, check, check_sphere, dijkstra, load, orient, save, shortest_path
 from ._report import MeshReport, SphereReport
 from ._spheremap import SphereMap
@@ -19,6 +19,7 @@ from ._quality import quality
 __all__ = [
     "ConvergenceError",
     "FormatError",
+    "MapError",
     "Mesh",
     "MeshError",
     "MeshReport",

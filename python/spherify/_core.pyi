@@ -7,7 +7,7 @@ import numpy.typing as npt
 
 from ._report import MeshReport, SphereReport
 
-__all__ = ["CoreMesh", "__version__", "boundary_loop", "check", "check_raw", "check_sphere", "dijkstra", "embed_alexa", "embed_gotsman", "embed_radial", "embed_relaxation", "embed_theta_phi", "load", "orient", "quality", "save", "shortest_path", "tutte"]
+__all__ = ["CoreMesh", "CorePointMap", "__version__", "boundary_loop", "check", "check_raw", "check_sphere", "dijkstra", "embed_alexa", "embed_gotsman", "embed_radial", "embed_relaxation", "embed_theta_phi", "load", "orient", "point_map_gc", "point_map_theta_phi", "quality", "save", "shortest_path", "tutte"]
 
 __version__: str
 
@@ -21,6 +21,27 @@ class CoreMesh:
     @property
     def n_faces(self) -> int: ...
 
+@final
+class CorePointMap:
+    def to_sphere(
+        self, face_ids: npt.NDArray[np.int64], bary: npt.NDArray[np.float64]
+    ) -> npt.NDArray[np.float64]: ...
+    def to_surface(
+        self, points: npt.NDArray[np.float64]
+    ) -> Tuple[npt.NDArray[np.int64], npt.NDArray[np.float64], npt.NDArray[np.float64]]: ...
+    @property
+    def not_bijective(self) -> Optional[str]: ...
+
+def point_map_theta_phi(
+    mesh: CoreMesh,
+    cut_faces: npt.NDArray[np.int64],
+    theta_phi: npt.NDArray[np.float64],
+    poles: Tuple[int, int],
+    tp_valid: bool,
+) -> CorePointMap: ...
+def point_map_gc(
+    mesh: CoreMesh, points: npt.NDArray[np.float64], valid: bool, flipped: int
+) -> CorePointMap: ...
 def load(path: str | PathLike[str]) -> Tuple[CoreMesh, List[str], Dict[str, npt.NDArray[np.float64]]]: ...
 def save(
     mesh: CoreMesh,

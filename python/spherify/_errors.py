@@ -49,6 +49,13 @@ class ConvergenceError(SpherifyError, RuntimeError):
         self.state = state
 
 
+class MapError(SpherifyError, ValueError):
+    """The map cannot answer the question: ``SphereMap.to_surface`` on a map
+    that is not a certified bijection (a GC-embedding that fails the tests of
+    thesis 3.4, or a theta-phi rectangle that double precision could not hold),
+    where the preimage of a sphere point is not defined."""
+
+
 class SpherifyWarning(UserWarning):
     """A result that was computed but comes without its usual guarantee (for
     instance a Tutte embedding with negative cotangent weights, or one in which

@@ -2,10 +2,13 @@
 
 from __future__ import annotations
 
-from typing import Any, Dict, List
+from typing import Any, Dict, List, Optional, Tuple
 
 import numpy as np
+import numpy.typing as npt
 
+from . import _core
+from ._errors import MeshError
 from ._mesh import Mesh, check_sphere
 from ._report import SphereReport
 
@@ -57,6 +60,9 @@ class SphereMap:
         Refinement steps, pole-fan monotonicity and re-embedding (6.5.1), the
         thinnest triangle relative to the rectangle, and the rectangle's
         flipped / collapsed triangle ids.
+
+    Every map also has ``to_sphere`` (the map h from surface points to the
+    sphere) and ``to_surface`` (its inverse), see below.
     """
 
     def __init__(self, mesh: Mesh, points: np.ndarray, method: str, info: Dict[str, Any],
@@ -72,6 +78,7 @@ class SphereMap:
         self.seconds: Dict[str, float] = dict(info.get("seconds", {}))
         self.notes = list(notes)
         self.report: SphereReport = check_sphere(mesh, points)
+        self._point_map: Optional[_core.CorePointMap] = None
         if "theta_phi" in info:
             self.poles = tuple(int(p) for p in info["poles"])
             self.cut_path = info["cut_path"]
@@ -82,6 +89,87 @@ class SphereMap:
             self.details = {key: info[key] for key in (
                 "refinements", "re_embedded", "fans_monotone", "min_area_ratio",
                 "tp_flipped_faces", "tp_degenerate_faces", "cut_boundary")}
+
+    def _points_map(self) -> _core.CorePointMap:
+        """The point-location structure, built on first use (O(F log F))."""
+        if self._point_map is None:
+            if self.method == "theta_phi":
+                self._point_map = _core.point_map_theta_phi(
+                    self.mesh._core, self.cut_mesh.faces, self.theta_phi, self.poles,
+                    self.tp_valid)
+            else:
+                self._point_map = _core.point_map_gc(
+                    self.mesh._core, self.points, self.valid, self.flipped)
+        return self._point_map
+
+    def to_sphere(self, face_ids: npt.ArrayLike, bary: npt.ArrayLike) -> np.ndarray:
+        """Map surface points to the sphere: the homeomorphism h.
+
+        For theta-phi maps this is the thesis's own bijection (6.6): the
+        barycentric map into the theta-phi rectangle (h1), the stretch of the
+        pole triangles onto the rectangle's top and bottom lines (h2, eq.
+        6.44-6.56) and the fold onto the sphere (h3, eq. 6.35). It is a
+        bijection whenever ``tp_valid`` holds, even when the folded vertices do
+        not form a valid GC-embedding. For the other methods it is the
+        barycentric map of thesis 3.3: the same weights of the sphere
+        triangle's corners, projected onto the sphere (a bijection when
+        ``valid``).
+
+        Parameters
+        ----------
+        face_ids : (k,) int
+            A face of ``mesh`` per point.
+        bary : (k, 3) float
+            Barycentric weights on that face's corners (in the order of
+            ``mesh.faces``): finite, >= 0 and summing to 1 (within 1e-6; they
+            are rescaled).
+
+        Returns
+        -------
+        (k, 3) float64
+            Unit vectors.
+
+        Raises
+        ------
+        MeshError
+            Wrong shapes, a face id out of range or bad weights (the row is named).
+        """
+        ids = np.asarray(face_ids)
+        if ids.dtype.kind not in "iu":
+            raise MeshError(f"face_ids must be integers, got dtype {ids.dtype}")
+        return self._points_map().to_sphere(ids.astype(np.int64, copy=False),
+                                            _float_rows(bary, "bary"))
+
+    def to_surface(self, points: npt.ArrayLike) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Map points of the unit sphere back to the surface: h^-1.
+
+        Each point is located among the cells of the map (a box tree; O(log F)
+        per point, in parallel), then the inverse of :meth:`to_sphere` gives
+        the face and its barycentric weights. Points on an edge or a vertex
+        get one of the faces that share it.
+
+        Parameters
+        ----------
+        points : (k, 3) float
+            Unit vectors (norm within 1e-6 of 1; they are normalised).
+
+        Returns
+        -------
+        face_ids : (k,) int64
+        bary : (k, 3) float64
+            Barycentric weights on the face's corners, >= 0, summing to 1.
+        xyz : (k, 3) float64
+            The surface points themselves.
+
+        Raises
+        ------
+        MapError
+            The map is not a certified bijection (``tp_valid`` False for
+            theta-phi, ``valid`` False otherwise), so h^-1 is not defined.
+        MeshError
+            Wrong shape, or a point that is not a unit vector (the row is named).
+        """
+        return self._points_map().to_surface(_float_rows(points, "points"))
 
     @property
     def valid(self) -> bool:
@@ -99,3 +187,11 @@ class SphereMap:
         return (f"SphereMap(method={self.method!r}, n_vertices={len(self.points)}, "
                 f"valid={self.valid}, flipped={self.flipped}, status={self.status!r}, "
                 f"iterations={self.iterations})")
+
+
+def _float_rows(data: npt.ArrayLike, what: str) -> np.ndarray:
+    try:
+        array = np.asarray(data, dtype=np.float64)
+    except (TypeError, ValueError) as err:
+        raise MeshError(f"{what} must be numbers: {err}") from None
+    return np.ascontiguousarray(array)

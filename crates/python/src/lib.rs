@@ -12,6 +12,7 @@ mod graph;
 mod io;
 mod mesh;
 mod metrics;
+mod point_map;
 mod radial;
 mod relaxation;
 mod sphere;
@@ -22,6 +23,9 @@ mod validate;
 #[pymodule]
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<mesh::CoreMesh>()?;
+    m.add_class::<point_map::CorePointMap>()?;
+    m.add_function(wrap_pyfunction!(point_map::point_map_theta_phi, m)?)?;
+    m.add_function(wrap_pyfunction!(point_map::point_map_gc, m)?)?;
     m.add_function(wrap_pyfunction!(io::load, m)?)?;
     m.add_function(wrap_pyfunction!(io::save, m)?)?;
     m.add_function(wrap_pyfunction!(validate::check, m)?)?;

@@ -16,9 +16,13 @@
 //! sphere (3.3, 6.6).
 
 pub mod alexa;
+pub mod bvh;
 pub mod embedding;
+pub mod gc_map;
 pub mod gotsman;
+pub mod h_map;
 pub mod metrics;
+pub mod point_map;
 pub mod poles;
 pub mod radial;
 pub mod relaxation;

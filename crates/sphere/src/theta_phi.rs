@@ -330,16 +330,25 @@ fn strictly_increasing_phi(uv: &[[f64; 2]], fan: &[u32]) -> bool {
     fan.windows(2).all(|w| uv[w[0] as usize][1] < uv[w[1] as usize][1])
 }
 
-/// Eq. 6.38: the fan's inner vertices pinned at theta = h1 (north) or
-/// pi - h1 (south), evenly in phi; the pole itself is then cut off from the
-/// free vertices, which is the graph H = G - n of eq. 6.36.
+/// Eq. 6.38, made strictly convex: the fan's inner vertices pinned evenly in
+/// phi, the pole then cut off from the free vertices (the graph H = G - n of
+/// eq. 6.36). The thesis puts them on the straight line theta = h1; but when
+/// two of them that are not neighbours in the fan share an edge (a face made of
+/// three pole neighbours, found on small random meshes), that edge lies along
+/// the straight side and Tutte's theorem gives a triangle of zero area, in
+/// exact arithmetic too. So they go on the convex arc
+/// theta = h1 (1 - sin(phi / 2) / 2) instead (mirrored for the south pole),
+/// which keeps the boundary convex, bulges towards the pole and still meets
+/// the rectangle's sides at (h1, 0) and (h1, 2 pi).
 fn pin_fan(fixed: &mut [Option<[f64; 2]>], fan: &[u32], k: usize, south: bool) {
     let h1 = PI / (k as f64 + 1.0);
     let inner = &fan[1..fan.len() - 1];
     let h2 = 2.0 * PI / (inner.len() as f64 + 1.0);
-    let theta = if south { PI - h1 } else { h1 };
     for (j, &v) in inner.iter().enumerate() {
-        fixed[v as usize] = Some([theta, (j + 1) as f64 * h2]);
+        let phi = (j + 1) as f64 * h2;
+        let depth = h1 * (1.0 - 0.5 * (0.5 * phi).sin());
+        let theta = if south { PI - depth } else { depth };
+        fixed[v as usize] = Some([theta, phi]);
     }
 }
 

@@ -1,0 +1,199 @@
+//! A bounding-volume hierarchy of axis-aligned boxes, for point location.
+//!
+//! The maps h^-1 (thesis 6.6) and the inverse barycentric map (3.3) must find,
+//! for each of up to millions of points, the cell (triangle, or pole
+//! trapezium) that holds it. Tutte-type embeddings are anything but uniform:
+//! most triangles crowd into tiny regions (the exponential squeezing of long
+//! limbs), so a uniform grid degenerates; a median-split box tree adapts to
+//! the density. Built in O(n log n), queried in O(log n + overlapping boxes).
+
+/// A box in `D` dimensions: `min[i] <= x[i] <= max[i]`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Aabb<const D: usize> {
+    pub min: [f64; D],
+    pub max: [f64; D],
+}
+
+impl<const D: usize> Aabb<D> {
+    /// The smallest box holding `points`.
+    pub fn around(points: &[[f64; D]]) -> Self {
+        let mut b = Aabb { min: [f64::INFINITY; D], max: [f64::NEG_INFINITY; D] };
+        for p in points {
+            b.include(p);
+        }
+        b
+    }
+
+    fn include(&mut self, p: &[f64; D]) {
+        for i in 0..D {
+            self.min[i] = self.min[i].min(p[i]);
+            self.max[i] = self.max[i].max(p[i]);
+        }
+    }
+
+    fn merge(&mut self, other: &Self) {
+        self.include(&other.min);
+        self.include(&other.max);
+    }
+
+    /// Whether `p` lies in the box grown by `slack` on every side.
+    pub fn contains(&self, p: &[f64; D], slack: f64) -> bool {
+        (0..D).all(|i| p[i] >= self.min[i] - slack && p[i] <= self.max[i] + slack)
+    }
+
+    fn centre(&self, axis: usize) -> f64 {
+        0.5 * (self.min[axis] + self.max[axis])
+    }
+}
+
+/// Leaves hold at most this many items.
+const LEAF_SIZE: usize = 4;
+
+#[derive(Debug, Clone)]
+struct Node<const D: usize> {
+    bounds: Aabb<D>,
+    /// Leaf: items[start..start + count]; inner node: children at `start`
+    /// and `start + 1` (count == 0).
+    start: u32,
+    count: u32,
+}
+
+/// A box tree over items `0..n`.
+#[derive(Debug, Clone)]
+pub struct Bvh<const D: usize> {
+    nodes: Vec<Node<D>>,
+    items: Vec<u32>,
+}
+
+impl<const D: usize> Bvh<D> {
+    /// Builds the tree over one box per item.
+    pub fn new(boxes: &[Aabb<D>]) -> Self {
+        let mut items: Vec<u32> = (0..boxes.len() as u32).collect();
+        let mut nodes = Vec::with_capacity(2 * boxes.len() / LEAF_SIZE + 1);
+        if !boxes.is_empty() {
+            nodes.push(Node { bounds: boxes[0], start: 0, count: 0 });
+            // Explicit stack of (node, item range): no recursion depth limit.
+            let mut stack = vec![(0usize, 0usize, boxes.len())];
+            while let Some((node, lo, hi)) = stack.pop() {
+                let mut bounds = boxes[items[lo] as usize];
+                for &it in &items[lo + 1..hi] {
+                    bounds.merge(&boxes[it as usize]);
+                }
+                nodes[node].bounds = bounds;
+                if hi - lo <= LEAF_SIZE {
+                    nodes[node].start = lo as u32;
+                    nodes[node].count = (hi - lo) as u32;
+                    continue;
+                }
+                // Split at the median centre along the widest axis of the centres.
+                let mut centres = Aabb { min: [f64::INFINITY; D], max: [f64::NEG_INFINITY; D] };
+                for &it in &items[lo..hi] {
+                    let b = &boxes[it as usize];
+                    let c: [f64; D] = std::array::from_fn(|i| b.centre(i));
+                    centres.include(&c);
+                }
+                let axis = (0..D)
+                    .max_by(|&a, &b| {
+                        (centres.max[a] - centres.min[a])
+                            .total_cmp(&(centres.max[b] - centres.min[b]))
+                    })
+                    .unwrap_or(0);
+                let mid = lo + (hi - lo) / 2;
+                items[lo..hi].select_nth_unstable_by(mid - lo, |&a, &b| {
+                    boxes[a as usize].centre(axis).total_cmp(&boxes[b as usize].centre(axis))
+                });
+                let left = nodes.len();
+                nodes.push(Node { bounds, start: 0, count: 0 });
+                nodes.push(Node { bounds, start: 0, count: 0 });
+                nodes[node].start = left as u32;
+                nodes[node].count = 0;
+                stack.push((left, lo, mid));
+                stack.push((left + 1, mid, hi));
+            }
+        }
+        Bvh { nodes, items }
+    }
+
+    /// Calls `visit(item)` for every item in a leaf whose bounds, grown by
+    /// `slack`, contain `p`: a superset of the items whose own box does, so the
+    /// caller tests each item's shape.
+    pub fn for_each_containing(&self, p: &[f64; D], slack: f64, mut visit: impl FnMut(u32)) {
+        if self.nodes.is_empty() {
+            return;
+        }
+        let mut stack = Vec::with_capacity(64);
+        stack.push(0usize);
+        while let Some(i) = stack.pop() {
+            let node = &self.nodes[i];
+            if !node.bounds.contains(p, slack) {
+                continue;
+            }
+            if node.count > 0 {
+                let start = node.start as usize;
+                for &it in &self.items[start..start + node.count as usize] {
+                    visit(it);
+                }
+            } else {
+                stack.push(node.start as usize);
+                stack.push(node.start as usize + 1);
+            }
+        }
+    }
+
+    /// Number of items.
+    pub fn len(&self) -> usize {
+        self.items.len()
+    }
+
+    /// Whether the tree holds no items.
+    pub fn is_empty(&self) -> bool {
+        self.items.is_empty()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn lcg(state: &mut u64) -> f64 {
+        *state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        (*state >> 11) as f64 / (1u64 << 53) as f64
+    }
+
+    #[test]
+    fn finds_exactly_the_boxes_a_brute_force_scan_finds() {
+        let mut s = 7u64;
+        let boxes: Vec<Aabb<2>> = (0..500)
+            .map(|_| {
+                let (x, y) = (lcg(&mut s), lcg(&mut s));
+                // Mixed sizes, including long thin boxes.
+                let (w, h) = (lcg(&mut s).powi(3), lcg(&mut s).powi(6));
+                Aabb { min: [x, y], max: [x + w, y + h] }
+            })
+            .collect();
+        let bvh = Bvh::new(&boxes);
+        assert_eq!(bvh.len(), 500);
+        for _ in 0..300 {
+            let p = [lcg(&mut s) * 1.2, lcg(&mut s) * 1.2];
+            let mut got = Vec::new();
+            bvh.for_each_containing(&p, 0.0, |i| {
+                if boxes[i as usize].contains(&p, 0.0) {
+                    got.push(i)
+                }
+            });
+            got.sort_unstable();
+            let want: Vec<u32> =
+                (0..500u32).filter(|&i| boxes[i as usize].contains(&p, 0.0)).collect();
+            assert_eq!(got, want);
+        }
+    }
+
+    #[test]
+    fn empty_tree_visits_nothing() {
+        let bvh = Bvh::<3>::new(&[]);
+        let mut n = 0;
+        bvh.for_each_containing(&[0.0; 3], 1.0, |_| n += 1);
+        assert_eq!(n, 0);
+        assert!(bvh.is_empty());
+    }
+}

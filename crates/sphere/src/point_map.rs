@@ -1,0 +1,299 @@
+//! Mapping many points between the surface and the sphere: `to_sphere` (h)
+//! and `to_surface` (h^-1) for any spherical map.
+//!
+//! * theta-phi maps use the thesis's own bijection h = h3 o h2 o h1 (6.6,
+//!   [`crate::h_map`]), which holds whenever the rectangle embedding is
+//!   certified (`tp_valid`), whether or not the folded points happen to form a
+//!   valid GC-embedding;
+//! * every other map uses the barycentric map of 3.3 ([`crate::gc_map`]),
+//!   a bijection exactly when the embedding is a valid GC-embedding.
+//!
+//! `to_sphere` is a function in every case; `to_surface` is refused, with the
+//! reason, when the map is not a certified bijection, since "the" preimage is
+//! then not defined. Both validate their input row by row and run in parallel.
+
+use rayon::prelude::*;
+
+use crate::gc_map::GcMap;
+use crate::h_map::ThetaPhiMap;
+
+/// Why a point query cannot be answered.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum PointMapError {
+    #[error("row {row}: face id {face} is out of range (the mesh has {n_faces} faces)")]
+    FaceOutOfRange { row: usize, face: i64, n_faces: usize },
+    #[error("row {row}: barycentric weights {weights:?} must be finite, >= 0 and sum to 1")]
+    BadWeights { row: usize, weights: [f64; 3] },
+    #[error("row {row}: {point:?} is not a unit vector (norm {norm})")]
+    NotOnSphere { row: usize, point: [f64; 3], norm: f64 },
+    #[error("face_ids has {faces} rows but bary has {weights}")]
+    LengthMismatch { faces: usize, weights: usize },
+    #[error("this map is not a bijection, so h^-1 is not defined: {0}")]
+    NotBijective(String),
+}
+
+/// Tolerances on user input: weights may be this far below 0 or their sum
+/// this far from 1 (they are rescaled), and sphere points this far from unit
+/// length (they are normalised).
+const WEIGHT_TOLERANCE: f64 = 1e-6;
+const NORM_TOLERANCE: f64 = 1e-6;
+
+#[derive(Debug, Clone)]
+enum Inner {
+    ThetaPhi(ThetaPhiMap),
+    Gc(GcMap),
+}
+
+/// h and h^-1 for one spherical map of one mesh.
+#[derive(Debug, Clone)]
+pub struct PointMap {
+    faces: Vec<[u32; 3]>,
+    positions: Vec<[f64; 3]>,
+    inner: Inner,
+    /// `Some(reason)` when h^-1 is not defined.
+    not_bijective: Option<String>,
+}
+
+impl PointMap {
+    /// The theta-phi map h (6.6). `cut_faces` are the cut mesh's faces in the
+    /// input's face order, `theta_phi` its rectangle embedding; `tp_valid` is
+    /// the certificate of the rectangle (without it h is not one-to-one).
+    pub fn theta_phi(
+        faces: &[[u32; 3]],
+        positions: &[[f64; 3]],
+        cut_faces: &[[u32; 3]],
+        theta_phi: &[[f64; 2]],
+        poles: [u32; 2],
+        tp_valid: bool,
+    ) -> Self {
+        let map = ThetaPhiMap::new(cut_faces, theta_phi, poles[0], poles[1]);
+        let not_bijective = if !tp_valid {
+            Some(
+                "the theta-phi rectangle embedding is not certified flip-free (tp_valid is False)"
+                    .to_string(),
+            )
+        } else {
+            map.problem().map(str::to_string)
+        };
+        PointMap {
+            faces: faces.to_vec(),
+            positions: positions.to_vec(),
+            inner: Inner::ThetaPhi(map),
+            not_bijective,
+        }
+    }
+
+    /// The barycentric map of 3.3 for a GC-embedding; `valid` is its verdict
+    /// under the exact tests of 3.4 and `flipped` the number of failing faces.
+    pub fn gc(
+        faces: &[[u32; 3]],
+        positions: &[[f64; 3]],
+        points: &[[f64; 3]],
+        valid: bool,
+        flipped: usize,
+    ) -> Self {
+        let not_bijective = (!valid).then(|| {
+            format!("the points are not a valid GC-embedding ({flipped} faces fail the orientation test of thesis 3.4)")
+        });
+        PointMap {
+            faces: faces.to_vec(),
+            positions: positions.to_vec(),
+            inner: Inner::Gc(GcMap::new(faces, points)),
+            not_bijective,
+        }
+    }
+
+    /// Why h^-1 is not defined, if it is not.
+    pub fn not_bijective(&self) -> Option<&str> {
+        self.not_bijective.as_deref()
+    }
+
+    /// h: the sphere point of every (face, barycentric weights) pair.
+    pub fn to_sphere(
+        &self,
+        face_ids: &[i64],
+        bary: &[[f64; 3]],
+    ) -> Result<Vec<[f64; 3]>, PointMapError> {
+        if face_ids.len() != bary.len() {
+            return Err(PointMapError::LengthMismatch {
+                faces: face_ids.len(),
+                weights: bary.len(),
+            });
+        }
+        let n_faces = self.faces.len();
+        face_ids
+            .par_iter()
+            .zip(bary.par_iter())
+            .enumerate()
+            .map(|(row, (&face, &w))| {
+                if face < 0 || face as usize >= n_faces {
+                    return Err(PointMapError::FaceOutOfRange { row, face, n_faces });
+                }
+                let w = checked_weights(row, w)?;
+                Ok(match &self.inner {
+                    Inner::ThetaPhi(m) => m.to_sphere(face as u32, w),
+                    Inner::Gc(m) => m.to_sphere(face as u32, w),
+                })
+            })
+            .collect()
+    }
+
+    /// h^-1: for every unit vector, the face, the barycentric weights on it
+    /// and the surface point.
+    #[allow(clippy::type_complexity)]
+    pub fn to_surface(
+        &self,
+        points: &[[f64; 3]],
+    ) -> Result<(Vec<u32>, Vec<[f64; 3]>, Vec<[f64; 3]>), PointMapError> {
+        if let Some(why) = &self.not_bijective {
+            return Err(PointMapError::NotBijective(why.clone()));
+        }
+        let located: Vec<(u32, [f64; 3])> = points
+            .par_iter()
+            .enumerate()
+            .map(|(row, &p)| {
+                let norm = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
+                if !((norm - 1.0).abs() <= NORM_TOLERANCE) {
+                    return Err(PointMapError::NotOnSphere { row, point: p, norm });
+                }
+                let p = p.map(|x| x / norm);
+                Ok(match &self.inner {
+                    Inner::ThetaPhi(m) => m.to_surface(p),
+                    Inner::Gc(m) => m.to_surface(p),
+                })
+            })
+            .collect::<Result<_, _>>()?;
+        let xyz = located
+            .par_iter()
+            .map(|&(f, w)| {
+                let face = self.faces[f as usize];
+                let mut x = [0.0; 3];
+                for k in 0..3 {
+                    let p = self.positions[face[k] as usize];
+                    for i in 0..3 {
+                        x[i] += w[k] * p[i];
+                    }
+                }
+                x
+            })
+            .collect();
+        let (faces, weights) = located.into_iter().unzip();
+        Ok((faces, weights, xyz))
+    }
+}
+
+/// Checks one row of user weights and rescales it to sum exactly 1.
+fn checked_weights(row: usize, w: [f64; 3]) -> Result<[f64; 3], PointMapError> {
+    let sum = w[0] + w[1] + w[2];
+    let ok = w.iter().all(|&x| x.is_finite() && x >= -WEIGHT_TOLERANCE)
+        && (sum - 1.0).abs() <= WEIGHT_TOLERANCE;
+    if !ok {
+        return Err(PointMapError::BadWeights { row, weights: w });
+    }
+    let c = w.map(|x| x.max(0.0));
+    let s = c[0] + c[1] + c[2];
+    Ok(c.map(|x| x / s))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::theta_phi::{theta_phi, ThetaPhiParams};
+    use spherify_mesh::solids::{octahedron, tetrahedron};
+    use spherify_mesh::Mesh;
+
+    fn lcg(state: &mut u64) -> f64 {
+        *state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        (*state >> 11) as f64 / (1u64 << 53) as f64
+    }
+
+    fn theta_phi_map(mesh: &Mesh) -> PointMap {
+        let tp = theta_phi(mesh, &ThetaPhiParams::default()).unwrap();
+        assert!(tp.tp_valid);
+        PointMap::theta_phi(
+            mesh.faces(),
+            mesh.positions(),
+            tp.cut.mesh.faces(),
+            &tp.theta_phi,
+            [tp.poles.north, tp.poles.south],
+            tp.tp_valid,
+        )
+    }
+
+    fn round_trip(map: &PointMap, mesh: &Mesh, seed: u64) {
+        assert_eq!(map.not_bijective(), None);
+        let mut s = seed;
+        // Surface -> sphere -> surface, on corners, edges and insides of every face.
+        let mut ids = Vec::new();
+        let mut bary = Vec::new();
+        for f in 0..mesh.n_faces() as i64 {
+            for w in [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [0.5, 0.5, 0.0]] {
+                ids.push(f);
+                bary.push(w);
+            }
+            let (a, b) = (lcg(&mut s), lcg(&mut s));
+            let (a, b) = if a + b > 1.0 { (1.0 - a, 1.0 - b) } else { (a, b) };
+            ids.push(f);
+            bary.push([a, b, 1.0 - a - b]);
+        }
+        let sphere = map.to_sphere(&ids, &bary).unwrap();
+        let (_, _, xyz) = map.to_surface(&sphere).unwrap();
+        for (row, (&f, w)) in ids.iter().zip(&bary).enumerate() {
+            let face = mesh.faces()[f as usize];
+            let want: Vec<f64> = (0..3)
+                .map(|i| (0..3).map(|k| w[k] * mesh.positions()[face[k] as usize][i]).sum())
+                .collect();
+            let err = (0..3).map(|i| (want[i] - xyz[row][i]).abs()).fold(0.0, f64::max);
+            assert!(err < 1e-9, "row {row} face {f} {w:?}: {err}");
+        }
+        // Sphere -> surface -> sphere on random points and the poles.
+        let mut points: Vec<[f64; 3]> = (0..500)
+            .map(|_| {
+                let z = 2.0 * lcg(&mut s) - 1.0;
+                let t = 2.0 * std::f64::consts::PI * lcg(&mut s);
+                let r = (1.0 - z * z).sqrt();
+                [r * t.cos(), r * t.sin(), z]
+            })
+            .collect();
+        points.extend([[0.0, 0.0, 1.0], [0.0, 0.0, -1.0], [1.0, 0.0, 0.0], [0.6, 0.0, 0.8]]);
+        let (faces, weights, _) = map.to_surface(&points).unwrap();
+        let ids: Vec<i64> = faces.iter().map(|&f| f as i64).collect();
+        let back = map.to_sphere(&ids, &weights).unwrap();
+        for (p, q) in points.iter().zip(&back) {
+            let err = (0..3).map(|i| (p[i] - q[i]).abs()).fold(0.0, f64::max);
+            assert!(err < 1e-9, "{p:?} -> {q:?}");
+        }
+    }
+
+    #[test]
+    fn theta_phi_round_trips_on_the_octahedron_and_the_tetrahedron() {
+        for mesh in [octahedron(), tetrahedron()] {
+            let map = theta_phi_map(&mesh);
+            round_trip(&map, &mesh, 3);
+        }
+    }
+
+    #[test]
+    fn gc_round_trips_on_the_octahedron() {
+        let mesh = octahedron();
+        let map = PointMap::gc(mesh.faces(), mesh.positions(), mesh.positions(), true, 0);
+        round_trip(&map, &mesh, 5);
+    }
+
+    #[test]
+    fn bad_input_is_named_by_row() {
+        let mesh = octahedron();
+        let map = PointMap::gc(mesh.faces(), mesh.positions(), mesh.positions(), true, 0);
+        let err = map.to_sphere(&[0, 8], &[[1.0, 0.0, 0.0]; 2]).unwrap_err();
+        assert!(matches!(err, PointMapError::FaceOutOfRange { row: 1, face: 8, .. }));
+        let err = map.to_sphere(&[0], &[[0.5, 0.6, 0.0]]).unwrap_err();
+        assert!(matches!(err, PointMapError::BadWeights { row: 0, .. }));
+        let err = map.to_surface(&[[0.0, 0.0, 1.0], [0.0, 0.0, 2.0]]).unwrap_err();
+        assert!(matches!(err, PointMapError::NotOnSphere { row: 1, .. }));
+        let invalid = PointMap::gc(mesh.faces(), mesh.positions(), mesh.positions(), false, 3);
+        assert!(matches!(
+            invalid.to_surface(&[[0.0, 0.0, 1.0]]),
+            Err(PointMapError::NotBijective(_))
+        ));
+    }
+}
