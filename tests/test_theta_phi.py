@@ -129,3 +129,19 @@ def test_corpus_is_certified(shared_meshes: Path) -> None:
         mesh = sp.load(shared_meshes / entry["path"])
         m = sp.embed(mesh)
         assert m.tp_valid, f"{entry['name']}: {m.message}"
+
+
+def test_re_embedded_fan_is_pinned_on_a_strictly_convex_arc() -> None:
+    """A random 47-vertex mesh whose north fan needs 6.36-6.38: with the fan on
+    the thesis's straight line theta = h1, a face made of three pole
+    neighbours collapsed to zero area (in exact arithmetic too); on the arc
+    the rectangle is certified."""
+    import sys
+    sys.path.insert(0, str(Path(__file__).parent))
+    from _meshgen import make_surface
+    s = make_surface(47, 57, flip_fraction=1.5, stretch=1.0, flatten=0.5, twist=0.0, bend=0.0,
+                     log_scale=0.0)
+    m = sp.embed(sp.Mesh(s.V, s.F))
+    assert m.details["re_embedded"][0]
+    assert m.tp_valid, m.message
+    assert all(m.details["fans_monotone"])
