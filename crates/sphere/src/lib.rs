@@ -18,10 +18,12 @@
 pub mod alexa;
 pub mod embedding;
 pub mod gotsman;
+pub mod jacobi;
 pub mod metrics;
 pub mod poles;
 pub mod radial;
 pub mod relaxation;
+pub mod symmetry;
 pub mod theta_phi;
 pub mod validity;
 
