@@ -12,6 +12,7 @@ mod graph;
 mod io;
 mod mesh;
 mod metrics;
+mod progress;
 mod radial;
 mod relaxation;
 mod sphere;

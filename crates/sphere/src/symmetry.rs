@@ -234,6 +234,13 @@ fn best_plane(planes: &[Plane]) -> usize {
     planes.iter().position(|p| p.score <= least + 1e-9).unwrap_or(0)
 }
 
+/// The normal of the largest-variance plane other than `chosen`: the longest
+/// axis of the ellipsoid that lies in the chosen plane.
+fn long_axis_in(planes: &[Plane], chosen: usize) -> [f64; 3] {
+    let other = if chosen == 2 { 1 } else { 2 };
+    planes[other].normal
+}
+
 /// The smallest eps whose band holds both ends of every edge that crosses the
 /// plane (ends strictly on opposite sides). The plane meets the surface in
 /// such edges and in vertices on the plane (always in the band); along each
@@ -267,30 +274,29 @@ fn induced_subgraph(graph: &Adjacency, in_r: &[bool]) -> Adjacency {
     Adjacency { offsets, neighbors }
 }
 
-/// The largest connected component of the vertices in R (ties: the one with
-/// the smallest vertex id), as (its smallest vertex, its size).
-fn largest_component(h: &Adjacency, in_r: &[bool]) -> Option<(u32, usize)> {
+/// The vertices of the largest connected component of H (ties: the one with
+/// the smallest vertex id); empty when R is.
+fn largest_component(h: &Adjacency, in_r: &[bool]) -> Vec<u32> {
     let mut seen = vec![false; in_r.len()];
-    let mut best: Option<(u32, usize)> = None;
-    let mut stack = Vec::new();
+    let mut best = Vec::new();
     for start in 0..in_r.len() as u32 {
         if !in_r[start as usize] || seen[start as usize] {
             continue;
         }
         seen[start as usize] = true;
-        stack.push(start);
-        let mut size = 0;
-        while let Some(v) = stack.pop() {
-            size += 1;
+        let mut component = vec![start];
+        let mut next = 0;
+        while let Some(&v) = component.get(next) {
+            next += 1;
             for &u in h.neighbors(v) {
                 if !seen[u as usize] {
                     seen[u as usize] = true;
-                    stack.push(u);
+                    component.push(u);
                 }
             }
         }
-        if best.is_none_or(|(_, s)| size > s) {
-            best = Some((start, size));
+        if component.len() > best.len() {
+            best = component;
         }
     }
     best
@@ -355,11 +361,26 @@ pub fn symmetry(
     result.band = in_r.iter().filter(|&&r| r).count();
     let h = induced_subgraph(graph, &in_r);
     let too_small = |component, path| Fallback::ComponentTooSmall { component, path };
-    let Some((start, size)) = largest_component(&h, &in_r) else {
+    let component = largest_component(&h, &in_r);
+    let size = component.len();
+    result.component = size;
+    // The thesis starts the two sweeps at an arbitrary vertex. But H is mostly
+    // a closed band (where the plane meets the surface), on which every vertex
+    // has an antipode, so the start decides where the poles go. Starting at
+    // the end of the longest in-plane axis of the ellipsoid puts the poles
+    // near the two ends of that axis: far apart in space, not by numbering.
+    let axis = long_axis_in(&result.planes, k);
+    let reach = |v: u32| dot(axis, sub(positions[v as usize], centre));
+    let Some(start) = component.iter().copied().reduce(|a, b| {
+        if reach(b) > reach(a) || (reach(b) == reach(a) && b < a) {
+            b
+        } else {
+            a
+        }
+    }) else {
         result.fallback = Some(too_small(0, 0));
         return Ok(result);
     };
-    result.component = size;
 
     let lengths = EdgeWeights::Length(positions);
     let found = poles::fast_graph(&h, start, lengths);
