@@ -167,6 +167,25 @@ def test_too_thin_a_band_falls_back() -> None:
     assert m.poles == sp.embed(mesh, poles="fast_graph").poles
 
 
+def test_poles_close_together_fall_back() -> None:
+    # The helix's best plane (a plane of two-fold rotation symmetry, score 0)
+    # meets the tube in separate small loops: poles on one of them are close.
+    mesh = sp.datasets.helix_tube(1500)
+    with pytest.warns(sp.SpherifyWarning, match="too close together"):
+        m = sp.embed(mesh, poles="symmetry")
+    sym = m.details["symmetry"]
+    assert sym["score"] < 1e-6 and sym["spread"] < 0.25
+    assert sym["component"] < sym["band"] / 2
+    # The spread is the path length inside the band over the fast-graph
+    # distance; no path between the poles is shorter than their geodesic.
+    fast = sp.embed(mesh, poles="fast_graph")
+    dist, _ = sp.dijkstra(mesh, fast.poles[0])
+    north, south = sym["symmetry_poles"]
+    d_ns, _ = sp.dijkstra(mesh, north)
+    assert d_ns[south] <= sym["spread"] * dist[fast.poles[1]] * (1 + 1e-12)
+    assert m.poles == fast.poles and m.tp_valid
+
+
 @pytest.mark.parametrize("options, word", [({"symmetry_eps": -1.0}, "eps"),
                                            ({"symmetry_eps": float("nan")}, "eps"),
                                            ({"symmetry_max_score": 2.0}, "max_score")])

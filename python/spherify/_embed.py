@@ -58,8 +58,10 @@ def embed(mesh: MeshLike, method: str = "theta_phi", **options: Any) -> SphereMa
           skew) (0 = mirror-symmetric), the vertices within ``symmetry_eps`` of
           the best plane, fast-graph poles and a shortest path inside the
           largest connected piece they form. O(N log N). When the best score
-          is above ``symmetry_max_score`` or the piece cannot hold a path of 4
-          vertices, it falls back to ``"fast_graph"`` and warns
+          is above ``symmetry_max_score``, the piece cannot hold a path of 4
+          vertices, or the path between its poles is shorter than a quarter
+          of the fast-graph pole distance (a plane meeting a helix's tube in
+          small loops), it falls back to ``"fast_graph"`` and warns
           (:class:`SpherifyWarning`); ``SphereMap.details["symmetry"]`` records
           the planes, scores, the choice and the reason.
         * ``(north, south)``: the caller's pair of vertex ids.

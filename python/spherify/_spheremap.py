@@ -70,7 +70,9 @@ class SphereMap:
           ``score``;
         * ``eps`` (band half-width used), ``band`` (vertices within it),
           ``component`` (vertices in its largest connected piece),
-          ``symmetry_poles`` (the poles found in it, or None);
+          ``symmetry_poles`` (the poles found in it, or None), ``spread``
+          (the length of the path between them inside the piece over the
+          fast-graph pole distance; NaN when not reached);
         * ``fallback``: None when the poles and cut path came from the plane,
           else why the fast-graph poles were used instead.
     """

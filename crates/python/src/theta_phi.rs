@@ -58,6 +58,7 @@ fn symmetry_to_py<'py>(py: Python<'py>, sym: &Symmetry) -> PyResult<Bound<'py, P
     d.set_item("band", sym.band)?;
     d.set_item("component", sym.component)?;
     d.set_item("symmetry_poles", sym.poles.map(|p| (p.north, p.south)))?;
+    d.set_item("spread", sym.spread)?;
     d.set_item("fallback", sym.fallback.map(|f| f.to_string()))?;
     Ok(d)
 }
@@ -84,7 +85,11 @@ pub fn embed_theta_phi<'py>(
     symmetry_max_score: f64,
     progress: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyDict>)> {
-    let symmetry = SymmetryParams { eps: symmetry_eps, max_score: symmetry_max_score };
+    let symmetry = SymmetryParams {
+        eps: symmetry_eps,
+        max_score: symmetry_max_score,
+        ..SymmetryParams::default()
+    };
     let poles = match poles {
         Some(p) => pole_choice(py, p, symmetry)?,
         None => PoleChoice::FastGraph,

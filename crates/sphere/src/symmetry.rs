@@ -38,11 +38,16 @@
 //! * [`Fallback::NotSymmetric`]: the best score exceeds `max_score`;
 //! * [`Fallback::ComponentTooSmall`]: the shortest path between the poles
 //!   inside the largest component of H has fewer than 4 vertices, too few for
-//!   the cut path of k >= 2 that the theta-phi method assumes (6.2.4).
+//!   the cut path of k >= 2 that the theta-phi method assumes (6.2.4);
+//! * [`Fallback::PolesTooClose`]: that path is shorter than `min_spread`
+//!   times the distance between the fast-graph poles. A plane can meet the
+//!   surface in several small loops (a helix's tube), and poles on one of
+//!   them are close together, which the pole methods of 6.2 set out to avoid.
 //!
-//! Cost: O(F) for the ellipsoid and the scores, O(N + E) for R and H, and two
+//! Cost: O(F) for the ellipsoid and the scores, O(N + E) for R and H, two
 //! Dijkstra sweeps plus one shortest path on H, O(|H| log |H|) (each allocates
-//! O(N) arrays).
+//! O(N) arrays), and the two fast-graph sweeps on the whole mesh for the
+//! spread, O(N log N).
 
 use spherify_mesh::dijkstra::{dijkstra_to, EdgeWeights};
 use spherify_mesh::Adjacency;
@@ -57,6 +62,12 @@ use crate::poles::{self, Poles};
 /// cortex and the octopus it is above 0.06.
 pub const DEFAULT_MAX_SCORE: f64 = 0.05;
 
+/// Default for [`SymmetryParams::min_spread`]. The helix tube (whose best
+/// plane, a plane of two-fold rotation symmetry, meets the tube in separate
+/// small loops) gives 0.05 and an embedding double precision cannot hold;
+/// the tentacles shape, the lowest of the others, 0.33; most shapes about 1.
+pub const DEFAULT_MIN_SPREAD: f64 = 0.25;
+
 /// Parameters of [`symmetry`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SymmetryParams {
@@ -69,11 +80,14 @@ pub struct SymmetryParams {
     pub eps: Option<f64>,
     /// Fall back when the best plane's score is above this (in [0, 1]).
     pub max_score: f64,
+    /// Fall back when the path between the poles inside H is shorter than
+    /// this fraction of the distance between the fast-graph poles.
+    pub min_spread: f64,
 }
 
 impl Default for SymmetryParams {
     fn default() -> Self {
-        SymmetryParams { eps: None, max_score: DEFAULT_MAX_SCORE }
+        SymmetryParams { eps: None, max_score: DEFAULT_MAX_SCORE, min_spread: DEFAULT_MIN_SPREAD }
     }
 }
 
@@ -101,6 +115,7 @@ pub enum Fallback {
     ZeroArea,
     NotSymmetric { score: f64, max_score: f64 },
     ComponentTooSmall { component: usize, path: usize },
+    PolesTooClose { spread: f64, min_spread: f64 },
 }
 
 impl std::fmt::Display for Fallback {
@@ -114,6 +129,10 @@ impl std::fmt::Display for Fallback {
             Fallback::ComponentTooSmall { component, path } => write!(
                 f,
                 "the vertices near the symmetry plane are too few to hold a cut path: the largest connected piece has {component} vertices and a pole-to-pole path of {path} (at least 4 needed)"
+            ),
+            Fallback::PolesTooClose { spread, min_spread } => write!(
+                f,
+                "the poles near the symmetry plane are too close together: the path between them is {spread:.3} of the fast-graph pole distance (min_spread {min_spread})"
             ),
         }
     }
@@ -136,6 +155,9 @@ pub struct Symmetry {
     pub component: usize,
     /// The poles found inside H (also set when the path was too short).
     pub poles: Option<Poles>,
+    /// The length of the path between them inside H over the distance between
+    /// the fast-graph poles; NaN when not reached.
+    pub spread: f64,
     /// A shortest north-south path inside H; empty on fallback.
     pub path: Vec<u32>,
     pub fallback: Option<Fallback>,
@@ -321,6 +343,13 @@ pub fn symmetry(
             });
         }
     }
+    if !(params.min_spread >= 0.0 && params.min_spread.is_finite()) {
+        return Err(SphereError::InvalidParameter {
+            name: "symmetry min_spread",
+            value: format!("{}", params.min_spread),
+            expected: "a finite number >= 0",
+        });
+    }
     if !(params.max_score >= 0.0 && params.max_score <= 1.0) {
         return Err(SphereError::InvalidParameter {
             name: "symmetry max_score",
@@ -336,6 +365,7 @@ pub fn symmetry(
         band: 0,
         component: 0,
         poles: None,
+        spread: f64::NAN,
         path: Vec::new(),
         fallback: None,
     };
@@ -386,11 +416,28 @@ pub fn symmetry(
     let found = poles::fast_graph(&h, start, lengths);
     let path = found.and_then(|p| dijkstra_to(&h, p.north, p.south, lengths));
     result.poles = found;
-    match path {
-        Some((_, path)) if path.len() >= 4 => result.path = path,
-        Some((_, path)) => result.fallback = Some(too_small(size, path.len())),
-        None => result.fallback = Some(too_small(size, 0)),
+    let (length, path) = match path {
+        Some((length, path)) if path.len() >= 4 => (length, path),
+        Some((_, path)) => {
+            result.fallback = Some(too_small(size, path.len()));
+            return Ok(result);
+        }
+        None => {
+            result.fallback = Some(too_small(size, 0));
+            return Ok(result);
+        }
+    };
+    // Poles close together make the theta-phi map crowd the rest of the mesh
+    // into a sliver (6.2: "the idea is to avoid choosing two vertices close
+    // to one another"). The fast-graph distance is the yardstick.
+    let reference = poles::fast_graph(graph, 0, lengths).map_or(0.0, |p| p.distance);
+    result.spread = if reference > 0.0 { length / reference } else { f64::INFINITY };
+    if result.spread < params.min_spread {
+        result.fallback =
+            Some(Fallback::PolesTooClose { spread: result.spread, min_spread: params.min_spread });
+        return Ok(result);
     }
+    result.path = path;
     Ok(result)
 }
 
@@ -565,6 +612,12 @@ mod tests {
         // Accepting any score takes the best plane anyway.
         let lax = run(&mesh, &SymmetryParams { max_score: 1.0, ..Default::default() });
         assert_eq!(lax.fallback, None);
+        assert!(lax.spread > DEFAULT_MIN_SPREAD);
+        // Demanding a path far longer than the fast-graph distance: too close.
+        let far = run(&mesh, &SymmetryParams { max_score: 1.0, min_spread: 10.0, eps: None });
+        assert!(matches!(far.fallback, Some(Fallback::PolesTooClose { .. })), "{far:?}");
+        assert_eq!(far.spread, lax.spread);
+        assert!(far.path.is_empty());
     }
 
     #[test]

@@ -563,7 +563,10 @@ mod tests {
         assert!(tp.tp_valid, "{}", tp.embedding.message);
         // No plane convincing: the fast-graph poles, and the reason recorded.
         let strict = ThetaPhiParams {
-            poles: PoleChoice::Symmetry(SymmetryParams { max_score: 0.0, eps: None }),
+            poles: PoleChoice::Symmetry(SymmetryParams {
+                max_score: 0.0,
+                ..SymmetryParams::default()
+            }),
             ..ThetaPhiParams::default()
         };
         let tp = theta_phi(&mesh, &strict).unwrap();
