@@ -1,6 +1,6 @@
 # Type stubs of the Rust extension spherify._core (checked by mypy.stubtest in CI).
 from os import PathLike
-from typing import Any, Dict, List, Optional, Tuple, final
+from typing import Any, Callable, Dict, List, Optional, Tuple, final
 
 import numpy as np
 import numpy.typing as npt
@@ -109,5 +109,8 @@ def embed_theta_phi(
     weights: str = "uniform",
     rho: float = 1.0,
     max_refinements: int = 8,
+    symmetry_eps: Optional[float] = None,
+    symmetry_max_score: float = 0.05,
+    progress: Optional[Callable[[int, int], object]] = None,
 ) -> Tuple[npt.NDArray[np.float64], Dict[str, Any]]: ...
 def quality(mesh: CoreMesh, points: npt.NDArray[np.float64]) -> Dict[str, Any]: ...

@@ -59,7 +59,25 @@ class SphereMap:
     details : dict
         Refinement steps, pole-fan monotonicity and re-embedding (6.5.1), the
         thinnest triangle relative to the rectangle, and the rectangle's
-        flipped / collapsed triangle ids.
+        flipped / collapsed triangle ids. With ``poles="symmetry"`` also
+        ``details["symmetry"]`` (thesis 6.2.5), a dict with
+
+        * ``normals`` (3, 3) float64: unit normals of the three principal
+          planes, by ascending ``variances`` (area-weighted variance of the
+          face centroids across each plane); ``centre``: the area-weighted
+          centroid m (eq. 6.11) all three pass through;
+        * ``signed_sums`` (D of eq. 6.18), ``balances`` (|D| / sum |d|),
+          ``skews`` (|sum w d^3| / sum w |d|^3) and ``scores`` (the larger of
+          the two; 0 for a mirror plane), one per plane;
+        * ``chosen`` (index of the best plane or None), its ``normal`` and
+          ``score``;
+        * ``eps`` (band half-width used), ``band`` (vertices within it),
+          ``component`` (vertices in its largest connected piece),
+          ``symmetry_poles`` (the poles found in it, or None), ``spread``
+          (the length of the path between them inside the piece over the
+          fast-graph pole distance; NaN when not reached);
+        * ``fallback``: None when the poles and cut path came from the plane,
+          else why the fast-graph poles were used instead.
 
     Every map also has ``to_sphere`` (the map h from surface points to the
     sphere) and ``to_surface`` (its inverse), see below.
@@ -89,6 +107,8 @@ class SphereMap:
             self.details = {key: info[key] for key in (
                 "refinements", "re_embedded", "fans_monotone", "min_area_ratio",
                 "tp_flipped_faces", "tp_degenerate_faces", "cut_boundary")}
+            if "symmetry" in info:
+                self.details["symmetry"] = info["symmetry"]
 
     def _points_map(self) -> _core.CorePointMap:
         """The point-location structure, built on first use (O(F log F))."""

@@ -2,7 +2,9 @@
 
     spherify map MESH -o OUT [--method theta_phi] [--poles fast_graph]
                                    map a mesh onto the sphere, print the certificate,
-                                   write OUT (the sphere as a mesh) and OUT's .npz
+                                   write OUT (the sphere as a mesh) and OUT's .npz;
+                                   --poles graph shows a progress bar on a terminal
+                                   (or with --progress)
     spherify check MESH            load, validate, orient and print the report
     spherify orient MESH -o OUT    write a consistently, outward-oriented copy
 
@@ -102,6 +104,10 @@ def _cmd_map(args: argparse.Namespace) -> int:
     options = {}
     if args.method == "theta_phi":
         options = {"poles": args.poles, "weights": args.weights}
+        if args.poles == "symmetry":
+            options["symmetry_eps"] = args.symmetry_eps
+        if args.poles == "graph" and (args.progress or sys.stderr.isatty()):
+            options["progress"] = True
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", SpherifyWarning)  # reported below instead
         m = embed(mesh, args.method, **options)
@@ -112,6 +118,14 @@ def _cmd_map(args: argparse.Namespace) -> int:
     certified = m.valid
     if m.method == "theta_phi":
         print(f"poles: {m.poles[0]} (north), {m.poles[1]} (south); cut path of {len(m.cut_path)} vertices")
+        symmetry = m.details.get("symmetry")
+        if symmetry is not None:
+            if symmetry["chosen"] is not None:
+                normal = ", ".join(f"{x:.4f}" for x in symmetry["normal"])
+                print(f"symmetry plane: normal ({normal}), score {symmetry['score']:.4f}, "
+                      f"{symmetry['band']} vertices within eps {symmetry['eps']:.4g}")
+            if symmetry["fallback"] is not None:
+                print(f"symmetry poles fell back to fast_graph: {symmetry['fallback']}")
         print(f"theta-phi rectangle (the bijection h): "
               f"{'certified flip-free' if m.tp_valid else 'NOT certified'} under exact predicates")
         certified = m.tp_valid
@@ -146,7 +160,14 @@ def main(argv: Optional[List[str]] = None) -> int:
             p.add_argument("-o", "--output", required=True, help="output mesh file")
         if name == "map":
             p.add_argument("--method", default="theta_phi", choices=methods())
-            p.add_argument("--poles", default="fast_graph", choices=["fast_graph", "graph", "physical"])
+            p.add_argument("--poles", default="fast_graph",
+                           choices=["fast_graph", "graph", "physical", "symmetry"])
+            p.add_argument("--symmetry-eps", type=float, default=None,
+                           help="--poles symmetry: band half-width around the plane in mesh "
+                                "units (default: automatic)")
+            p.add_argument("--progress", action="store_true",
+                           help="--poles graph: show a progress bar even when stderr is not a "
+                                "terminal")
             p.add_argument("--weights", default="uniform", choices=["uniform", "chord", "mean_value"])
         p.set_defaults(func=func)
     args = parser.parse_args(argv)

@@ -13,6 +13,7 @@ mod io;
 mod mesh;
 mod metrics;
 mod point_map;
+mod progress;
 mod radial;
 mod relaxation;
 mod sphere;

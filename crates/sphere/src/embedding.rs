@@ -72,6 +72,9 @@ pub enum SphereError {
     NoConvergence { last: Box<SphereEmbedding> },
     #[error(transparent)]
     Solve(#[from] SparseError),
+    /// A progress callback asked a long stage to stop.
+    #[error("{stage} stopped by the progress callback after {done} of {total} steps")]
+    Cancelled { stage: &'static str, done: usize, total: usize },
 }
 
 /// Projects `x` onto the unit sphere; `None` for the zero vector or non-finite input.

@@ -21,11 +21,13 @@ pub mod embedding;
 pub mod gc_map;
 pub mod gotsman;
 pub mod h_map;
+pub mod jacobi;
 pub mod metrics;
 pub mod point_map;
 pub mod poles;
 pub mod radial;
 pub mod relaxation;
+pub mod symmetry;
 pub mod theta_phi;
 pub mod validity;
 

@@ -15,7 +15,7 @@
 use rayon::prelude::*;
 use spherify_mesh::dijkstra::{dijkstra, EdgeWeights};
 use spherify_mesh::Adjacency;
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
 /// A pole pair and how far apart it is (in the measure that chose it).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -94,19 +94,36 @@ pub fn fast_graph(graph: &Adjacency, start: u32, weights: EdgeWeights) -> Option
     Some(Poles { north, south, distance })
 }
 
+/// [`graph`] stopped early because its progress callback returned `false`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Cancelled {
+    /// Sources finished when it stopped.
+    pub done: usize,
+    pub total: usize,
+}
+
 /// The exact graph diameter (thesis eq. 6.5): Dijkstra from every vertex, in
 /// parallel. `progress(done, total)` is called as sources finish (from worker
-/// threads; keep it cheap). Ties go to the lexicographically smallest pair.
+/// threads, in no particular order of `done`; keep it cheap). When it returns
+/// `false`, no further source is started and the call ends with [`Cancelled`]
+/// once the running ones finish (one Dijkstra each, O(N log N)). Ties go to
+/// the lexicographically smallest pair.
 pub fn graph(
     graph: &Adjacency,
     weights: EdgeWeights,
-    progress: &(dyn Fn(usize, usize) + Sync),
-) -> Option<Poles> {
+    progress: &(dyn Fn(usize, usize) -> bool + Sync),
+) -> Result<Option<Poles>, Cancelled> {
     let n = graph.n_vertices();
     let done = AtomicUsize::new(0);
-    (0..n as u32)
+    let stop = AtomicBool::new(false);
+    let best = (0..n as u32)
         .into_par_iter()
         .filter_map(|source| {
+            // rayon offers no early exit from a parallel reduction; skipping
+            // the remaining sources costs one load each.
+            if stop.load(Ordering::Relaxed) {
+                return None;
+            }
             let paths = dijkstra(graph, source, weights)?;
             // Farthest reachable vertex with a larger index: each pair counted once.
             let mut best: Option<(u32, f64)> = None;
@@ -115,7 +132,9 @@ pub fn graph(
                     best = Some((v as u32, d));
                 }
             }
-            progress(done.fetch_add(1, Ordering::Relaxed) + 1, n);
+            if !progress(done.fetch_add(1, Ordering::Relaxed) + 1, n) {
+                stop.store(true, Ordering::Relaxed);
+            }
             best.map(|(v, d)| Poles { north: source, south: v, distance: d })
         })
         .reduce_with(|p, q| {
@@ -126,7 +145,11 @@ pub fn graph(
             } else {
                 p
             }
-        })
+        });
+    if stop.load(Ordering::Relaxed) {
+        return Err(Cancelled { done: done.load(Ordering::Relaxed), total: n });
+    }
+    Ok(best)
 }
 
 #[cfg(test)]
@@ -190,16 +213,42 @@ mod tests {
     #[test]
     fn graph_diameter_and_two_sweeps() {
         let adj = path_with_spur(10);
-        let exact = graph(&adj, EdgeWeights::Uniform, &|_, _| {}).unwrap();
+        let exact = graph(&adj, EdgeWeights::Uniform, &|_, _| true).unwrap().unwrap();
         assert_eq!((exact.north, exact.south, exact.distance), (0, 9, 9.0));
         let fast = fast_graph(&adj, 5, EdgeWeights::Uniform).unwrap();
         assert_eq!(fast.distance, 9.0);
         let calls = AtomicUsize::new(0);
-        graph(&adj, EdgeWeights::Uniform, &|_, total| {
+        let seen = std::sync::Mutex::new(Vec::new());
+        graph(&adj, EdgeWeights::Uniform, &|done, total| {
             assert_eq!(total, 11);
             calls.fetch_add(1, Ordering::Relaxed);
-        });
+            seen.lock().unwrap().push(done);
+            true
+        })
+        .unwrap();
         assert_eq!(calls.load(Ordering::Relaxed), 11);
+        let mut seen = seen.into_inner().unwrap();
+        seen.sort();
+        assert_eq!(seen, (1..=11).collect::<Vec<_>>());
         assert!(fast_graph(&adj, 99, EdgeWeights::Uniform).is_none());
+    }
+
+    #[test]
+    fn graph_stops_when_progress_says_so() {
+        let adj = path_with_spur(2000);
+        let calls = AtomicUsize::new(0);
+        let stopped = graph(&adj, EdgeWeights::Uniform, &|done, _| {
+            calls.fetch_add(1, Ordering::Relaxed);
+            done < 10
+        });
+        let Err(Cancelled { done, total }) = stopped else {
+            panic!("expected Cancelled, got {stopped:?}");
+        };
+        assert_eq!(total, 2001);
+        // Sources already running when the flag went up still finish, one
+        // per worker thread at most.
+        let workers = rayon::current_num_threads();
+        assert!((10..10 + workers).contains(&done), "done {done} with {workers} threads");
+        assert_eq!(calls.load(Ordering::Relaxed), done);
     }
 }

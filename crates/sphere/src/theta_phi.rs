@@ -2,8 +2,10 @@
 //! bijection for every closed genus-0 mesh.
 //!
 //! 1. Poles n and s ([`crate::poles`], thesis 6.2) and a shortest path between
-//!    them (6.2.4), made chordless and at least 4 vertices long (the thesis
-//!    assumes k >= 2; we lengthen shorter paths so the tetrahedron works too).
+//!    them (6.2.4), or poles and a path near a symmetry plane
+//!    ([`crate::symmetry`], 6.2.5); the path is made chordless and at least 4
+//!    vertices long (the thesis assumes k >= 2; we lengthen shorter paths so
+//!    the tetrahedron works too).
 //! 2. The mesh is cut open along the path into a disk (6.3, `spherify_mesh::cut`).
 //! 3. The disk is Tutte-embedded in the theta-phi rectangle [0, pi] x [0, 2 pi]
 //!    with the boundary of eq. 6.31 (6.4), and every triangle is checked with an
@@ -34,6 +36,7 @@ use spherify_sparse::Factorization;
 
 use crate::embedding::{SphereEmbedding, SphereError, Status};
 use crate::poles::{self, Poles};
+use crate::symmetry::{self, Symmetry, SymmetryParams};
 
 use std::f64::consts::PI;
 
@@ -46,6 +49,9 @@ pub enum PoleChoice {
     Graph,
     /// Farthest pair in space (6.2.1), exact.
     Physical,
+    /// Poles and cut path near a symmetry plane (6.2.5); falls back to
+    /// `FastGraph` when no plane is convincing (see [`crate::symmetry`]).
+    Symmetry(SymmetryParams),
     /// The caller's pair.
     Explicit(u32, u32),
 }
@@ -92,6 +98,9 @@ pub struct ThetaPhi {
     pub fans_monotone: [bool; 2],
     /// Smallest triangle area in the rectangle divided by the rectangle's area (2 pi^2).
     pub min_area_ratio: f64,
+    /// What the symmetry method found, for `PoleChoice::Symmetry`; its
+    /// `fallback` says whether (and why) the fast-graph poles were used instead.
+    pub symmetry: Option<Symmetry>,
 }
 
 fn topology(mesh: &Mesh, problem: TopologyProblem) -> SphereError {
@@ -127,6 +136,18 @@ fn from_cut(mesh: &Mesh, err: CutError) -> SphereError {
 /// Maps a closed genus-0 mesh (consistently oriented, counter-clockwise seen
 /// from outside) onto the sphere with the theta-phi method.
 pub fn theta_phi(mesh: &Mesh, params: &ThetaPhiParams) -> Result<ThetaPhi, SphereError> {
+    theta_phi_with_progress(mesh, params, &|_, _| true)
+}
+
+/// [`theta_phi`] reporting the progress of `PoleChoice::Graph`, the one slow
+/// stage (O(N^2 log N)), as `progress(done, total)` sources, from worker
+/// threads. Returning `false` stops the search: the call then fails with
+/// [`SphereError::Cancelled`]. Other pole choices never call it.
+pub fn theta_phi_with_progress(
+    mesh: &Mesh,
+    params: &ThetaPhiParams,
+    progress: &(dyn Fn(usize, usize) -> bool + Sync),
+) -> Result<ThetaPhi, SphereError> {
     let mut seconds = Vec::new();
     let mut clock = Instant::now();
     let mut lap = |name: &'static str, seconds: &mut Vec<(&'static str, f64)>| {
@@ -140,9 +161,25 @@ pub fn theta_phi(mesh: &Mesh, params: &ThetaPhiParams) -> Result<ThetaPhi, Spher
     }
     let graph = he.adjacency();
     let lengths = EdgeWeights::Length(mesh.positions());
+    let mut found_symmetry = None;
+    let mut symmetry_path = None;
     let chosen = match params.poles {
         PoleChoice::FastGraph => poles::fast_graph(&graph, 0, lengths),
-        PoleChoice::Graph => poles::graph(&graph, lengths, &|_, _| {}),
+        PoleChoice::Graph => poles::graph(&graph, lengths, progress).map_err(|c| {
+            SphereError::Cancelled { stage: "graph poles", done: c.done, total: c.total }
+        })?,
+        PoleChoice::Symmetry(sym_params) => {
+            let sym = symmetry::symmetry(mesh.positions(), mesh.faces(), &graph, &sym_params)?;
+            let chosen = match (sym.fallback, sym.poles) {
+                (None, Some(p)) => {
+                    symmetry_path = Some(sym.path.clone());
+                    Some(p)
+                }
+                _ => poles::fast_graph(&graph, 0, lengths),
+            };
+            found_symmetry = Some(sym);
+            chosen
+        }
         PoleChoice::Physical => poles::physical(mesh.positions()),
         PoleChoice::Explicit(n, s) => {
             if n == s || n as usize >= mesh.n_vertices() || s as usize >= mesh.n_vertices() {
@@ -158,8 +195,11 @@ pub fn theta_phi(mesh: &Mesh, params: &ThetaPhiParams) -> Result<ThetaPhi, Spher
     .ok_or_else(|| topology(mesh, TopologyProblem::NotSphere))?;
     lap("poles", &mut seconds);
 
-    let path = cut_path(&graph, chosen.north, chosen.south, lengths)
-        .ok_or_else(|| topology(mesh, TopologyProblem::NotSphere))?;
+    let path = match symmetry_path {
+        Some(path) => finish_path(&graph, path, lengths),
+        None => cut_path(&graph, chosen.north, chosen.south, lengths),
+    }
+    .ok_or_else(|| topology(mesh, TopologyProblem::NotSphere))?;
     let cut = cut_open(mesh, &path).map_err(|e| from_cut(mesh, e))?;
     lap("cut", &mut seconds);
 
@@ -264,6 +304,7 @@ pub fn theta_phi(mesh: &Mesh, params: &ThetaPhiParams) -> Result<ThetaPhi, Spher
         re_embedded,
         fans_monotone,
         min_area_ratio,
+        symmetry: found_symmetry,
     })
 }
 
@@ -355,7 +396,16 @@ fn pin_fan(fixed: &mut [Option<[f64; 2]>], fan: &[u32], k: usize, south: bool) {
 /// A shortest path from n to s (6.2.4) without chords between its inner
 /// vertices and with at least two of them (k >= 2).
 fn cut_path(graph: &Adjacency, north: u32, south: u32, weights: EdgeWeights) -> Option<Vec<u32>> {
-    let (_, mut path) = dijkstra_to(graph, north, south, weights)?;
+    let (_, path) = dijkstra_to(graph, north, south, weights)?;
+    finish_path(graph, path, weights)
+}
+
+/// A simple path from its first to its last vertex made chordless, and
+/// lengthened through the whole graph when fewer than 4 vertices remain. A
+/// chord joins two path vertices, so a path inside an induced subgraph (the H
+/// of the symmetry method, eq. 6.21) stays inside it unless lengthened.
+fn finish_path(graph: &Adjacency, mut path: Vec<u32>, weights: EdgeWeights) -> Option<Vec<u32>> {
+    let (north, south) = (*path.first()?, *path.last()?);
     shortcut_chords(graph, &mut path);
     if path.len() >= 4 {
         return Some(path);
@@ -483,6 +533,7 @@ mod tests {
             PoleChoice::Graph,
             PoleChoice::Physical,
             PoleChoice::Explicit(3, last),
+            PoleChoice::Symmetry(SymmetryParams::default()),
         ] {
             let params = ThetaPhiParams { poles, ..ThetaPhiParams::default() };
             let tp = theta_phi(&mesh, &params).unwrap();
@@ -497,6 +548,51 @@ mod tests {
             let report = check_sphere(mesh.faces(), &tp.embedding.points);
             assert_eq!(report.covering_degree, 1, "{poles:?}");
         }
+    }
+
+    #[test]
+    fn symmetry_poles_cut_near_the_plane() {
+        // Mirror-symmetric in x = 0 up to the direction of the quad diagonals.
+        let mesh = uv_sphere(12, 16);
+        let params = ThetaPhiParams {
+            poles: PoleChoice::Symmetry(SymmetryParams::default()),
+            ..ThetaPhiParams::default()
+        };
+        let tp = theta_phi(&mesh, &params).unwrap();
+        let sym = tp.symmetry.as_ref().unwrap();
+        assert_eq!(sym.fallback, None, "{sym:?}");
+        let plane = sym.planes[sym.chosen.unwrap()];
+        assert!(plane.normal[0] > 0.999, "{plane:?}");
+        assert_eq!(tp.cut_path, sym.path);
+        let d = |v: u32| {
+            let x = mesh.positions()[v as usize];
+            (0..3).map(|k| plane.normal[k] * (x[k] - sym.centre[k])).sum::<f64>()
+        };
+        assert!(tp.cut_path.iter().all(|&v| d(v).abs() <= sym.eps));
+        assert!(tp.tp_valid, "{}", tp.embedding.message);
+        // No plane convincing: the fast-graph poles, and the reason recorded.
+        let strict = ThetaPhiParams {
+            poles: PoleChoice::Symmetry(SymmetryParams {
+                max_score: 0.0,
+                ..SymmetryParams::default()
+            }),
+            ..ThetaPhiParams::default()
+        };
+        let tp = theta_phi(&mesh, &strict).unwrap();
+        let fast = theta_phi(&mesh, &ThetaPhiParams::default()).unwrap();
+        assert!(matches!(
+            tp.symmetry.unwrap().fallback,
+            Some(crate::symmetry::Fallback::NotSymmetric { .. })
+        ));
+        assert_eq!((tp.poles, tp.cut_path), (fast.poles, fast.cut_path));
+    }
+
+    #[test]
+    fn graph_poles_can_be_cancelled() {
+        let mesh = uv_sphere(12, 16);
+        let params = ThetaPhiParams { poles: PoleChoice::Graph, ..ThetaPhiParams::default() };
+        let err = theta_phi_with_progress(&mesh, &params, &|done, _| done < 5).unwrap_err();
+        assert!(matches!(err, SphereError::Cancelled { stage: "graph poles", .. }), "{err}");
     }
 
     #[test]

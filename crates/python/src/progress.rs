@@ -1,0 +1,142 @@
+//! Progress callbacks and Ctrl-C for long core calls.
+//!
+//! The core reports progress through `Fn(done, total) -> bool` closures called
+//! from rayon worker threads (STYLE 17); returning `false` asks it to stop.
+//! [`run`] turns an optional Python callable into such a closure:
+//!
+//! * the callable is called at most about 100 times (each time `done` passes
+//!   another hundredth of `total`, and once at `done == total`), with `done`
+//!   increasing, each call re-attaching the worker thread to the interpreter;
+//! * if it raises, the exception is kept, the closure returns `false` from then
+//!   on, and [`run`] raises that exception once the core call has returned;
+//! * the work runs on its own thread while the calling thread waits with the
+//!   GIL released, waking every 100 ms to let Python handle signals: Ctrl-C
+//!   stops the work the same way (worker threads never see signals).
+
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Condvar, Mutex, MutexGuard};
+use std::time::Duration;
+
+use pyo3::prelude::*;
+
+use crate::errors::mesh_error;
+
+/// Most calls of the Python callable per run (plus the final one).
+const MAX_CALLS: usize = 100;
+
+struct State {
+    callback: Option<Py<PyAny>>,
+    /// The last `done` passed to the callable.
+    last: Mutex<usize>,
+    error: Mutex<Option<PyErr>>,
+    stop: AtomicBool,
+}
+
+/// A poisoned lock only means another thread panicked while holding it; the
+/// data (a counter, an optional error) is still meaningful.
+fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
+    m.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
+}
+
+impl State {
+    fn fail(&self, err: PyErr) {
+        let mut slot = lock(&self.error);
+        if slot.is_none() {
+            *slot = Some(err);
+        }
+        self.stop.store(true, Ordering::SeqCst);
+    }
+
+    fn report(&self, done: usize, total: usize) -> bool {
+        if self.stop.load(Ordering::SeqCst) {
+            return false;
+        }
+        let Some(callback) = &self.callback else {
+            return true;
+        };
+        let step = total.div_ceil(MAX_CALLS).max(1);
+        // Held across the call, so that calls happen one at a time and in
+        // increasing order of `done`: workers finish sources out of order.
+        let mut last = lock(&self.last);
+        if done <= *last || (done < total && done / step == *last / step) {
+            return true;
+        }
+        *last = done;
+        let called = Python::attach(|py| callback.call1(py, (done, total)).map(drop));
+        drop(last);
+        if let Err(err) = called {
+            self.fail(err);
+            return false;
+        }
+        true
+    }
+}
+
+/// Runs `work` with a progress closure backed by `callback` (a Python callable
+/// taking `(done, total)`, or `None`), with the GIL released. Raises what the
+/// callable raised, or what a signal handler raised (KeyboardInterrupt), even
+/// when `work` finished; otherwise returns its result.
+pub fn run<R: Send>(
+    py: Python<'_>,
+    callback: Option<&Bound<'_, PyAny>>,
+    work: impl FnOnce(&(dyn Fn(usize, usize) -> bool + Sync)) -> R + Send,
+) -> PyResult<R> {
+    if let Some(c) = callback {
+        if !c.is_callable() {
+            return Err(mesh_error(
+                py,
+                format!(
+                    "progress must be None or a callable taking (done, total), got {}",
+                    c.get_type().name()?
+                ),
+            ));
+        }
+    }
+    let state = State {
+        callback: callback.map(|c| c.clone().unbind()),
+        last: Mutex::new(0),
+        error: Mutex::new(None),
+        stop: AtomicBool::new(false),
+    };
+    let finished: (Mutex<Option<R>>, Condvar) = (Mutex::new(None), Condvar::new());
+    let result = std::thread::scope(|scope| {
+        let (state, finished) = (&state, &finished);
+        let worker = scope.spawn(move || {
+            let result = work(&|done, total| state.report(done, total));
+            *lock(&finished.0) = Some(result);
+            finished.1.notify_all();
+        });
+        loop {
+            let result = py.detach(|| {
+                let slot = lock(&finished.0);
+                let (mut slot, _) = finished
+                    .1
+                    .wait_timeout_while(slot, Duration::from_millis(100), |r| r.is_none())
+                    .unwrap_or_else(|poisoned| poisoned.into_inner());
+                slot.take()
+            });
+            if let Some(result) = result {
+                return Some(result);
+            }
+            if worker.is_finished() {
+                // Finished without a result: the work panicked (a bug). Let the
+                // panic reach Python as it would have without this thread.
+                if let Err(payload) = worker.join() {
+                    std::panic::resume_unwind(payload);
+                }
+                return lock(&finished.0).take();
+            }
+            if let Err(err) = py.check_signals() {
+                state.fail(err);
+            }
+        }
+    });
+    let Some(result) = result else {
+        return Err(mesh_error(py, "internal error: the computation ended without a result"));
+    };
+    let raised = lock(&state.error).take();
+    match raised {
+        Some(err) => Err(err),
+        None => Ok(result),
+    }
+}
