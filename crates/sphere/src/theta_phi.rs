@@ -229,15 +229,24 @@ pub fn theta_phi_with_progress(
     // the tetrahedron, where every vertex is on the boundary) there is nothing
     // to pin, and the fan is reported as it is.
     let mut re_embedded = [false; 2];
-    for (side, fan) in [&north_fan, &south_fan].into_iter().enumerate() {
-        let inner = &fan[1..fan.len().saturating_sub(1).max(1)];
-        if !strictly_increasing_phi(&uv, fan) && inner.iter().all(|&v| fixed[v as usize].is_none())
-        {
-            pin_fan(&mut fixed, fan, k, side == 1);
-            re_embedded[side] = true;
+    // Pinning one fan moves the other pole's neighbours, which can turn that
+    // fan back: look again after each re-embedding (at most once per pole).
+    loop {
+        let mut pinned = false;
+        for (side, fan) in [&north_fan, &south_fan].into_iter().enumerate() {
+            let inner = &fan[1..fan.len().saturating_sub(1).max(1)];
+            if !re_embedded[side]
+                && !strictly_increasing_phi(&uv, fan)
+                && inner.iter().all(|&v| fixed[v as usize].is_none())
+            {
+                pin_fan(&mut fixed, fan, k, side == 1);
+                re_embedded[side] = true;
+                pinned = true;
+            }
         }
-    }
-    if re_embedded.iter().any(|&r| r) {
+        if !pinned {
+            break;
+        }
         uv = solve_refined(
             &cut_he,
             &weights,
@@ -435,6 +444,9 @@ fn shortcut_chords(graph: &Adjacency, path: &mut Vec<u32>) {
 /// of n not adjacent to s, then a shortest path to s avoiding n; failing that,
 /// n, a, b, s with a ~ n, b ~ a, b ~ s.
 fn lengthen(graph: &Adjacency, north: u32, south: u32, weights: EdgeWeights) -> Option<Vec<u32>> {
+    if let Some(path) = lengthen_clear_of_poles(graph, north, south, weights) {
+        return Some(path);
+    }
     let n = graph.n_vertices();
     // The graph without the north pole: drop its edges.
     let offsets_ok = graph.neighbors(north).iter().any(|&a| a != south);
@@ -474,6 +486,71 @@ fn lengthen(graph: &Adjacency, north: u32, south: u32, weights: EdgeWeights) -> 
     }
     let _ = n;
     None
+}
+
+/// The shortest path n, a, ..., b, s in which n is adjacent to no path
+/// vertex but a, and s to none but b. A pole next to a further path vertex
+/// has neighbours on the rectangle's side, so its phi values cannot increase
+/// strictly (6.5.1) and the fan cannot be pinned either (6.38). Such a path
+/// runs from a neighbour a of n that is not one of s through vertices next to
+/// neither pole to a neighbour b of s that is not one of n; the triangle
+/// inequality of edge lengths keeps it from stepping back into N(n) or N(s).
+/// None when every vertex is next to a pole (the octahedron).
+fn lengthen_clear_of_poles(
+    graph: &Adjacency,
+    north: u32,
+    south: u32,
+    weights: EdgeWeights,
+) -> Option<Vec<u32>> {
+    #[derive(Clone, Copy, PartialEq)]
+    enum Role {
+        Pole,
+        NextToNorth,
+        NextToSouth,
+        Free,
+        Blocked,
+    }
+    let mut role = vec![Role::Free; graph.n_vertices()];
+    role[north as usize] = Role::Pole;
+    role[south as usize] = Role::Pole;
+    for &a in graph.neighbors(north) {
+        if role[a as usize] == Role::Free {
+            role[a as usize] = Role::NextToNorth;
+        }
+    }
+    for &b in graph.neighbors(south) {
+        role[b as usize] = match role[b as usize] {
+            Role::Free => Role::NextToSouth,
+            Role::NextToNorth => Role::Blocked,
+            other => other,
+        };
+    }
+    let keep = |u: u32, v: u32| {
+        let (ru, rv) = (role[u as usize], role[v as usize]);
+        let pole_edge = |p: u32, x: Role| {
+            (p == north && x == Role::NextToNorth) || (p == south && x == Role::NextToSouth)
+        };
+        match (ru, rv) {
+            (Role::Pole, x) => pole_edge(u, x),
+            (x, Role::Pole) => pole_edge(v, x),
+            (Role::Blocked, _) | (_, Role::Blocked) => false,
+            (Role::NextToNorth, Role::NextToNorth) | (Role::NextToSouth, Role::NextToSouth) => {
+                false
+            }
+            _ => true,
+        }
+    };
+    let mut offsets = Vec::with_capacity(graph.offsets.len());
+    let mut neighbors = Vec::with_capacity(graph.neighbors.len());
+    offsets.push(0);
+    for v in 0..graph.n_vertices() as u32 {
+        neighbors.extend(graph.neighbors(v).iter().filter(|&&u| keep(v, u)));
+        offsets.push(neighbors.len());
+    }
+    let clear = Adjacency { offsets, neighbors };
+    let (_, mut path) = dijkstra_to(&clear, north, south, weights)?;
+    shortcut_chords(graph, &mut path);
+    (path.len() >= 4).then_some(path)
 }
 
 fn remove_vertex(graph: &Adjacency, removed: u32) -> Adjacency {
