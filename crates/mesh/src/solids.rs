@@ -37,6 +37,41 @@ pub fn tetrahedron() -> Mesh {
         .expect("the tetrahedron's constant arrays are valid")
 }
 
+/// A mesh inscribed in the unit sphere with every triangle split in four
+/// (at its edge midpoints) `levels` times, each new vertex pushed out onto the
+/// sphere: the usual finer sphere meshes for tests and examples.
+pub fn subdivided(mut positions: Vec<[f64; 3]>, mut faces: Vec<[u32; 3]>, levels: usize) -> Mesh {
+    for _ in 0..levels {
+        let mut midpoints = std::collections::HashMap::new();
+        let mut split = |a: u32, b: u32, p: &mut Vec<[f64; 3]>| -> u32 {
+            *midpoints.entry((a.min(b), a.max(b))).or_insert_with(|| {
+                let (x, y) = (p[a as usize], p[b as usize]);
+                let m = [x[0] + y[0], x[1] + y[1], x[2] + y[2]];
+                let r = (m[0] * m[0] + m[1] * m[1] + m[2] * m[2]).sqrt();
+                p.push(m.map(|c| c / r));
+                (p.len() - 1) as u32
+            })
+        };
+        let mut finer = Vec::with_capacity(4 * faces.len());
+        for &[a, b, c] in &faces {
+            let (ab, bc, ca) = (
+                split(a, b, &mut positions),
+                split(b, c, &mut positions),
+                split(c, a, &mut positions),
+            );
+            finer.extend([[a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca]]);
+        }
+        faces = finer;
+    }
+    Mesh::new(positions, faces).expect("subdividing a valid sphere mesh keeps it valid")
+}
+
+/// The octahedron subdivided `levels` times onto the unit sphere: mirror
+/// symmetric in the three coordinate planes, triangulation included.
+pub fn octasphere(levels: usize) -> Mesh {
+    subdivided(OCTAHEDRON_POSITIONS.to_vec(), OCTAHEDRON_FACES.to_vec(), levels)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

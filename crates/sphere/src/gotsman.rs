@@ -781,48 +781,14 @@ fn max_abs(v: &[f64]) -> f64 {
 mod tests {
     use super::*;
     use crate::validity::check_sphere;
-    use std::collections::HashMap;
 
     /// The octahedron split `levels` times into four (edge midpoints), with
     /// every vertex moved to radius `radius(direction)`: a star-shaped
     /// genus-0 mesh, counter-clockwise from outside.
     fn subdivided_octahedron(levels: usize, radius: impl Fn([f64; 3]) -> f64) -> Mesh {
-        let mut p: Vec<[f64; 3]> = vec![
-            [1., 0., 0.],
-            [-1., 0., 0.],
-            [0., 1., 0.],
-            [0., -1., 0.],
-            [0., 0., 1.],
-            [0., 0., -1.],
-        ];
-        let mut f: Vec<[u32; 3]> = vec![
-            [0, 2, 4],
-            [2, 1, 4],
-            [1, 3, 4],
-            [3, 0, 4],
-            [2, 0, 5],
-            [1, 2, 5],
-            [3, 1, 5],
-            [0, 3, 5],
-        ];
-        for _ in 0..levels {
-            let mut mid: HashMap<(u32, u32), u32> = HashMap::new();
-            let mut split = |a: u32, b: u32, p: &mut Vec<[f64; 3]>| {
-                *mid.entry((a.min(b), a.max(b))).or_insert_with(|| {
-                    let (x, y) = (p[a as usize], p[b as usize]);
-                    p.push(normalize([x[0] + y[0], x[1] + y[1], x[2] + y[2]]).unwrap());
-                    (p.len() - 1) as u32
-                })
-            };
-            let mut next = Vec::with_capacity(4 * f.len());
-            for &[a, b, c] in &f {
-                let (ab, bc, ca) = (split(a, b, &mut p), split(b, c, &mut p), split(c, a, &mut p));
-                next.extend([[a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca]]);
-            }
-            f = next;
-        }
-        let p = p.into_iter().map(|d| d.map(|x| x * radius(d))).collect();
-        Mesh::new(p, f).unwrap()
+        let base = spherify_mesh::solids::octasphere(levels);
+        let p = base.positions().iter().map(|&d| d.map(|x| x * radius(d))).collect();
+        Mesh::new(p, base.faces().to_vec()).unwrap()
     }
 
     fn bumpy(d: [f64; 3]) -> f64 {

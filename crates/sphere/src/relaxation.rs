@@ -514,26 +514,8 @@ pub(crate) mod tests {
         (p, f)
     }
 
-    /// A polyhedron inscribed in the unit sphere with each triangle split in
-    /// four, `levels` times, new vertices pushed onto the sphere.
-    fn subdivide((mut p, mut f): (Vec<[f64; 3]>, Vec<[u32; 3]>), levels: usize) -> Mesh {
-        for _ in 0..levels {
-            let mut mid = std::collections::HashMap::new();
-            let mut split = |a: u32, b: u32, p: &mut Vec<[f64; 3]>| -> u32 {
-                *mid.entry((a.min(b), a.max(b))).or_insert_with(|| {
-                    let (x, y) = (p[a as usize], p[b as usize]);
-                    p.push(normalize([x[0] + y[0], x[1] + y[1], x[2] + y[2]]).unwrap());
-                    (p.len() - 1) as u32
-                })
-            };
-            let mut finer = Vec::with_capacity(4 * f.len());
-            for &[a, b, c] in &f {
-                let (ab, bc, ca) = (split(a, b, &mut p), split(b, c, &mut p), split(c, a, &mut p));
-                finer.extend([[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]);
-            }
-            f = finer;
-        }
-        Mesh::new(p, f).unwrap()
+    fn subdivide((p, f): (Vec<[f64; 3]>, Vec<[u32; 3]>), levels: usize) -> Mesh {
+        spherify_mesh::solids::subdivided(p, f, levels)
     }
 
     pub fn icosphere(levels: usize) -> Mesh {

@@ -450,44 +450,8 @@ mod tests {
     /// unit sphere: mirror-symmetric in the three coordinate planes,
     /// triangulation included.
     fn octasphere(levels: usize) -> (Vec<[f64; 3]>, Vec<[u32; 3]>) {
-        let mut p = vec![
-            [1.0, 0.0, 0.0],
-            [-1.0, 0.0, 0.0],
-            [0.0, 1.0, 0.0],
-            [0.0, -1.0, 0.0],
-            [0.0, 0.0, 1.0],
-            [0.0, 0.0, -1.0],
-        ];
-        let mut f = vec![
-            [0, 2, 4],
-            [2, 1, 4],
-            [1, 3, 4],
-            [3, 0, 4],
-            [2, 0, 5],
-            [1, 2, 5],
-            [3, 1, 5],
-            [0, 3, 5],
-        ];
-        for _ in 0..levels {
-            let mut mid = std::collections::HashMap::new();
-            let mut midpoint = |a: u32, b: u32, p: &mut Vec<[f64; 3]>| {
-                *mid.entry((a.min(b), a.max(b))).or_insert_with(|| {
-                    let (x, y) = (p[a as usize], p[b as usize]);
-                    let m = [x[0] + y[0], x[1] + y[1], x[2] + y[2]];
-                    let r = dot(m, m).sqrt();
-                    p.push(m.map(|c| c / r));
-                    (p.len() - 1) as u32
-                })
-            };
-            let mut next = Vec::new();
-            for &[a, b, c] in &f {
-                let (ab, bc, ca) =
-                    (midpoint(a, b, &mut p), midpoint(b, c, &mut p), midpoint(c, a, &mut p));
-                next.extend([[a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca]]);
-            }
-            f = next;
-        }
-        (p, f)
+        let m = spherify_mesh::solids::octasphere(levels);
+        (m.positions().to_vec(), m.faces().to_vec())
     }
 
     /// Mirror-symmetric in y = 0 only: x and z are bent by even functions of
