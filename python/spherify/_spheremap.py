@@ -101,7 +101,8 @@ class SphereMap:
             self.poles = tuple(int(p) for p in info["poles"])
             self.cut_path = info["cut_path"]
             self.theta_phi = info["theta_phi"]
-            self.cut_mesh = Mesh(info["cut_vertices"], info["cut_faces"])
+            self._cut_arrays = (info["cut_vertices"], info["cut_faces"])
+            self._cut_mesh: Optional[Mesh] = None
             self.cut_original = info["cut_original"]
             self.tp_valid = bool(info["tp_valid"])
             self.details = {key: info[key] for key in (
@@ -190,6 +191,17 @@ class SphereMap:
             Wrong shape, or a point that is not a unit vector (the row is named).
         """
         return self._points_map().to_surface(_float_rows(points, "points"))
+
+    @property
+    def cut_mesh(self) -> Mesh:
+        """The cut-open disk (theta-phi maps only; see the class docstring).
+        Built on first use: copying it into the core costs as much as the
+        exact validity test, and most callers never look at it."""
+        if self.method != "theta_phi" or not hasattr(self, "_cut_arrays"):
+            raise AttributeError("cut_mesh exists for theta-phi maps only")
+        if self._cut_mesh is None:
+            self._cut_mesh = Mesh(*self._cut_arrays)
+        return self._cut_mesh
 
     @property
     def valid(self) -> bool:

@@ -97,6 +97,13 @@ impl Mesh {
         self.edge_table.get_or_init(|| EdgeTable::new(self.positions.len(), &self.faces))
     }
 
+    /// Frees the cached edge table; the next [`Mesh::edge_table`] rebuilds it.
+    /// For callers that keep the mesh through a memory peak after their last
+    /// topology query (the edge table is ~36 bytes per vertex).
+    pub fn forget_edge_table(&mut self) {
+        self.edge_table = OnceLock::new();
+    }
+
     pub fn into_parts(self) -> (Vec<[f64; 3]>, Vec<[u32; 3]>) {
         (self.positions, self.faces)
     }

@@ -18,6 +18,19 @@ pub fn rows<T: numpy::Element + Copy + Default, const K: usize>(
     if shape.len() != 2 || shape[1] != K {
         return Err(mesh_error(py, format!("{what} must have shape (n, {K}), got {shape:?}")));
     }
+    // A C-contiguous array (what the Python side always passes) is copied
+    // as one slice: walking it row by row through ndarray's iterators cost
+    // more than the exact validity test that reads the result.
+    if let Some(flat) = view.as_slice() {
+        return Ok(flat
+            .chunks_exact(K)
+            .map(|c| {
+                let mut row = [T::default(); K];
+                row.copy_from_slice(c);
+                row
+            })
+            .collect());
+    }
     let mut out = vec![[T::default(); K]; shape[0]];
     for (row, src) in out.iter_mut().zip(view.outer_iter()) {
         for (dst, &x) in row.iter_mut().zip(src.iter()) {

@@ -23,8 +23,9 @@ use faer::sparse::linalg::cholesky::{
 };
 use faer::sparse::linalg::lu::{factorize_symbolic_lu, LuRef, NumericLu, SymbolicLu};
 use faer::sparse::linalg::LuError;
+use faer::sparse::FaerError;
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
-use faer::{Conj, Mat, Par, Side};
+use faer::{Conj, Index, Mat, Par, Side};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 
 /// Iterative-refinement steps tried after the first solve when the residual
@@ -46,7 +47,12 @@ const SOLVE_PAR: Par = Par::Seq;
 
 /// A factorised matrix, ready to solve any number of right-hand sides.
 pub(crate) enum Factor {
-    /// `A = P^T L L^T P` (AMD ordering `P`), of `A` itself.
+    /// `A = P^T L L^T P` (AMD ordering `P`), of `A` itself, with 32-bit
+    /// indices: the CSR column indices serve as they are, and the factor's
+    /// own index arrays take half the memory (the factorisation is the
+    /// memory peak of a Tutte map).
+    Cholesky32 { symbolic: SymbolicCholesky<u32>, values: Vec<f64> },
+    /// The same with 64-bit indices, for factors too large for 32 bits.
     Cholesky { symbolic: SymbolicCholesky<usize>, values: Vec<f64> },
     /// LU of `A^T`; see [`Factor::lu`] for why the transpose.
     LuOfTranspose { symbolic: SymbolicLu<usize>, numeric: NumericLu<usize, f64> },
@@ -99,6 +105,63 @@ fn scratch(req: StackReq) -> Result<MemBuffer, SparseError> {
     MemBuffer::try_new(req).map_err(|e| failed("allocating scratch", e))
 }
 
+/// Symbolic analysis (AMD ordering) and numeric `L L^T` of the lower
+/// triangle of `m`, with indices of type `I`; `None` when the factor has
+/// more entries than `I` can count.
+fn llt<I: Index>(
+    m: SparseColMatRef<'_, I, f64>,
+) -> Result<Option<(SymbolicCholesky<I>, Vec<f64>)>, SparseError> {
+    // The CSC view is A^T = A (A is symmetric); its lower triangle is A's
+    // upper one, equal to A's lower one within the tolerance.
+    let symbolic = match factorize_symbolic_cholesky(
+        m.symbolic(),
+        Side::Lower,
+        SymmetricOrdering::Amd,
+        Default::default(),
+    ) {
+        Ok(symbolic) => symbolic,
+        Err(FaerError::IndexOverflow) => return Ok(None),
+        Err(e) => return Err(failed("sparse Cholesky analysis", e)),
+    };
+    let mut values = Vec::new();
+    values
+        .try_reserve_exact(symbolic.len_val())
+        .map_err(|e| failed("allocating the Cholesky factor", e))?;
+    values.resize(symbolic.len_val(), 0.0);
+    let par = factor_par();
+    let mut mem = scratch(symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()))?;
+    let result = symbolic.factorize_numeric_llt(
+        &mut values,
+        m,
+        Side::Lower,
+        Default::default(),
+        par,
+        MemStack::new(&mut mem),
+        Default::default(),
+    );
+    // The only numeric failure faer reports is a non-positive pivot.
+    if let Err(DenseLltError::NonPositivePivot { .. }) = result {
+        return Err(SparseError::NotPositiveDefinite { method: "sparse Cholesky pivot" });
+    }
+    Ok(Some((symbolic, values)))
+}
+
+/// Solves `L L^T x = b` in place for every column of `x`.
+fn llt_solve<I: Index>(
+    symbolic: &SymbolicCholesky<I>,
+    values: &[f64],
+    x: &mut Mat<f64>,
+) -> Result<(), SparseError> {
+    let mut mem = scratch(symbolic.solve_in_place_scratch::<f64>(x.ncols(), SOLVE_PAR))?;
+    LltRef::new(symbolic, values).solve_in_place_with_conj(
+        Conj::No,
+        x.as_mut(),
+        SOLVE_PAR,
+        MemStack::new(&mut mem),
+    );
+    Ok(())
+}
+
 impl Factor {
     /// Sparse Cholesky of a symmetric matrix (square, finite, symmetric within
     /// tolerance: checked by the dispatcher). Only one triangle is read.
@@ -106,39 +169,32 @@ impl Factor {
     /// Errors: [`SparseError::NotPositiveDefinite`] on a non-positive pivot.
     pub(crate) fn cholesky(a: &CsrMatrix) -> Result<Factor, SparseError> {
         guarded("sparse Cholesky", || {
-            let view = TransposeView::new(a);
-            // The CSC view is A^T = A (A is symmetric); its lower triangle is
-            // A's upper one, equal to A's lower one within the tolerance.
-            let m = view.matrix(a);
-            let symbolic = factorize_symbolic_cholesky(
-                m.symbolic(),
-                Side::Lower,
-                SymmetricOrdering::Amd,
-                Default::default(),
-            )
-            .map_err(|e| failed("sparse Cholesky analysis", e))?;
-            let mut values = Vec::new();
-            values
-                .try_reserve_exact(symbolic.len_val())
-                .map_err(|e| failed("allocating the Cholesky factor", e))?;
-            values.resize(symbolic.len_val(), 0.0);
-            let par = factor_par();
-            let mut mem =
-                scratch(symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()))?;
-            let result = symbolic.factorize_numeric_llt(
-                &mut values,
-                m,
-                Side::Lower,
-                Default::default(),
-                par,
-                MemStack::new(&mut mem),
-                Default::default(),
-            );
-            // The only numeric failure faer reports is a non-positive pivot.
-            if let Err(DenseLltError::NonPositivePivot { .. }) = result {
-                return Err(SparseError::NotPositiveDefinite { method: "sparse Cholesky pivot" });
+            // 32-bit indices when A and L fit (faer reports an L that does
+            // not as `IndexOverflow`), 64-bit otherwise.
+            if let Ok(col_ptr) =
+                a.row_offsets().iter().map(|&o| u32::try_from(o)).collect::<Result<Vec<_>, _>>()
+            {
+                let n = a.n_rows();
+                // The CSR arrays read as CSC are A^T; the checks are the
+                // CsrMatrix invariants, so `new_checked` cannot fire.
+                let symbolic =
+                    SymbolicSparseColMatRef::new_checked(n, n, &col_ptr, None, a.col_indices());
+                if let Some((symbolic, values)) = llt(SparseColMatRef::new(symbolic, a.values()))? {
+                    return Ok(Factor::Cholesky32 { symbolic, values });
+                }
             }
-            Ok(Factor::Cholesky { symbolic, values })
+            Factor::cholesky_wide(a)
+        })
+    }
+
+    /// [`Factor::cholesky`] with 64-bit indices.
+    fn cholesky_wide(a: &CsrMatrix) -> Result<Factor, SparseError> {
+        guarded("sparse Cholesky", || {
+            let view = TransposeView::new(a);
+            match llt(view.matrix(a))? {
+                Some((symbolic, values)) => Ok(Factor::Cholesky { symbolic, values }),
+                None => Err(failed("sparse Cholesky analysis", FaerError::IndexOverflow)),
+            }
         })
     }
 
@@ -185,15 +241,8 @@ impl Factor {
     fn solve_in_place(&self, x: &mut Mat<f64>) -> Result<(), SparseError> {
         let k = x.ncols();
         match self {
-            Factor::Cholesky { symbolic, values } => {
-                let mut mem = scratch(symbolic.solve_in_place_scratch::<f64>(k, SOLVE_PAR))?;
-                LltRef::new(symbolic, values).solve_in_place_with_conj(
-                    Conj::No,
-                    x.as_mut(),
-                    SOLVE_PAR,
-                    MemStack::new(&mut mem),
-                );
-            }
+            Factor::Cholesky32 { symbolic, values } => llt_solve(symbolic, values, x)?,
+            Factor::Cholesky { symbolic, values } => llt_solve(symbolic, values, x)?,
             Factor::LuOfTranspose { symbolic, numeric } => {
                 let mut mem =
                     scratch(symbolic.solve_transpose_in_place_scratch::<f64>(k, SOLVE_PAR))?;
@@ -267,11 +316,14 @@ mod tests {
             let n = a.n_rows();
             let b1: Vec<f64> = (0..n).map(|i| (i as f64 * 0.7).cos()).collect();
             let b2: Vec<f64> = (0..n).map(|i| (i % 3) as f64).collect();
-            let f = Factor::cholesky(&a).unwrap();
-            let (x, res) = f.solve(&a, &[b1.clone(), b2.clone()], 1e-12).unwrap();
-            assert!(rel_err(&x[0], &dense_solve(&a, &b1)) < 1e-10);
-            assert!(rel_err(&x[1], &dense_solve(&a, &b2)) < 1e-10);
-            assert!(res.iter().all(|&r| r < 1e-12));
+            let narrow = Factor::cholesky(&a).unwrap();
+            assert!(matches!(narrow, Factor::Cholesky32 { .. }));
+            for f in [narrow, Factor::cholesky_wide(&a).unwrap()] {
+                let (x, res) = f.solve(&a, &[b1.clone(), b2.clone()], 1e-12).unwrap();
+                assert!(rel_err(&x[0], &dense_solve(&a, &b1)) < 1e-10);
+                assert!(rel_err(&x[1], &dense_solve(&a, &b2)) < 1e-10);
+                assert!(res.iter().all(|&r| r < 1e-12));
+            }
         }
     }
 

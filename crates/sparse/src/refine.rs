@@ -4,7 +4,7 @@
 //! in the solution. Where an embedding's triangles are thinner than that
 //! error (the long limbs and spikes of Tutte-type maps), the rounding can
 //! flip them. Refinement computes r = b - A x with every product and sum
-//! carried exactly in two doubles (Dekker's TwoProduct via fused multiply-add
+//! carried exactly in two doubles (Dekker's TwoProduct with Veltkamp's split,
 //! and Knuth's TwoSum), rounds r once, solves A d = r with the existing factor
 //! and updates x += d. Each step shrinks the error by about cond(A) * eps until
 //! x is the double nearest the exact solution, give or take an ulp: the best a
@@ -23,14 +23,38 @@ fn two_sum(a: f64, b: f64) -> (f64, f64) {
     (s, (a - (s - bb)) + (b - bb))
 }
 
+/// Veltkamp's split of `a` into two halves of 26 significant bits each, whose
+/// products with another half are exact.
+#[inline]
+fn split(a: f64) -> (f64, f64) {
+    const FACTOR: f64 = 134_217_729.0; // 2^27 + 1
+    let c = FACTOR * a;
+    let hi = c - (c - a);
+    (hi, a - hi)
+}
+
+/// Product p = a * b and its rounding error e, with p + e = a * b exactly
+/// (Dekker's TwoProduct). Written without `f64::mul_add`: unless the crate is
+/// built for a CPU with FMA, `mul_add` is an out-of-line software routine,
+/// which made this residual slower than the factorisation it refines. The
+/// split is exact barring overflow (|a|, |b| above 2^995) or underflow of the
+/// error term, neither of which a Tutte system's entries come near; and a
+/// slightly inexact residual would only slow refinement, never decide
+/// validity (the exact predicates do that).
+#[inline]
+fn two_product(a: f64, b: f64) -> (f64, f64) {
+    let p = a * b;
+    let (ah, al) = split(a);
+    let (bh, bl) = split(b);
+    (p, ((ah * bh - p) + ah * bl + al * bh) + al * bl)
+}
+
 /// b - A x for one row, in double-double, rounded to double at the end.
 fn residual_row(a: &CsrMatrix, i: usize, b: f64, x: &[f64]) -> f64 {
     let (cols, vals) = a.row(i);
     let (mut hi, mut lo) = (b, 0.0);
     for (&j, &v) in cols.iter().zip(vals) {
-        let p = v * x[j as usize];
-        // Exact error of the product (TwoProduct by fused multiply-add).
-        let e = v.mul_add(x[j as usize], -p);
+        let (p, e) = two_product(v, x[j as usize]);
         let (s, t) = two_sum(hi, -p);
         hi = s;
         lo += t - e;
@@ -81,6 +105,21 @@ pub fn refine_step(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn two_product_error_is_exact() {
+        // (1 + 2^-30)^2 = 1 + 2^-29 + 2^-60: the last term is below double
+        // precision next to 1 and must come back as the error.
+        let a = 1.0 + 2f64.powi(-30);
+        let (p, e) = two_product(a, a);
+        assert_eq!(p, 1.0 + 2f64.powi(-29));
+        assert_eq!(e, 2f64.powi(-60));
+        for (a, b) in [(0.1, 3.7), (-1e10, 7.3e-5), (std::f64::consts::PI, -std::f64::consts::E)] {
+            let (p, e) = two_product(a, b);
+            assert_eq!(p, a * b);
+            assert_eq!(e, a.mul_add(b, -p), "{a} * {b}");
+        }
+    }
 
     #[test]
     fn double_double_residual_sees_what_double_cannot() {

@@ -26,7 +26,7 @@
 
 use std::time::Instant;
 
-use spherify_mesh::cut::{cut_open, CutError, CutMesh};
+use spherify_mesh::cut::{cut_open_with, CutError, CutMesh};
 use spherify_mesh::dijkstra::{dijkstra, dijkstra_to, EdgeWeights};
 use spherify_mesh::{validate, Adjacency, HalfEdgeMesh, Mesh, TopologyError, TopologyProblem};
 use spherify_sparse::refine::refine_step;
@@ -148,12 +148,7 @@ pub fn theta_phi_with_progress(
     params: &ThetaPhiParams,
     progress: &(dyn Fn(usize, usize) -> bool + Sync),
 ) -> Result<ThetaPhi, SphereError> {
-    let mut seconds = Vec::new();
-    let mut clock = Instant::now();
-    let mut lap = |name: &'static str, seconds: &mut Vec<(&'static str, f64)>| {
-        seconds.push((name, clock.elapsed().as_secs_f64()));
-        clock = Instant::now();
-    };
+    let mut watch = Stopwatch::new();
     let he = HalfEdgeMesh::new(mesh)?;
     let euler = he.n_vertices() as i64 - he.n_edges() as i64 + he.n_faces() as i64;
     if !he.boundary_loops().is_empty() || euler != 2 {
@@ -193,19 +188,22 @@ pub fn theta_phi_with_progress(
         }
     }
     .ok_or_else(|| topology(mesh, TopologyProblem::NotSphere))?;
-    lap("poles", &mut seconds);
+    watch.lap("poles");
 
     let path = match symmetry_path {
         Some(path) => finish_path(&graph, path, lengths),
         None => cut_path(&graph, chosen.north, chosen.south, lengths),
     }
     .ok_or_else(|| topology(mesh, TopologyProblem::NotSphere))?;
-    let cut = cut_open(mesh, &path).map_err(|e| from_cut(mesh, e))?;
-    lap("cut", &mut seconds);
+    let mut cut = cut_open_with(mesh, &he, &path).map_err(|e| from_cut(mesh, e))?;
+    // The factorisation below is the memory peak; what only chose the poles
+    // and the path need not be alive then.
+    drop(graph);
+    drop(he);
+    watch.lap("cut");
 
     let cut_he = HalfEdgeMesh::new(&cut.mesh)?;
-    let weights = half_edge_weights(cut.mesh.positions(), &cut_he, params.weights)
-        .map_err(|e| from_tutte(e.into()))?;
+    cut.mesh.forget_edge_table();
     let k = path.len() - 2;
     let n_vertices = mesh.n_vertices();
     let north_fan = pole_fan(&cut_he, chosen.north, false);
@@ -213,15 +211,16 @@ pub fn theta_phi_with_progress(
 
     let mut fixed = rectangle_boundary(&cut.boundary, k, n_vertices);
     let mut refinements = 0;
+    watch.lap("system");
     let mut uv = solve_refined(
-        &cut_he,
-        &weights,
+        cut_he,
+        &cut.mesh,
+        params.weights,
         &fixed,
-        cut.mesh.faces(),
         params.max_refinements,
         &mut refinements,
+        &mut watch,
     )?;
-    lap("embed", &mut seconds);
 
     // Pole fans (6.5.1): re-embed with the fan pinned (6.38) where phi is not
     // strictly increasing. Eq. 6.38 needs the fan's inner vertices to be free;
@@ -248,29 +247,19 @@ pub fn theta_phi_with_progress(
             break;
         }
         uv = solve_refined(
-            &cut_he,
-            &weights,
+            HalfEdgeMesh::new(&cut.mesh)?,
+            &cut.mesh,
+            params.weights,
             &fixed,
-            cut.mesh.faces(),
             params.max_refinements,
             &mut refinements,
+            &mut watch,
         )?;
-        lap("re-embed poles", &mut seconds);
     }
     let fans_monotone =
         [strictly_increasing_phi(&uv, &north_fan), strictly_increasing_phi(&uv, &south_fan)];
     let inverted = inverted_faces(cut.mesh.faces(), &uv);
     let tp_valid = inverted.is_empty();
-
-    // The fold (6.35); originals keep their labels in the cut mesh.
-    let mut points: Vec<[f64; 3]> = uv[..n_vertices]
-        .iter()
-        .map(|&[t, p]| [t.sin() * p.cos(), t.sin() * p.sin(), t.cos()])
-        .collect();
-    points[chosen.north as usize] = [0.0, 0.0, 1.0];
-    points[chosen.south as usize] = [0.0, 0.0, -1.0];
-    lap("fold", &mut seconds);
-
     let min_area_ratio = cut
         .mesh
         .faces()
@@ -281,6 +270,17 @@ pub fn theta_phi_with_progress(
         })
         .fold(f64::INFINITY, f64::min)
         / (2.0 * PI * PI);
+    watch.lap("check");
+
+    // The fold (6.35); originals keep their labels in the cut mesh.
+    let mut points: Vec<[f64; 3]> = uv[..n_vertices]
+        .iter()
+        .map(|&[t, p]| [t.sin() * p.cos(), t.sin() * p.sin(), t.cos()])
+        .collect();
+    points[chosen.north as usize] = [0.0, 0.0, 1.0];
+    points[chosen.south as usize] = [0.0, 0.0, -1.0];
+    watch.lap("fold");
+
     let message = if tp_valid {
         format!(
             "theta-phi embedding certified flip-free in double precision ({refinements} refinement steps, thinnest triangle {min_area_ratio:.3e} of the rectangle)"
@@ -299,7 +299,7 @@ pub fn theta_phi_with_progress(
         iterations: refinements,
         status: Status::Direct,
         message,
-        seconds,
+        seconds: watch.seconds,
     };
     Ok(ThetaPhi {
         embedding,
@@ -317,32 +317,76 @@ pub fn theta_phi_with_progress(
     })
 }
 
-/// Solves the Tutte system with `fixed` boundary, then refines in double-double
-/// while triangles are inverted and refinement still changes the solution.
+/// Wall-clock seconds per stage in first-seen order. A stage met again (the
+/// pole re-embedding solves a second system) adds to its first entry, so the
+/// stages always sum to the whole call.
+struct Stopwatch {
+    clock: Instant,
+    seconds: Vec<(&'static str, f64)>,
+}
+
+impl Stopwatch {
+    fn new() -> Stopwatch {
+        Stopwatch { clock: Instant::now(), seconds: Vec::new() }
+    }
+
+    /// Charges the time since the last lap to `stage`.
+    fn lap(&mut self, stage: &'static str) {
+        let elapsed = self.clock.elapsed().as_secs_f64();
+        self.clock = Instant::now();
+        match self.seconds.iter_mut().find(|(name, _)| *name == stage) {
+            Some((_, total)) => *total += elapsed,
+            None => self.seconds.push((stage, elapsed)),
+        }
+    }
+}
+
+/// Solves the Tutte system of `cut` (whose half-edges are `he`) with `fixed`
+/// boundary, then refines in double-double while triangles are inverted and
+/// refinement still changes the solution.
+///
+/// `he` is taken by value so that it and the weights are freed once the
+/// system is assembled: the factor then has their memory (at a million
+/// vertices they are ~130 MB next to a ~600 MB factor).
 fn solve_refined(
-    he: &HalfEdgeMesh,
-    weights: &[f64],
+    he: HalfEdgeMesh,
+    cut: &Mesh,
+    weights: Weights,
     fixed: &[Option<[f64; 2]>],
-    faces: &[[u32; 3]],
     max_refinements: usize,
     refinements: &mut usize,
+    watch: &mut Stopwatch,
 ) -> Result<Vec<[f64; 2]>, SphereError> {
-    let system = FixedSystem::assemble(he, weights, fixed).map_err(from_tutte)?;
-    let mut uv = system.fixed_positions(fixed);
+    let system = {
+        let weights =
+            half_edge_weights(cut.positions(), &he, weights).map_err(|e| from_tutte(e.into()))?;
+        FixedSystem::assemble(&he, &weights, fixed).map_err(from_tutte)?
+    };
+    drop(he);
+    let faces = cut.faces();
     if system.free.is_empty() {
-        return Ok(uv);
+        return Ok(system.fixed_positions(fixed));
     }
+    watch.lap("system");
     let factor = Factorization::new(&system.matrix)?;
+    watch.lap("factor");
+    let mut uv = system.fixed_positions(fixed);
     let mut x = factor.solve(&system.matrix, &system.rhs)?;
     system.scatter(&mut uv, &x);
+    watch.lap("solve");
     // One refinement step always: the plain solve leaves cond(A) * eps behind.
     for step in 0..max_refinements {
-        if step > 0 && inverted_faces(faces, &uv).is_empty() {
-            break;
+        if step > 0 {
+            let done = inverted_faces(faces, &uv).is_empty();
+            watch.lap("check");
+            if done {
+                break;
+            }
         }
         let change = refine_step(&system.matrix, &factor, &system.rhs, &mut x)?;
         *refinements += 1;
         system.scatter(&mut uv, &x);
+        watch.lap("refine");
         if change == 0.0 {
             break;
         }
