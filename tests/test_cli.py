@@ -139,6 +139,7 @@ def test_map_writes_the_sphere_and_the_npz(tmp_path: Path, capsys: pytest.Captur
     text = capsys.readouterr().out
     assert code == 0, text
     assert "certified flip-free" in text and "GC-embedding" in text
+    assert "quality: angle distortion mean" in text and "stretch L2" in text
     sphere = sp.load(out)
     np.testing.assert_allclose(np.linalg.norm(sphere.vertices, axis=1), 1.0, atol=1e-12)
     data = np.load(tmp_path / "sphere.npz")

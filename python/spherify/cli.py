@@ -30,6 +30,7 @@ from . import datasets
 from ._embed import embed, methods
 from ._errors import SpherifyError, SpherifyWarning, TopologyError
 from ._mesh import Mesh, check, load, orient, save
+from ._quality import quality
 
 
 def _load(args: argparse.Namespace) -> Mesh:
@@ -132,6 +133,11 @@ def _cmd_map(args: argparse.Namespace) -> int:
     print(f"GC-embedding (minor-arc edges): {'valid' if m.valid else 'not valid'}, "
           f"{m.flipped} faces flipped or collapsed; area sum {m.report.area_sum:.12f} "
           f"(4 pi = {4 * np.pi:.12f})")
+    q = quality(m.mesh, m.points)
+    print(f"quality: angle distortion mean {q['angle_mean_deg']:.3g} deg (max "
+          f"{q['angle_max_deg']:.3g}), conformal mean {q['conformal_mean']:.3g}, "
+          f"log-area std {q['area_log_std']:.3g}, stretch L2 {q['stretch_l2']:.3g} "
+          f"(Linf {q['stretch_linf']:.3g}), edge-length CV {q['edge_length_cv']:.3g}")
     stages = ", ".join(f"{k} {v:.3f}" for k, v in m.seconds.items())
     print(f"seconds: load {loaded - start:.3f}; {stages}; total {mapped - start:.3f}")
     save(Mesh(m.points, m.mesh.faces), out)
