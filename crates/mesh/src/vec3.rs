@@ -30,6 +30,11 @@ pub fn norm(a: [f64; 3]) -> f64 {
     dot(a, a).sqrt()
 }
 
+/// The determinant of the 3x3 matrix with rows a, b, c: a . (b x c).
+pub fn det3(a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> f64 {
+    dot(a, cross(b, c))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -39,6 +44,8 @@ mod tests {
         assert_eq!(cross([1.0, 0.0, 0.0], [0.0, 1.0, 0.0]), [0.0, 0.0, 1.0]);
         assert_eq!(dot([1.0, 2.0, 3.0], [4.0, 5.0, 6.0]), 32.0);
         assert_eq!(norm([3.0, 4.0, 0.0]), 5.0);
+        assert_eq!(det3([1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]), 1.0);
+        assert_eq!(det3([0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 2.0]), -2.0);
         assert_eq!(
             add(sub([1.0, 1.0, 1.0], [1.0, 2.0, 3.0]), scale([0.0, 1.0, 2.0], 2.0)),
             [0.0, 1.0, 2.0]

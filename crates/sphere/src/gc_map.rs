@@ -10,7 +10,7 @@
 //! flat triangle at the point with these weights). Both directions are only a
 //! bijection when the embedding is valid (3.4); callers check that first.
 
-use spherify_mesh::vec3::{cross, dot, norm, scale};
+use spherify_mesh::vec3::{cross, det3, dot, norm, scale};
 
 use crate::bvh::{Aabb, Bvh};
 
@@ -45,10 +45,6 @@ fn spherical_box(t: [[f64; 3]; 3]) -> Aabb<3> {
         b.max[i] = b.max[i].min(1.0);
     }
     b
-}
-
-fn det3(a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> f64 {
-    dot(a, cross(b, c))
 }
 
 impl GcMap {

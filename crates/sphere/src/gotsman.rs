@@ -92,11 +92,12 @@
 use std::time::Instant;
 
 use rayon::prelude::*;
-use spherify_mesh::{HalfEdgeMesh, Mesh, TopologyError, TopologyProblem};
+use spherify_mesh::{HalfEdgeMesh, Mesh};
 use spherify_sparse::weights::{half_edge_weights, Weights};
 use spherify_sparse::{solve, CsrMatrix, SolveParams, SolverKind, SparseError};
 
 use crate::embedding::{normalize, SphereEmbedding, SphereError, Status};
+use crate::relaxation::sphere_connectivity;
 
 /// Spread (see the module documentation) below which the points count as
 /// collapsed: their RMS distance from their mean is below 1% of the radius.
@@ -220,19 +221,6 @@ pub fn gotsman(mesh: &Mesh, params: &GotsmanParams) -> Result<SphereEmbedding, S
         return Err(SphereError::NoConvergence { last: Box::new(embedding) });
     }
     Ok(embedding)
-}
-
-/// The half-edge structure of a closed genus-0 mesh, or why it is not one.
-fn sphere_connectivity(mesh: &Mesh) -> Result<HalfEdgeMesh, SphereError> {
-    let report = spherify_mesh::validate::check(mesh);
-    if !report.is_sphere_topology {
-        return Err(TopologyError {
-            problem: TopologyProblem::NotSphere,
-            report: Box::new(report),
-        }
-        .into());
-    }
-    Ok(HalfEdgeMesh::new(mesh)?)
 }
 
 /// `W` as an `n x n` CSR matrix with rows summing to 1 (eq. 5.4).

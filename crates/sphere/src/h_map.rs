@@ -38,6 +38,7 @@ use std::collections::{HashMap, HashSet};
 use std::f64::consts::PI;
 
 use spherify_mesh::predicates::{orient2d, Sign};
+use spherify_mesh::vec3::det3;
 
 use crate::bvh::{Aabb, Bvh};
 
@@ -149,10 +150,6 @@ pub(crate) fn triangle_weights(p: [f64; 2], a: [f64; 2], b: [f64; 2], c: [f64; 2
 /// weights of a face point in a piece whose corners x, y, z are themselves
 /// given by weights on the face's corners.
 fn piece_weights([x, y, z]: [[f64; 3]; 3], w: [f64; 3]) -> [f64; 3] {
-    let det3 = |x: [f64; 3], y: [f64; 3], z: [f64; 3]| {
-        x[0] * (y[1] * z[2] - y[2] * z[1]) - x[1] * (y[0] * z[2] - y[2] * z[0])
-            + x[2] * (y[0] * z[1] - y[1] * z[0])
-    };
     let d = det3(x, y, z);
     [det3(w, y, z) / d, det3(x, w, z) / d, det3(x, y, w) / d]
 }

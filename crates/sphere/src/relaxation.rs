@@ -209,7 +209,7 @@ impl Controls {
     }
 }
 
-/// Connectivity of a mesh the relaxation methods accept: closed, connected,
+/// Connectivity of a mesh the relaxation methods and Gotsman accept: closed, connected,
 /// manifold, genus 0 and consistently oriented.
 pub(crate) fn sphere_connectivity(mesh: &Mesh) -> Result<HalfEdgeMesh, SphereError> {
     let report = validate::check(mesh);
