@@ -483,44 +483,6 @@ pub(crate) mod tests {
         }
     }
 
-    /// Parse timings of the larger corpus files; run with
-    /// `cargo test --release -p spherify-mesh io::tests::parse_timings -- --ignored --nocapture`.
-    #[test]
-    #[ignore]
-    fn parse_timings() {
-        let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/meshes");
-        let Ok(igea) = read(&root.join("igea.ply")) else { return };
-        let mut inputs = Vec::new();
-        for name in ["igea.ply", "horse.ply", "scorpion.ply", "armadillo.obj", "sword.obj"] {
-            let bytes = std::fs::read(root.join(name)).unwrap();
-            inputs.push((name.to_string(), format_from_path(Path::new(name)).unwrap(), bytes));
-        }
-        // The same large mesh in every format and encoding spherify writes.
-        let none = VertexAttributes::default();
-        for (label, format, ply_encoding, stl_binary) in [
-            ("igea as obj", FileFormat::Obj, PlyEncoding::Ascii, true),
-            ("igea as off", FileFormat::Off, PlyEncoding::Ascii, true),
-            ("igea as ascii ply", FileFormat::Ply, PlyEncoding::Ascii, true),
-            ("igea as binary stl", FileFormat::Stl, PlyEncoding::Ascii, true),
-            ("igea as ascii stl", FileFormat::Stl, PlyEncoding::Ascii, false),
-        ] {
-            let options = WriteOptions { ply_encoding, stl_binary };
-            let bytes = write_bytes(&igea.mesh, &none, format, &options, label).unwrap();
-            inputs.push((label.to_string(), format, bytes));
-        }
-        for (name, format, bytes) in inputs {
-            let mut best = f64::INFINITY;
-            for _ in 0..20 {
-                let start = std::time::Instant::now();
-                let loaded = read_bytes(&bytes, format, &name).unwrap();
-                best = best.min(start.elapsed().as_secs_f64());
-                assert!(loaded.mesh.n_faces() > 0);
-            }
-            let mb = bytes.len() as f64 / 1e6;
-            eprintln!("{name}: {mb:.2} MB in {:.2} ms ({:.0} MB/s)", best * 1e3, mb / best);
-        }
-    }
-
     /// (path, V, F) of each manifest entry, by a minimal scan of the JSON: enough
     /// for this file's flat `"key": value` layout without a JSON dependency.
     fn manifest_entries(json: &str) -> Vec<(String, usize, usize)> {
