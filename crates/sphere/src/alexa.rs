@@ -29,12 +29,11 @@
 
 use std::time::Instant;
 
-use spherify_mesh::Mesh;
-
-use crate::embedding::{normalize, SphereEmbedding, SphereError};
-use crate::relaxation::{
-    initial_points, iterate, sphere_connectivity, CapLimit, Controls, Initial,
-};
+use crate::embedding::{normalize, SphereEmbedding};
+use crate::error::SphereError;
+use crate::genus_zero::GenusZeroMesh;
+use crate::initial::{initial_points, Initial};
+use crate::relaxation::{iterate, CapLimit, Controls};
 
 /// The step scale c_i of eq. 5.18.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -82,7 +81,7 @@ impl Default for AlexaParams {
 /// `Converged` when the exact validity test passes, `Collapsed` when the points
 /// are certain never to spread over the sphere again, `MaxIterations` otherwise.
 /// O(E) per iteration, in parallel; O(F) per validity test.
-pub fn alexa(mesh: &Mesh, params: &AlexaParams) -> Result<SphereEmbedding, SphereError> {
+pub fn alexa(mesh: &GenusZeroMesh, params: &AlexaParams) -> Result<SphereEmbedding, SphereError> {
     let start = Instant::now();
     let cap = match params.step {
         AlexaStep::InverseLongestEdge => CapLimit::Hemisphere,
@@ -102,8 +101,7 @@ pub fn alexa(mesh: &Mesh, params: &AlexaParams) -> Result<SphereEmbedding, Spher
         }
     };
     let controls = Controls::new(params.max_iter, params.check_every, params.tol, params.strict)?;
-    let he = sphere_connectivity(mesh)?;
-    let graph = he.adjacency();
+    let graph = mesh.half_edges().adjacency();
     let points = initial_points(mesh, &params.initial)?;
     let setup = start.elapsed().as_secs_f64();
     let step = params.step;
@@ -138,6 +136,16 @@ mod tests {
         bent_tube, bumpy, capsule, icosphere, octahedron, perturbed_octahedron, scrambled,
     };
     use crate::validity::check_sphere;
+    use spherify_mesh::Mesh;
+
+    /// The method on a test mesh, validated here.
+    fn alexa(mesh: &Mesh, params: &AlexaParams) -> Result<SphereEmbedding, SphereError> {
+        super::alexa(&GenusZeroMesh::new(mesh.clone())?, params)
+    }
+
+    fn initial_points(mesh: &Mesh, initial: &Initial) -> Result<Vec<[f64; 3]>, SphereError> {
+        crate::initial::initial_points(&GenusZeroMesh::new(mesh.clone())?, initial)
+    }
 
     fn assert_valid(mesh: &Mesh, e: &SphereEmbedding) {
         assert_eq!(e.status, Status::Converged, "{}", e.message);

@@ -1,14 +1,11 @@
-//! What every spherical method returns, and how it fails.
+//! What every spherical method returns.
 //!
 //! Each method lives in its own module (`radial.rs`, `relaxation.rs`,
-//! `alexa.rs`, `gotsman.rs`, later `theta_phi.rs`) and returns a
+//! `alexa.rs`, `gotsman.rs`, `theta_phi.rs`) and returns a
 //! [`SphereEmbedding`]: one point on the unit sphere per vertex plus an honest
 //! account of how the method ended. Whether the points form a valid
 //! GC-embedding is decided separately and exactly by
 //! [`crate::validity::check_sphere`]; methods never claim validity themselves.
-
-use spherify_mesh::TopologyError;
-use spherify_sparse::SparseError;
 
 /// How an iterative method ended.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -55,30 +52,9 @@ impl SphereEmbedding {
     }
 }
 
-/// Why a spherical method could not produce points at all.
-#[derive(Debug, Clone, thiserror::Error)]
-pub enum SphereError {
-    #[error(transparent)]
-    Topology(#[from] TopologyError),
-    /// Radial projection from the kernel: the mesh is not star-shaped.
-    #[error("the mesh is not star-shaped: no point sees every face from inside (the kernel is empty{detail})")]
-    NotStarShaped { detail: String },
-    /// A parameter outside its range.
-    #[error("{name} = {value}: {expected}")]
-    InvalidParameter { name: &'static str, value: String, expected: &'static str },
-    /// The caller asked for `strict` and the method did not converge; `last`
-    /// holds where it stopped.
-    #[error("{} after {} iterations: {}", last.status.name(), last.iterations, last.message)]
-    NoConvergence { last: Box<SphereEmbedding> },
-    #[error(transparent)]
-    Solve(#[from] SparseError),
-    /// A progress callback asked a long stage to stop.
-    #[error("{stage} stopped by the progress callback after {done} of {total} steps")]
-    Cancelled { stage: &'static str, done: usize, total: usize },
-}
-
 /// Projects `x` onto the unit sphere; `None` for the zero vector or non-finite input.
 pub fn normalize(x: [f64; 3]) -> Option<[f64; 3]> {
     let n = (x[0] * x[0] + x[1] * x[1] + x[2] * x[2]).sqrt();
     (n > 0.0 && n.is_finite()).then(|| [x[0] / n, x[1] / n, x[2] / n])
 }
+

@@ -92,12 +92,14 @@
 use std::time::Instant;
 
 use rayon::prelude::*;
-use spherify_mesh::{HalfEdgeMesh, Mesh};
-use spherify_sparse::weights::{half_edge_weights, Weights};
+use spherify_sparse::weights::Weights;
 use spherify_sparse::{solve, CsrMatrix, SolveParams, SolverKind, SparseError};
 
-use crate::embedding::{normalize, SphereEmbedding, SphereError, Status};
-use crate::relaxation::sphere_connectivity;
+use crate::embedding::{normalize, SphereEmbedding, Status};
+use crate::error::SphereError;
+use crate::genus_zero::GenusZeroMesh;
+use crate::initial::{initial_points, Initial};
+use crate::weight_matrix::{row_stochastic, Positivity};
 
 /// Spread (see the module documentation) below which the points count as
 /// collapsed: their RMS distance from their mean is below 1% of the radius.
@@ -110,17 +112,6 @@ const ACCEPT_RATIO: f64 = 1e-4;
 /// The trust radius, relative to `|x|`, below which no further progress is
 /// possible in double precision: the iteration has stalled.
 const MIN_RADIUS: f64 = 1e-15;
-
-/// Where the iteration starts.
-#[derive(Debug, Clone, PartialEq)]
-pub enum Initial {
-    /// Thesis eq. 5.11: each vertex projected radially from the mean vertex.
-    /// A vertex exactly at the mean takes the direction of its neighbours'.
-    Centroid,
-    /// One point per vertex (normalised here; none may be zero or non-finite),
-    /// for example the result of another method.
-    Points(Vec<[f64; 3]>),
-}
 
 /// Parameters of [`gotsman`].
 #[derive(Debug, Clone, PartialEq)]
@@ -174,7 +165,7 @@ impl Default for GotsmanParams {
 /// [`SphereError::Solve`] if the sparse LU fails other than by singularity;
 /// [`SphereError::NoConvergence`] (with the last iterate) when `strict` and the
 /// iteration did not converge or collapsed.
-pub fn gotsman(mesh: &Mesh, params: &GotsmanParams) -> Result<SphereEmbedding, SphereError> {
+pub fn gotsman(mesh: &GenusZeroMesh, params: &GotsmanParams) -> Result<SphereEmbedding, SphereError> {
     let start = Instant::now();
     if !(params.tol >= 0.0 && params.tol.is_finite()) {
         return Err(SphereError::InvalidParameter {
@@ -198,9 +189,8 @@ pub fn gotsman(mesh: &Mesh, params: &GotsmanParams) -> Result<SphereEmbedding, S
             expected: "at most 2^30 vertices (4 unknowns each, 32-bit indices)",
         });
     }
-    let he = sphere_connectivity(mesh)?;
-    let w = weight_matrix(mesh, &he, params.weights)?;
-    let points = initial_points(mesh, &w, &params.initial)?;
+    let w = row_stochastic(mesh, params.weights, Positivity::EveryWeight)?;
+    let points = initial_points(mesh, &params.initial)?;
     let mut seconds = vec![("setup", start.elapsed().as_secs_f64())];
 
     let mut x = vec![0.0; 4 * n];
@@ -221,96 +211,6 @@ pub fn gotsman(mesh: &Mesh, params: &GotsmanParams) -> Result<SphereEmbedding, S
         return Err(SphereError::NoConvergence { last: Box::new(embedding) });
     }
     Ok(embedding)
-}
-
-/// `W` as an `n x n` CSR matrix with rows summing to 1 (eq. 5.4).
-fn weight_matrix(
-    mesh: &Mesh,
-    he: &HalfEdgeMesh,
-    weights: Weights,
-) -> Result<CsrMatrix, SphereError> {
-    let bad = |value: String| SphereError::InvalidParameter {
-        name: "weights",
-        value,
-        expected: "positive, finite weights on every edge (eq. 5.3)",
-    };
-    let w = half_edge_weights(mesh.positions(), he, weights).map_err(|e| bad(e.to_string()))?;
-    let n = mesh.n_vertices();
-    let (mut rows, mut cols, mut values) = (Vec::new(), Vec::new(), Vec::new());
-    for i in 0..n as u32 {
-        let first = values.len();
-        for h in he.rotation(i) {
-            let value = w[h as usize];
-            if value.is_nan() || value <= 0.0 {
-                return Err(bad(format!("{value} on edge ({i}, {})", he.head(h))));
-            }
-            rows.push(i);
-            cols.push(he.head(h));
-            values.push(value);
-        }
-        let sum: f64 = values[first..].iter().sum();
-        if !(sum > 0.0 && sum.is_finite()) {
-            return Err(bad(format!("row {i} sums to {sum}")));
-        }
-        values[first..].iter_mut().for_each(|v| *v /= sum);
-    }
-    Ok(CsrMatrix::from_triplets(n, n, &rows, &cols, &values)?)
-}
-
-/// Unit start points, one per vertex.
-fn initial_points(
-    mesh: &Mesh,
-    w: &CsrMatrix,
-    initial: &Initial,
-) -> Result<Vec<[f64; 3]>, SphereError> {
-    let n = mesh.n_vertices();
-    match initial {
-        Initial::Points(p) => {
-            if p.len() != n {
-                return Err(SphereError::InvalidParameter {
-                    name: "initial",
-                    value: format!("{} points", p.len()),
-                    expected: "one point per vertex",
-                });
-            }
-            p.iter()
-                .enumerate()
-                .map(|(i, &q)| {
-                    normalize(q).ok_or_else(|| SphereError::InvalidParameter {
-                        name: "initial",
-                        value: format!("point {i} = {q:?}"),
-                        expected: "finite, non-zero points",
-                    })
-                })
-                .collect()
-        }
-        Initial::Centroid => {
-            let pos = mesh.positions();
-            let mut m = [0.0; 3];
-            for p in pos {
-                (0..3).for_each(|k| m[k] += p[k]);
-            }
-            let m = m.map(|s| s / n as f64);
-            let d: Vec<[f64; 3]> =
-                pos.iter().map(|p| [p[0] - m[0], p[1] - m[1], p[2] - m[2]]).collect();
-            Ok((0..n)
-                .map(|i| {
-                    normalize(d[i]).unwrap_or_else(|| {
-                        // A vertex at the mean has no direction of its own:
-                        // borrow its neighbours' (any start will do; Newton
-                        // moves it), and the north pole if even that is zero.
-                        let mut s = [0.0; 3];
-                        for &j in w.row(i).0 {
-                            if let Some(q) = normalize(d[j as usize]) {
-                                (0..3).for_each(|k| s[k] += q[k]);
-                            }
-                        }
-                        normalize(s).unwrap_or([0.0, 0.0, 1.0])
-                    })
-                })
-                .collect())
-        }
-    }
 }
 
 /// `u_i = sum_j w_ij v_j` for the points of the interleaved state `x`
@@ -769,6 +669,18 @@ fn max_abs(v: &[f64]) -> f64 {
 mod tests {
     use super::*;
     use crate::validity::check_sphere;
+    use spherify_mesh::Mesh;
+
+    /// The method on a test mesh, validated here.
+    fn gotsman(mesh: &Mesh, params: &GotsmanParams) -> Result<SphereEmbedding, SphereError> {
+        super::gotsman(&GenusZeroMesh::new(mesh.clone())?, params)
+    }
+
+    /// The uniform or chord weight matrix of a test mesh.
+    fn weight_matrix(mesh: &Mesh, weights: Weights) -> CsrMatrix {
+        let mesh = GenusZeroMesh::new(mesh.clone()).unwrap();
+        row_stochastic(&mesh, weights, Positivity::EveryWeight).unwrap()
+    }
 
     /// The octahedron split `levels` times into four (edge midpoints), with
     /// every vertex moved to radius `radius(direction)`: a star-shaped
@@ -786,8 +698,7 @@ mod tests {
     /// max_i |u_i x v_i| / |u_i|: zero when every point is the projection of
     /// its neighbours' weighted mean (eq. 5.5).
     fn projection_error(mesh: &Mesh, points: &[[f64; 3]]) -> f64 {
-        let he = HalfEdgeMesh::new(mesh).unwrap();
-        let w = weight_matrix(mesh, &he, Weights::Uniform).unwrap();
+        let w = weight_matrix(mesh, Weights::Uniform);
         let x: Vec<f64> = points.iter().flat_map(|p| [p[0], p[1], p[2], 0.0]).collect();
         let u = neighbour_means(&w, &x);
         (0..points.len())
@@ -913,8 +824,7 @@ mod tests {
     #[test]
     fn jacobian_matches_finite_differences() {
         let mesh = subdivided_octahedron(1, bumpy);
-        let he = HalfEdgeMesh::new(&mesh).unwrap();
-        let w = weight_matrix(&mesh, &he, Weights::Chord { rho: 1.0 }).unwrap();
+        let w = weight_matrix(&mesh, Weights::Chord { rho: 1.0 });
         let x: Vec<f64> =
             (0..4 * mesh.n_vertices()).map(|k| ((k * 7 % 13) as f64 * 0.37).sin()).collect();
         let jac = jacobian(&w, &x).unwrap();
@@ -938,8 +848,7 @@ mod tests {
     #[test]
     fn the_tangent_step_is_the_newton_step_of_the_full_jacobian() {
         let mesh = subdivided_octahedron(2, bumpy);
-        let he = HalfEdgeMesh::new(&mesh).unwrap();
-        let w = weight_matrix(&mesh, &he, Weights::Chord { rho: 1.0 }).unwrap();
+        let w = weight_matrix(&mesh, Weights::Chord { rho: 1.0 });
         // Points off the sphere and off any solution.
         let x: Vec<f64> = mesh
             .positions()

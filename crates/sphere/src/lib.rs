@@ -17,10 +17,14 @@
 
 pub mod alexa;
 pub mod bvh;
+pub mod embed;
 pub mod embedding;
+pub mod error;
 pub mod gc_map;
+pub mod genus_zero;
 pub mod gotsman;
 pub mod h_map;
+pub mod initial;
 pub mod jacobi;
 pub mod metrics;
 pub mod point_map;
@@ -30,8 +34,12 @@ pub mod relaxation;
 pub mod symmetry;
 pub mod theta_phi;
 pub mod validity;
+pub mod weight_matrix;
 
-pub use embedding::{SphereEmbedding, SphereError, Status};
+pub use embed::{embed, Details, Embedding, Method, MethodName, UnknownMethod};
+pub use embedding::{SphereEmbedding, Status};
+pub use error::SphereError;
+pub use genus_zero::GenusZeroMesh;
 pub use spherify_mesh::predicates;
 pub use spherify_mesh::predicates::Sign;
 pub use validity::{check_sphere, SphereReport};

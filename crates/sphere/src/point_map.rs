@@ -12,8 +12,12 @@
 //! reason, when the map is not a certified bijection, since "the" preimage is
 //! then not defined. Both validate their input row by row and run in parallel.
 
-use rayon::prelude::*;
+use std::sync::Arc;
 
+use rayon::prelude::*;
+use spherify_mesh::Mesh;
+
+use crate::embed::{Details, Embedding};
 use crate::gc_map::GcMap;
 use crate::h_map::ThetaPhiMap;
 
@@ -47,20 +51,35 @@ enum Inner {
 /// h and h^-1 for one spherical map of one mesh.
 #[derive(Debug, Clone)]
 pub struct PointMap {
-    faces: Vec<[u32; 3]>,
-    positions: Vec<[f64; 3]>,
+    mesh: Arc<Mesh>,
     inner: Inner,
     /// `Some(reason)` when h^-1 is not defined.
     not_bijective: Option<String>,
 }
 
 impl PointMap {
+    /// The point map of `embedding`, a map of `mesh` (the oriented mesh it
+    /// was computed for). Whether h^-1 is defined comes from the embedding's
+    /// own certificate, never from the caller. O(F log F).
+    pub fn new(mesh: Arc<Mesh>, embedding: &Embedding) -> PointMap {
+        match &embedding.details {
+            Details::ThetaPhi(tp) => {
+                let poles = [tp.poles.north, tp.poles.south];
+                PointMap::theta_phi(mesh, tp.cut.mesh.faces(), &tp.theta_phi, poles, tp.tp_valid)
+            }
+            _ => {
+                let report = &embedding.certificate;
+                let flipped = report.n_negative + report.n_zero;
+                PointMap::gc(mesh, &embedding.result.points, report.valid, flipped)
+            }
+        }
+    }
+
     /// The theta-phi map h (6.6). `cut_faces` are the cut mesh's faces in the
     /// input's face order, `theta_phi` its rectangle embedding; `tp_valid` is
     /// the certificate of the rectangle (without it h is not one-to-one).
-    pub fn theta_phi(
-        faces: &[[u32; 3]],
-        positions: &[[f64; 3]],
+    fn theta_phi(
+        mesh: Arc<Mesh>,
         cut_faces: &[[u32; 3]],
         theta_phi: &[[f64; 2]],
         poles: [u32; 2],
@@ -76,8 +95,7 @@ impl PointMap {
             map.problem().map(str::to_string)
         };
         PointMap {
-            faces: faces.to_vec(),
-            positions: positions.to_vec(),
+            mesh,
             inner: Inner::ThetaPhi(map),
             not_bijective,
         }
@@ -85,9 +103,8 @@ impl PointMap {
 
     /// The barycentric map of 3.3 for a GC-embedding; `valid` is its verdict
     /// under the exact tests of 3.4 and `flipped` the number of failing faces.
-    pub fn gc(
-        faces: &[[u32; 3]],
-        positions: &[[f64; 3]],
+    fn gc(
+        mesh: Arc<Mesh>,
         points: &[[f64; 3]],
         valid: bool,
         flipped: usize,
@@ -95,10 +112,10 @@ impl PointMap {
         let not_bijective = (!valid).then(|| {
             format!("the points are not a valid GC-embedding ({flipped} faces fail the orientation test of thesis 3.4)")
         });
+        let inner = Inner::Gc(GcMap::new(mesh.faces(), points));
         PointMap {
-            faces: faces.to_vec(),
-            positions: positions.to_vec(),
-            inner: Inner::Gc(GcMap::new(faces, points)),
+            mesh,
+            inner,
             not_bijective,
         }
     }
@@ -120,7 +137,7 @@ impl PointMap {
                 weights: bary.len(),
             });
         }
-        let n_faces = self.faces.len();
+        let n_faces = self.mesh.n_faces();
         face_ids
             .par_iter()
             .zip(bary.par_iter())
@@ -166,10 +183,10 @@ impl PointMap {
         let xyz = located
             .par_iter()
             .map(|&(f, w)| {
-                let face = self.faces[f as usize];
+                let face = self.mesh.faces()[f as usize];
                 let mut x = [0.0; 3];
                 for k in 0..3 {
-                    let p = self.positions[face[k] as usize];
+                    let p = self.mesh.positions()[face[k] as usize];
                     for i in 0..3 {
                         x[i] += w[k] * p[i];
                     }
@@ -198,9 +215,10 @@ fn checked_weights(row: usize, w: [f64; 3]) -> Result<[f64; 3], PointMapError> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::theta_phi::{theta_phi, ThetaPhiParams};
+    use crate::embed::{embed, Method};
+    use crate::genus_zero::GenusZeroMesh;
+    use crate::theta_phi::ThetaPhiParams;
     use spherify_mesh::solids::{octahedron, tetrahedron};
-    use spherify_mesh::Mesh;
 
     fn lcg(state: &mut u64) -> f64 {
         *state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
@@ -208,16 +226,11 @@ mod tests {
     }
 
     fn theta_phi_map(mesh: &Mesh) -> PointMap {
-        let tp = theta_phi(mesh, &ThetaPhiParams::default()).unwrap();
-        assert!(tp.tp_valid);
-        PointMap::theta_phi(
-            mesh.faces(),
-            mesh.positions(),
-            tp.cut.mesh.faces(),
-            &tp.theta_phi,
-            [tp.poles.north, tp.poles.south],
-            tp.tp_valid,
-        )
+        let mesh = GenusZeroMesh::new(mesh.clone()).unwrap();
+        let method = Method::ThetaPhi(ThetaPhiParams::default());
+        let e = embed(&mesh, &method, &|_, _| true).unwrap();
+        assert!(e.bijective());
+        PointMap::new(mesh.shared_mesh(), &e)
     }
 
     fn round_trip(map: &PointMap, mesh: &Mesh, seed: u64) {
@@ -276,21 +289,21 @@ mod tests {
     #[test]
     fn gc_round_trips_on_the_octahedron() {
         let mesh = octahedron();
-        let map = PointMap::gc(mesh.faces(), mesh.positions(), mesh.positions(), true, 0);
+        let map = PointMap::gc(Arc::new(mesh.clone()), mesh.positions(), true, 0);
         round_trip(&map, &mesh, 5);
     }
 
     #[test]
     fn bad_input_is_named_by_row() {
         let mesh = octahedron();
-        let map = PointMap::gc(mesh.faces(), mesh.positions(), mesh.positions(), true, 0);
+        let map = PointMap::gc(Arc::new(mesh.clone()), mesh.positions(), true, 0);
         let err = map.to_sphere(&[0, 8], &[[1.0, 0.0, 0.0]; 2]).unwrap_err();
         assert!(matches!(err, PointMapError::FaceOutOfRange { row: 1, face: 8, .. }));
         let err = map.to_sphere(&[0], &[[0.5, 0.6, 0.0]]).unwrap_err();
         assert!(matches!(err, PointMapError::BadWeights { row: 0, .. }));
         let err = map.to_surface(&[[0.0, 0.0, 1.0], [0.0, 0.0, 2.0]]).unwrap_err();
         assert!(matches!(err, PointMapError::NotOnSphere { row: 1, .. }));
-        let invalid = PointMap::gc(mesh.faces(), mesh.positions(), mesh.positions(), false, 3);
+        let invalid = PointMap::gc(Arc::new(mesh.clone()), mesh.positions(), false, 3);
         assert!(matches!(
             invalid.to_surface(&[[0.0, 0.0, 1.0]]),
             Err(PointMapError::NotBijective(_))

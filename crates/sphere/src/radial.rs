@@ -51,7 +51,10 @@ use rayon::prelude::*;
 use spherify_mesh::predicates::collinear3;
 use spherify_mesh::Mesh;
 
-use crate::embedding::{normalize, SphereEmbedding, SphereError, Status};
+use crate::embedding::{normalize, SphereEmbedding, Status};
+use crate::error::SphereError;
+use crate::genus_zero::GenusZeroMesh;
+use crate::initial::vertex_mean;
 
 /// Which point [`radial`] projects from.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -110,7 +113,7 @@ const MAX_ROUNDS: usize = 12;
 /// [`SphereError::NotStarShaped`] for [`Center::Kernel`] on a mesh without a
 /// kernel; [`SphereError::InvalidParameter`] for a non-finite point or a
 /// centre that coincides with a vertex (which then has no direction).
-pub fn radial(mesh: &Mesh, center: Center) -> Result<SphereEmbedding, SphereError> {
+pub fn radial(mesh: &GenusZeroMesh, center: Center) -> Result<SphereEmbedding, SphereError> {
     radial_map(mesh, center).map(|r| r.embedding)
 }
 
@@ -128,7 +131,8 @@ pub struct Radial {
 ///
 /// # Errors
 /// As [`radial`].
-pub fn radial_map(mesh: &Mesh, center: Center) -> Result<Radial, SphereError> {
+pub fn radial_map(mesh: &GenusZeroMesh, center: Center) -> Result<Radial, SphereError> {
+    let mesh = mesh.mesh();
     let started = Instant::now();
     let mut kernel_account = None;
     let (m, from) = match center {
@@ -424,19 +428,6 @@ pub fn backfacing(mesh: &Mesh, m: [f64; 3]) -> usize {
         .count()
 }
 
-/// The mean of the positions (thesis eq. 3.18), summed in order so that the
-/// result does not depend on the number of threads.
-fn vertex_mean(positions: &[[f64; 3]]) -> [f64; 3] {
-    let mut sum = [0.0; 3];
-    for p in positions {
-        for k in 0..3 {
-            sum[k] += p[k];
-        }
-    }
-    let n = positions.len().max(1) as f64;
-    sum.map(|s| s / n)
-}
-
 fn format_point(p: [f64; 3]) -> String {
     format!("({:.6e}, {:.6e}, {:.6e})", p[0], p[1], p[2])
 }
@@ -618,6 +609,11 @@ pub mod lp {
 mod tests {
     use super::*;
     use crate::validity::check_sphere;
+
+    /// The method on a test mesh, validated here.
+    fn radial(mesh: &Mesh, center: Center) -> Result<SphereEmbedding, SphereError> {
+        super::radial(&GenusZeroMesh::new(mesh.clone())?, center)
+    }
 
     /// A closed mesh with faces turned outward (by the sign of the volume).
     fn mesh(positions: Vec<[f64; 3]>, mut faces: Vec<[u32; 3]>) -> Mesh {

@@ -32,24 +32,14 @@ use spherify_mesh::vec3::add;
 use std::time::Instant;
 
 use rayon::prelude::*;
-use spherify_mesh::{validate, HalfEdgeMesh, Mesh, TopologyError, TopologyProblem};
-use spherify_sparse::weights::{half_edge_weights, Weights};
+use spherify_sparse::weights::Weights;
 
-use crate::embedding::{normalize, SphereEmbedding, SphereError, Status};
+use crate::embedding::{normalize, SphereEmbedding, Status};
+use crate::error::SphereError;
+use crate::genus_zero::GenusZeroMesh;
+use crate::initial::{initial_points, Initial};
+use crate::weight_matrix::{row_stochastic, Positivity};
 use crate::validity::check_sphere;
-
-/// Where the iteration starts (thesis eq. 5.13).
-#[derive(Debug, Clone, PartialEq)]
-pub enum Initial {
-    /// `v_i = (x_i - m) / |x_i - m|` with `m` the mean of the vertices (eq. 5.14).
-    Centroid,
-    /// The same with a caller-chosen centre `m`: the thesis needs this where the
-    /// centroid lies outside the mesh (its HELIX model, 7.3).
-    Center([f64; 3]),
-    /// One point per vertex, normalised onto the sphere (to resume a run, or to
-    /// start from another method's result).
-    Points(Vec<[f64; 3]>),
-}
 
 /// Parameters of [`relaxation`].
 #[derive(Debug, Clone)]
@@ -94,7 +84,10 @@ impl Default for RelaxationParams {
 /// when the iteration has settled), `Collapsed` when every point lies in an open
 /// hemisphere (see the module notes), `MaxIterations` otherwise. Cost per
 /// iteration O(E), in parallel; a validity test O(F).
-pub fn relaxation(mesh: &Mesh, params: &RelaxationParams) -> Result<SphereEmbedding, SphereError> {
+pub fn relaxation(
+    mesh: &GenusZeroMesh,
+    params: &RelaxationParams,
+) -> Result<SphereEmbedding, SphereError> {
     let start = Instant::now();
     if let Weights::Chord { rho } = params.weights {
         if !rho.is_finite() {
@@ -106,12 +99,10 @@ pub fn relaxation(mesh: &Mesh, params: &RelaxationParams) -> Result<SphereEmbedd
         }
     }
     let controls = Controls::new(params.max_iter, params.check_every, params.tol, params.strict)?;
-    let he = sphere_connectivity(mesh)?;
-    let rows = WeightRows::new(mesh, &he, params.weights)?;
+    let w = row_stochastic(mesh, params.weights, Positivity::RowSums)?;
     let points = initial_points(mesh, &params.initial)?;
     // Convex combinations keep points in a hemisphere only when no weight is negative.
-    let cap =
-        if rows.weights.iter().all(|&w| w >= 0.0) { CapLimit::Hemisphere } else { CapLimit::None };
+    let cap = if w.values().iter().all(|&x| x >= 0.0) { CapLimit::Hemisphere } else { CapLimit::None };
     let setup = start.elapsed().as_secs_f64();
     iterate(
         mesh.faces(),
@@ -122,58 +113,15 @@ pub fn relaxation(mesh: &Mesh, params: &RelaxationParams) -> Result<SphereEmbedd
         "relaxation",
         |old: &[[f64; 3]], i: usize| {
             let mut u = [0.0; 3];
-            for k in rows.offsets[i]..rows.offsets[i + 1] {
-                let (w, p) = (rows.weights[k], old[rows.neighbors[k] as usize]);
-                u = [u[0] + w * p[0], u[1] + w * p[1], u[2] + w * p[2]];
+            let (cols, vals) = w.row(i);
+            for (&j, &wij) in cols.iter().zip(vals) {
+                let p = old[j as usize];
+                u = [u[0] + wij * p[0], u[1] + wij * p[1], u[2] + wij * p[2]];
             }
             // u = 0 (neighbours cancelling exactly) has no direction: stay put.
             normalize(u).unwrap_or(old[i])
         },
     )
-}
-
-/// The rows of W (eq. 5.9) in compressed form, each normalised to sum to 1 (eq. 5.4).
-struct WeightRows {
-    offsets: Vec<usize>,
-    neighbors: Vec<u32>,
-    weights: Vec<f64>,
-}
-
-impl WeightRows {
-    fn new(mesh: &Mesh, he: &HalfEdgeMesh, kind: Weights) -> Result<WeightRows, SphereError> {
-        let per_half_edge = half_edge_weights(mesh.positions(), he, kind).map_err(|e| {
-            SphereError::InvalidParameter {
-                name: "weights",
-                value: e.to_string(),
-                expected: "weights that are finite on this mesh",
-            }
-        })?;
-        let n = he.n_vertices();
-        let mut offsets = Vec::with_capacity(n + 1);
-        let mut neighbors = Vec::with_capacity(he.n_half_edges());
-        let mut weights = Vec::with_capacity(he.n_half_edges());
-        offsets.push(0);
-        for v in 0..n as u32 {
-            let row_start = neighbors.len();
-            for h in he.rotation(v) {
-                neighbors.push(he.head(h));
-                weights.push(per_half_edge[h as usize]);
-            }
-            let sum: f64 = weights[row_start..].iter().sum();
-            // A non-positive sum (cotangent weights on a bad triangulation) leaves
-            // no combination to project.
-            if !(sum > 0.0 && sum.is_finite()) {
-                return Err(SphereError::InvalidParameter {
-                    name: "weights",
-                    value: format!("{kind:?}, whose weights around vertex {v} sum to {sum}"),
-                    expected: "weights with a positive sum around every vertex",
-                });
-            }
-            weights[row_start..].iter_mut().for_each(|w| *w /= sum);
-            offsets.push(neighbors.len());
-        }
-        Ok(WeightRows { offsets, neighbors, weights })
-    }
 }
 
 /// The controls both relaxation methods share, checked.
@@ -207,76 +155,6 @@ impl Controls {
         }
         Ok(Controls { max_iter, check_every, tol, strict })
     }
-}
-
-/// Connectivity of a mesh the relaxation methods and Gotsman accept: closed, connected,
-/// manifold, genus 0 and consistently oriented.
-pub(crate) fn sphere_connectivity(mesh: &Mesh) -> Result<HalfEdgeMesh, SphereError> {
-    let report = validate::check(mesh);
-    if !report.is_sphere_topology {
-        return Err(TopologyError {
-            problem: TopologyProblem::NotSphere,
-            report: Box::new(report),
-        }
-        .into());
-    }
-    Ok(HalfEdgeMesh::new(mesh)?)
-}
-
-/// The starting points of eq. 5.13.
-pub(crate) fn initial_points(mesh: &Mesh, initial: &Initial) -> Result<Vec<[f64; 3]>, SphereError> {
-    let positions = mesh.positions();
-    let center = match initial {
-        Initial::Points(points) => {
-            if points.len() != positions.len() {
-                return Err(SphereError::InvalidParameter {
-                    name: "initial",
-                    value: format!("{} points", points.len()),
-                    expected: "one point per vertex",
-                });
-            }
-            return points
-                .iter()
-                .enumerate()
-                .map(|(i, &p)| {
-                    normalize(p).ok_or_else(|| SphereError::InvalidParameter {
-                        name: "initial",
-                        value: format!("point {i} = {p:?}"),
-                        expected: "finite, non-zero points",
-                    })
-                })
-                .collect();
-        }
-        Initial::Center(c) => {
-            if !c.iter().all(|x| x.is_finite()) {
-                return Err(SphereError::InvalidParameter {
-                    name: "center",
-                    value: format!("{c:?}"),
-                    expected: "a finite point",
-                });
-            }
-            *c
-        }
-        Initial::Centroid => {
-            // Sequential sum: the same centre, bit for bit, on any thread count.
-            let s = positions.iter().fold([0.0; 3], |s, p| [s[0] + p[0], s[1] + p[1], s[2] + p[2]]);
-            let n = positions.len().max(1) as f64;
-            [s[0] / n, s[1] / n, s[2] / n]
-        }
-    };
-    positions
-        .iter()
-        .enumerate()
-        .map(|(i, p)| {
-            normalize([p[0] - center[0], p[1] - center[1], p[2] - center[2]]).ok_or_else(|| {
-                SphereError::InvalidParameter {
-                    name: "center",
-                    value: format!("{center:?}, which is vertex {i}"),
-                    expected: "a point that is not a vertex (it gives that vertex no direction)",
-                }
-            })
-        })
-        .collect()
 }
 
 /// How far the points may spread and still be certain never to become valid.
@@ -462,6 +340,16 @@ where
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
+    use spherify_mesh::{validate, Mesh};
+
+    /// The method on a test mesh, validated here.
+    fn relaxation(mesh: &Mesh, params: &RelaxationParams) -> Result<SphereEmbedding, SphereError> {
+        super::relaxation(&GenusZeroMesh::new(mesh.clone())?, params)
+    }
+
+    fn initial_points(mesh: &Mesh, initial: &Initial) -> Result<Vec<[f64; 3]>, SphereError> {
+        crate::initial::initial_points(&GenusZeroMesh::new(mesh.clone())?, initial)
+    }
 
     /// Unit icosahedron, faces counter-clockwise from outside.
     fn icosahedron() -> (Vec<[f64; 3]>, Vec<[u32; 3]>) {

@@ -52,7 +52,7 @@
 use spherify_mesh::dijkstra::{dijkstra_to, EdgeWeights};
 use spherify_mesh::Adjacency;
 
-use crate::embedding::SphereError;
+use crate::error::SphereError;
 use crate::jacobi::symmetric_eigen;
 use crate::poles::{self, Poles};
 

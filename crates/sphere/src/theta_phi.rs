@@ -34,7 +34,9 @@ use spherify_sparse::tutte::{inverted_faces, FixedSystem, InvertedFaces, TutteEr
 use spherify_sparse::weights::{half_edge_weights, Weights};
 use spherify_sparse::Factorization;
 
-use crate::embedding::{SphereEmbedding, SphereError, Status};
+use crate::embedding::{SphereEmbedding, Status};
+use crate::error::SphereError;
+use crate::genus_zero::GenusZeroMesh;
 use crate::poles::{self, Poles};
 use crate::symmetry::{self, Symmetry, SymmetryParams};
 
@@ -75,11 +77,9 @@ impl Default for ThetaPhiParams {
     }
 }
 
-/// Everything the theta-phi method computed.
+/// What the theta-phi method computed besides the points on the sphere.
 #[derive(Debug, Clone)]
 pub struct ThetaPhi {
-    /// One point per input vertex.
-    pub embedding: SphereEmbedding,
     pub poles: Poles,
     pub cut_path: Vec<u32>,
     pub cut: CutMesh,
@@ -105,6 +105,24 @@ pub struct ThetaPhi {
 
 fn topology(mesh: &Mesh, problem: TopologyProblem) -> SphereError {
     SphereError::Topology(TopologyError { problem, report: Box::new(validate::check(mesh)) })
+}
+
+/// Tutte's theorem (4.3) needs positive weights; cotangent weights can be
+/// negative, and then the rectangle may fold.
+fn check_weights(weights: Weights) -> Result<(), SphereError> {
+    match weights {
+        Weights::Cotangent => Err(SphereError::InvalidParameter {
+            name: "weights",
+            value: "cotangent".into(),
+            expected: "uniform, chord or mean_value: Tutte's theorem (4.3) needs positive weights",
+        }),
+        Weights::Chord { rho } if !rho.is_finite() => Err(SphereError::InvalidParameter {
+            name: "rho",
+            value: rho.to_string(),
+            expected: "a finite exponent",
+        }),
+        _ => Ok(()),
+    }
 }
 
 fn from_tutte(err: TutteError) -> SphereError {
@@ -133,9 +151,12 @@ fn from_cut(mesh: &Mesh, err: CutError) -> SphereError {
     }
 }
 
-/// Maps a closed genus-0 mesh (consistently oriented, counter-clockwise seen
-/// from outside) onto the sphere with the theta-phi method.
-pub fn theta_phi(mesh: &Mesh, params: &ThetaPhiParams) -> Result<ThetaPhi, SphereError> {
+/// Maps a closed genus-0 mesh onto the sphere with the theta-phi method: one
+/// point per vertex, and what the method computed on the way.
+pub fn theta_phi(
+    mesh: &GenusZeroMesh,
+    params: &ThetaPhiParams,
+) -> Result<(SphereEmbedding, ThetaPhi), SphereError> {
     theta_phi_with_progress(mesh, params, &|_, _| true)
 }
 
@@ -144,16 +165,18 @@ pub fn theta_phi(mesh: &Mesh, params: &ThetaPhiParams) -> Result<ThetaPhi, Spher
 /// threads. Returning `false` stops the search: the call then fails with
 /// [`SphereError::Cancelled`]. Other pole choices never call it.
 pub fn theta_phi_with_progress(
-    mesh: &Mesh,
+    mesh: &GenusZeroMesh,
     params: &ThetaPhiParams,
     progress: &(dyn Fn(usize, usize) -> bool + Sync),
-) -> Result<ThetaPhi, SphereError> {
-    let mut watch = Stopwatch::new();
-    let he = HalfEdgeMesh::new(mesh)?;
-    let euler = he.n_vertices() as i64 - he.n_edges() as i64 + he.n_faces() as i64;
-    if !he.boundary_loops().is_empty() || euler != 2 {
-        return Err(topology(mesh, TopologyProblem::NotSphere));
-    }
+) -> Result<(SphereEmbedding, ThetaPhi), SphereError> {
+    check_weights(params.weights)?;
+    let mut solver = RectangleSolver {
+        weights: params.weights,
+        max_refinements: params.max_refinements,
+        refinements: 0,
+        watch: Stopwatch::new(),
+    };
+    let (he, mesh) = (mesh.half_edges(), mesh.mesh());
     let graph = he.adjacency();
     let lengths = EdgeWeights::Length(mesh.positions());
     let mut found_symmetry = None;
@@ -188,19 +211,18 @@ pub fn theta_phi_with_progress(
         }
     }
     .ok_or_else(|| topology(mesh, TopologyProblem::NotSphere))?;
-    watch.lap("poles");
+    solver.watch.lap("poles");
 
     let path = match symmetry_path {
         Some(path) => finish_path(&graph, path, lengths),
         None => cut_path(&graph, chosen.north, chosen.south, lengths),
     }
     .ok_or_else(|| topology(mesh, TopologyProblem::NotSphere))?;
-    let mut cut = cut_open_with(mesh, &he, &path).map_err(|e| from_cut(mesh, e))?;
+    let mut cut = cut_open_with(mesh, he, &path).map_err(|e| from_cut(mesh, e))?;
     // The factorisation below is the memory peak; what only chose the poles
     // and the path need not be alive then.
     drop(graph);
-    drop(he);
-    watch.lap("cut");
+    solver.watch.lap("cut");
 
     let cut_he = HalfEdgeMesh::new(&cut.mesh)?;
     cut.mesh.forget_edge_table();
@@ -210,17 +232,8 @@ pub fn theta_phi_with_progress(
     let south_fan = pole_fan(&cut_he, chosen.south, true);
 
     let mut fixed = rectangle_boundary(&cut.boundary, k, n_vertices);
-    let mut refinements = 0;
-    watch.lap("system");
-    let mut uv = solve_refined(
-        cut_he,
-        &cut.mesh,
-        params.weights,
-        &fixed,
-        params.max_refinements,
-        &mut refinements,
-        &mut watch,
-    )?;
+    solver.watch.lap("system");
+    let mut uv = solver.solve(cut_he, &cut.mesh, &fixed)?;
 
     // Pole fans (6.5.1): re-embed with the fan pinned (6.38) where phi is not
     // strictly increasing. Eq. 6.38 needs the fan's inner vertices to be free;
@@ -246,15 +259,7 @@ pub fn theta_phi_with_progress(
         if !pinned {
             break;
         }
-        uv = solve_refined(
-            HalfEdgeMesh::new(&cut.mesh)?,
-            &cut.mesh,
-            params.weights,
-            &fixed,
-            params.max_refinements,
-            &mut refinements,
-            &mut watch,
-        )?;
+        uv = solver.solve(HalfEdgeMesh::new(&cut.mesh)?, &cut.mesh, &fixed)?;
     }
     let fans_monotone =
         [strictly_increasing_phi(&uv, &north_fan), strictly_increasing_phi(&uv, &south_fan)];
@@ -270,7 +275,7 @@ pub fn theta_phi_with_progress(
         })
         .fold(f64::INFINITY, f64::min)
         / (2.0 * PI * PI);
-    watch.lap("check");
+    solver.watch.lap("check");
 
     // The fold (6.35); originals keep their labels in the cut mesh.
     let mut points: Vec<[f64; 3]> = uv[..n_vertices]
@@ -279,7 +284,8 @@ pub fn theta_phi_with_progress(
         .collect();
     points[chosen.north as usize] = [0.0, 0.0, 1.0];
     points[chosen.south as usize] = [0.0, 0.0, -1.0];
-    watch.lap("fold");
+    solver.watch.lap("fold");
+    let refinements = solver.refinements;
 
     let message = if tp_valid {
         format!(
@@ -299,10 +305,9 @@ pub fn theta_phi_with_progress(
         iterations: refinements,
         status: Status::Direct,
         message,
-        seconds: watch.seconds,
+        seconds: solver.watch.seconds,
     };
-    Ok(ThetaPhi {
-        embedding,
+    let details = ThetaPhi {
         poles: chosen,
         cut_path: path,
         cut,
@@ -314,7 +319,8 @@ pub fn theta_phi_with_progress(
         fans_monotone,
         min_area_ratio,
         symmetry: found_symmetry,
-    })
+    };
+    Ok((embedding, details))
 }
 
 /// Wall-clock seconds per stage in first-seen order. A stage met again (the
@@ -341,57 +347,66 @@ impl Stopwatch {
     }
 }
 
-/// Solves the Tutte system of `cut` (whose half-edges are `he`) with `fixed`
-/// boundary, then refines in double-double while triangles are inverted and
-/// refinement still changes the solution.
-///
-/// `he` is taken by value so that it and the weights are freed once the
-/// system is assembled: the factor then has their memory (at a million
-/// vertices they are ~130 MB next to a ~600 MB factor).
-fn solve_refined(
-    he: HalfEdgeMesh,
-    cut: &Mesh,
+/// What both rectangle solves (the first, and the one with pinned pole fans)
+/// share: the weights, the refinement budget, and the running counts.
+struct RectangleSolver {
     weights: Weights,
-    fixed: &[Option<[f64; 2]>],
     max_refinements: usize,
-    refinements: &mut usize,
-    watch: &mut Stopwatch,
-) -> Result<Vec<[f64; 2]>, SphereError> {
-    let system = {
-        let weights =
-            half_edge_weights(cut.positions(), &he, weights).map_err(|e| from_tutte(e.into()))?;
-        FixedSystem::assemble(&he, &weights, fixed).map_err(from_tutte)?
-    };
-    drop(he);
-    let faces = cut.faces();
-    if system.free.is_empty() {
-        return Ok(system.fixed_positions(fixed));
-    }
-    watch.lap("system");
-    let factor = Factorization::new(&system.matrix)?;
-    watch.lap("factor");
-    let mut uv = system.fixed_positions(fixed);
-    let mut x = factor.solve(&system.matrix, &system.rhs)?;
-    system.scatter(&mut uv, &x);
-    watch.lap("solve");
-    // One refinement step always: the plain solve leaves cond(A) * eps behind.
-    for step in 0..max_refinements {
-        if step > 0 {
-            let done = inverted_faces(faces, &uv).is_empty();
-            watch.lap("check");
-            if done {
+    /// Refinement steps taken, over all solves.
+    refinements: usize,
+    watch: Stopwatch,
+}
+
+impl RectangleSolver {
+    /// Solves the Tutte system of `cut` (whose half-edges are `he`) with `fixed`
+    /// boundary, then refines in double-double while triangles are inverted
+    /// and refinement still changes the solution.
+    ///
+    /// `he` is taken by value so that it and the weights are freed once the
+    /// system is assembled: the factor then has their memory (at a million
+    /// vertices they are ~130 MB next to a ~600 MB factor).
+    fn solve(
+        &mut self,
+        he: HalfEdgeMesh,
+        cut: &Mesh,
+        fixed: &[Option<[f64; 2]>],
+    ) -> Result<Vec<[f64; 2]>, SphereError> {
+        let system = {
+            let weights = half_edge_weights(cut.positions(), &he, self.weights)
+                .map_err(|e| from_tutte(e.into()))?;
+            FixedSystem::assemble(&he, &weights, fixed).map_err(from_tutte)?
+        };
+        drop(he);
+        let faces = cut.faces();
+        if system.free.is_empty() {
+            return Ok(system.fixed_positions(fixed));
+        }
+        self.watch.lap("system");
+        let factor = Factorization::new(&system.matrix)?;
+        self.watch.lap("factor");
+        let mut uv = system.fixed_positions(fixed);
+        let mut x = factor.solve(&system.matrix, &system.rhs)?;
+        system.scatter(&mut uv, &x);
+        self.watch.lap("solve");
+        // One refinement step always: the plain solve leaves cond(A) * eps behind.
+        for step in 0..self.max_refinements {
+            if step > 0 {
+                let done = inverted_faces(faces, &uv).is_empty();
+                self.watch.lap("check");
+                if done {
+                    break;
+                }
+            }
+            let change = refine_step(&system.matrix, &factor, &system.rhs, &mut x)?;
+            self.refinements += 1;
+            system.scatter(&mut uv, &x);
+            self.watch.lap("refine");
+            if change == 0.0 {
                 break;
             }
         }
-        let change = refine_step(&system.matrix, &factor, &system.rhs, &mut x)?;
-        *refinements += 1;
-        system.scatter(&mut uv, &x);
-        watch.lap("refine");
-        if change == 0.0 {
-            break;
-        }
+        Ok(uv)
     }
-    Ok(uv)
 }
 
 /// The boundary of eq. 6.31: u_n = (0, pi), u_{p_i} = (i h, 0), u_s = (pi, pi),
@@ -615,6 +630,35 @@ mod tests {
     use super::*;
     use crate::validity::check_sphere;
 
+    /// A test run: the points, and the rest through `Deref`.
+    #[derive(Debug)]
+    struct Run {
+        embedding: SphereEmbedding,
+        details: ThetaPhi,
+    }
+
+    impl std::ops::Deref for Run {
+        type Target = ThetaPhi;
+        fn deref(&self) -> &ThetaPhi {
+            &self.details
+        }
+    }
+
+    /// The method on a test mesh, validated here.
+    fn theta_phi_with_progress(
+        mesh: &Mesh,
+        params: &ThetaPhiParams,
+        progress: &(dyn Fn(usize, usize) -> bool + Sync),
+    ) -> Result<Run, SphereError> {
+        let mesh = GenusZeroMesh::new(mesh.clone())?;
+        let (embedding, details) = super::theta_phi_with_progress(&mesh, params, progress)?;
+        Ok(Run { embedding, details })
+    }
+
+    fn theta_phi(mesh: &Mesh, params: &ThetaPhiParams) -> Result<Run, SphereError> {
+        theta_phi_with_progress(mesh, params, &|_, _| true)
+    }
+
     fn uv_sphere(rings: usize, segments: usize) -> Mesh {
         let mut p = vec![[0.0, 0.0, 1.0]];
         for i in 1..rings {
@@ -702,10 +746,10 @@ mod tests {
         let tp = theta_phi(&mesh, &strict).unwrap();
         let fast = theta_phi(&mesh, &ThetaPhiParams::default()).unwrap();
         assert!(matches!(
-            tp.symmetry.unwrap().fallback,
+            tp.symmetry.as_ref().unwrap().fallback,
             Some(crate::symmetry::Fallback::NotSymmetric { .. })
         ));
-        assert_eq!((tp.poles, tp.cut_path), (fast.poles, fast.cut_path));
+        assert_eq!((tp.poles, &tp.cut_path), (fast.poles, &fast.cut_path));
     }
 
     #[test]

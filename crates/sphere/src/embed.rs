@@ -1,0 +1,240 @@
+//! One entry point for every spherical method: [`embed`] takes a validated
+//! [`GenusZeroMesh`] and a [`Method`] with its parameters, runs the method,
+//! and certifies the points with the exact tests of thesis 3.4. The
+//! certificate is computed here, from the points that are returned, and
+//! travels with them in the one result type, [`Embedding`].
+
+use std::fmt;
+use std::str::FromStr;
+use std::time::Instant;
+
+use crate::alexa::{alexa, AlexaParams};
+use crate::embedding::SphereEmbedding;
+use crate::error::SphereError;
+use crate::genus_zero::GenusZeroMesh;
+use crate::gotsman::{gotsman, GotsmanParams};
+use crate::radial::{radial_map, Center, KernelPoint};
+use crate::relaxation::{relaxation, RelaxationParams};
+use crate::theta_phi::{theta_phi_with_progress, ThetaPhi, ThetaPhiParams};
+use crate::validity::{check_sphere, SphereReport};
+
+/// A spherical method and its parameters.
+#[derive(Debug, Clone)]
+pub enum Method {
+    /// Radial projection (thesis 3.5) from a centre.
+    Radial(Center),
+    /// Iterative relaxation (5.2).
+    Relaxation(RelaxationParams),
+    /// Alexa's method (5.3).
+    Alexa(AlexaParams),
+    /// Gotsman, Gu and Sheffer's spherical Tutte system (5.1).
+    Gotsman(GotsmanParams),
+    /// The theta-phi method (ch. 6).
+    ThetaPhi(ThetaPhiParams),
+}
+
+/// The name of a [`Method`], without parameters: what `sp.methods()` lists.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum MethodName {
+    Radial,
+    Relaxation,
+    Alexa,
+    Gotsman,
+    ThetaPhi,
+}
+
+impl MethodName {
+    /// Every method, in the order the documentation lists them.
+    pub const ALL: [MethodName; 5] = [
+        MethodName::Radial,
+        MethodName::Relaxation,
+        MethodName::Alexa,
+        MethodName::Gotsman,
+        MethodName::ThetaPhi,
+    ];
+
+    pub fn as_str(self) -> &'static str {
+        match self {
+            MethodName::Radial => "radial",
+            MethodName::Relaxation => "relaxation",
+            MethodName::Alexa => "alexa",
+            MethodName::Gotsman => "gotsman",
+            MethodName::ThetaPhi => "theta_phi",
+        }
+    }
+
+    /// The method with its default parameters.
+    pub fn with_defaults(self) -> Method {
+        match self {
+            MethodName::Radial => Method::Radial(Center::Kernel),
+            MethodName::Relaxation => Method::Relaxation(RelaxationParams::default()),
+            MethodName::Alexa => Method::Alexa(AlexaParams::default()),
+            MethodName::Gotsman => Method::Gotsman(GotsmanParams::default()),
+            MethodName::ThetaPhi => Method::ThetaPhi(ThetaPhiParams::default()),
+        }
+    }
+}
+
+impl fmt::Display for MethodName {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+/// A method name that [`MethodName::from_str`] does not know.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("unknown method {name:?}; available: {}", available())]
+pub struct UnknownMethod {
+    pub name: String,
+}
+
+fn available() -> String {
+    MethodName::ALL.iter().map(|m| m.as_str()).collect::<Vec<_>>().join(", ")
+}
+
+impl FromStr for MethodName {
+    type Err = UnknownMethod;
+
+    fn from_str(name: &str) -> Result<MethodName, UnknownMethod> {
+        MethodName::ALL
+            .into_iter()
+            .find(|m| m.as_str() == name)
+            .ok_or_else(|| UnknownMethod { name: name.to_string() })
+    }
+}
+
+impl Method {
+    pub fn name(&self) -> MethodName {
+        match self {
+            Method::Radial(_) => MethodName::Radial,
+            Method::Relaxation(_) => MethodName::Relaxation,
+            Method::Alexa(_) => MethodName::Alexa,
+            Method::Gotsman(_) => MethodName::Gotsman,
+            Method::ThetaPhi(_) => MethodName::ThetaPhi,
+        }
+    }
+}
+
+/// What a method computed besides the points, where it computed more.
+#[derive(Debug, Clone)]
+pub enum Details {
+    None,
+    Radial {
+        /// The point `m` of eq. 3.17.
+        center: [f64; 3],
+        /// The kernel LP's account, for [`Center::Kernel`].
+        kernel: Option<KernelPoint>,
+    },
+    ThetaPhi(Box<ThetaPhi>),
+}
+
+/// A map of a mesh onto the sphere, and the proof of what it is.
+#[derive(Debug, Clone)]
+pub struct Embedding {
+    pub method: MethodName,
+    /// The points (one per vertex of the mesh, in its order) and how the
+    /// method ended.
+    pub result: SphereEmbedding,
+    /// The exact tests of thesis 3.4 on `result.points`: `valid` means the
+    /// points with minor-arc edges form a GC-embedding, a bijection.
+    pub certificate: SphereReport,
+    pub details: Details,
+}
+
+impl Embedding {
+    /// Certifies points made elsewhere (a method's, or a caller's own) for
+    /// `mesh`, timing the check as the stage `"certify"`.
+    fn certified(
+        mesh: &GenusZeroMesh,
+        method: MethodName,
+        mut result: SphereEmbedding,
+        details: Details,
+    ) -> Embedding {
+        let started = Instant::now();
+        let certificate = check_sphere(mesh.faces(), &result.points);
+        result.seconds.push(("certify", started.elapsed().as_secs_f64()));
+        Embedding { method, result, certificate, details }
+    }
+
+    /// Whether h^-1 is defined: the theta-phi rectangle is certified, or the
+    /// points form a valid GC-embedding.
+    pub fn bijective(&self) -> bool {
+        match &self.details {
+            Details::ThetaPhi(tp) => tp.tp_valid,
+            _ => self.certificate.valid,
+        }
+    }
+}
+
+/// Maps `mesh` onto the unit sphere with `method`, then certifies the points.
+///
+/// `progress(done, total)` hears from the long stages that report (the exact
+/// graph poles of theta-phi); returning `false` stops them with
+/// [`SphereError::Cancelled`].
+///
+/// # Errors
+/// Whatever the method reports: bad parameters, a radial centre outside the
+/// kernel, a failed solve, a non-converged run under `strict`, a cancellation.
+pub fn embed(
+    mesh: &GenusZeroMesh,
+    method: &Method,
+    progress: &(dyn Fn(usize, usize) -> bool + Sync),
+) -> Result<Embedding, SphereError> {
+    let (result, details) = match method {
+        Method::Radial(center) => {
+            let r = radial_map(mesh, *center)?;
+            (r.embedding, Details::Radial { center: r.center, kernel: r.kernel })
+        }
+        Method::Relaxation(params) => (relaxation(mesh, params)?, Details::None),
+        Method::Alexa(params) => (alexa(mesh, params)?, Details::None),
+        Method::Gotsman(params) => (gotsman(mesh, params)?, Details::None),
+        Method::ThetaPhi(params) => {
+            let (points, tp) = theta_phi_with_progress(mesh, params, progress)?;
+            (points, Details::ThetaPhi(Box::new(tp)))
+        }
+    };
+    Ok(Embedding::certified(mesh, method.name(), result, details))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use spherify_mesh::solids::{octahedron, octasphere};
+
+    #[test]
+    fn names_round_trip_and_unknown_names_list_the_methods() {
+        for name in MethodName::ALL {
+            assert_eq!(name.as_str().parse::<MethodName>(), Ok(name));
+            assert_eq!(name.with_defaults().name(), name);
+        }
+        let err = "tutte".parse::<MethodName>().unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "unknown method \"tutte\"; available: radial, relaxation, alexa, gotsman, theta_phi"
+        );
+    }
+
+    #[test]
+    fn every_method_maps_a_round_mesh_and_the_certificate_is_the_exact_test() {
+        let mesh = GenusZeroMesh::new(octasphere(2)).unwrap();
+        for name in MethodName::ALL {
+            let e = embed(&mesh, &name.with_defaults(), &|_, _| true).unwrap();
+            assert_eq!(e.method, name);
+            assert_eq!(e.result.points.len(), mesh.n_vertices());
+            assert!(e.certificate.valid, "{name}: {}", e.result.message);
+            assert_eq!(e.certificate, check_sphere(mesh.faces(), &e.result.points));
+            assert!(e.bijective());
+            assert_eq!(e.result.seconds.last().map(|s| s.0), Some("certify"));
+        }
+    }
+
+    #[test]
+    fn theta_phi_refuses_cotangent_weights_in_the_core() {
+        use spherify_sparse::weights::Weights;
+        let mesh = GenusZeroMesh::new(octahedron()).unwrap();
+        let method =
+            Method::ThetaPhi(ThetaPhiParams { weights: Weights::Cotangent, ..Default::default() });
+        let err = embed(&mesh, &method, &|_, _| true).unwrap_err();
+        assert!(matches!(err, SphereError::InvalidParameter { name: "weights", .. }), "{err}");
+    }
+}

@@ -1,0 +1,124 @@
+//! The one door every spherical method comes in by (STYLE 5): a closed,
+//! connected, manifold genus-0 mesh whose faces are consistently oriented and
+//! face outward (thesis Prop. 2.8, Alg. 2.9), with its half-edge connectivity
+//! built once.
+//!
+//! [`GenusZeroMesh::new`] runs the validation of `spherify_mesh::validate`,
+//! repairs the orientation when the faces are inconsistent or face inward, and
+//! builds the half-edges. The methods of [`crate::embed`] take the result and
+//! never check topology again.
+
+use std::sync::Arc;
+
+use spherify_mesh::orient::orient;
+use spherify_mesh::{validate, HalfEdgeMesh, Mesh, TopologyError, TopologyProblem};
+
+/// A mesh every spherical method accepts. Cheap to share: the positions and
+/// faces are behind an `Arc`, so wrapping a mesh that needs no reorientation
+/// copies nothing.
+#[derive(Debug, Clone)]
+pub struct GenusZeroMesh {
+    mesh: Arc<Mesh>,
+    half_edges: HalfEdgeMesh,
+    reoriented_faces: usize,
+}
+
+impl GenusZeroMesh {
+    /// Validates `mesh` and orients it consistently outward. O(F log d).
+    ///
+    /// # Errors
+    /// [`TopologyError`] (with the full validation report) when the mesh is not
+    /// closed, connected, manifold and of genus 0.
+    pub fn new(mesh: impl Into<Arc<Mesh>>) -> Result<GenusZeroMesh, TopologyError> {
+        let mesh = mesh.into();
+        let report = validate::check(&mesh);
+        if !report.is_sphere_topology {
+            return Err(TopologyError {
+                problem: TopologyProblem::NotSphere,
+                report: Box::new(report),
+            });
+        }
+        let (mesh, reoriented_faces) = if report.consistently_oriented && report.outward {
+            (mesh, 0)
+        } else {
+            let (oriented, info) = orient(&mesh)?;
+            (Arc::new(oriented), info.flipped_faces)
+        };
+        let half_edges = HalfEdgeMesh::new(&mesh)?;
+        Ok(GenusZeroMesh { mesh, half_edges, reoriented_faces })
+    }
+
+    /// The oriented mesh: faces counter-clockwise seen from outside.
+    pub fn mesh(&self) -> &Mesh {
+        &self.mesh
+    }
+
+    /// The oriented mesh, shared.
+    pub fn shared_mesh(&self) -> Arc<Mesh> {
+        Arc::clone(&self.mesh)
+    }
+
+    pub fn half_edges(&self) -> &HalfEdgeMesh {
+        &self.half_edges
+    }
+
+    pub fn positions(&self) -> &[[f64; 3]] {
+        self.mesh.positions()
+    }
+
+    pub fn faces(&self) -> &[[u32; 3]] {
+        self.mesh.faces()
+    }
+
+    pub fn n_vertices(&self) -> usize {
+        self.mesh.n_vertices()
+    }
+
+    pub fn n_faces(&self) -> usize {
+        self.mesh.n_faces()
+    }
+
+    /// Faces whose corner order [`GenusZeroMesh::new`] reversed (0 when the
+    /// mesh was already consistent and outward).
+    pub fn reoriented_faces(&self) -> usize {
+        self.reoriented_faces
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use spherify_mesh::solids::{OCTAHEDRON_FACES, OCTAHEDRON_POSITIONS};
+
+    fn octahedron() -> Mesh {
+        Mesh::new(OCTAHEDRON_POSITIONS.to_vec(), OCTAHEDRON_FACES.to_vec()).unwrap()
+    }
+
+    #[test]
+    fn an_outward_mesh_is_shared_not_copied() {
+        let mesh = Arc::new(octahedron());
+        let g = GenusZeroMesh::new(Arc::clone(&mesh)).unwrap();
+        assert!(Arc::ptr_eq(&mesh, &g.shared_mesh()));
+        assert_eq!(g.reoriented_faces(), 0);
+        assert_eq!(g.half_edges().n_faces(), 8);
+    }
+
+    #[test]
+    fn an_inward_mesh_is_turned_outward() {
+        let faces: Vec<[u32; 3]> = OCTAHEDRON_FACES.iter().map(|&[a, b, c]| [a, c, b]).collect();
+        let g = GenusZeroMesh::new(Mesh::new(OCTAHEDRON_POSITIONS.to_vec(), faces).unwrap())
+            .unwrap();
+        assert_eq!(g.reoriented_faces(), 8);
+        assert_eq!(g.faces(), octahedron().faces());
+    }
+
+    #[test]
+    fn an_open_mesh_is_refused_with_its_report() {
+        let mut faces = OCTAHEDRON_FACES.to_vec();
+        faces.pop();
+        let err = GenusZeroMesh::new(Mesh::new(OCTAHEDRON_POSITIONS.to_vec(), faces).unwrap())
+            .unwrap_err();
+        assert_eq!(err.problem, TopologyProblem::NotSphere);
+        assert!(!err.report.closed);
+    }
+}
