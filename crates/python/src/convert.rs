@@ -56,33 +56,25 @@ pub fn to_i64_rows<const K: usize>(data: &[[u32; K]]) -> Vec<[i64; K]> {
     data.iter().map(|r| r.map(i64::from)).collect()
 }
 
-/// The weights named `name` (with exponent `rho` for "chord"), if `name` is one
-/// of `allowed`; otherwise a `MeshError` listing them, with `why` appended.
-pub fn weights(
-    py: Python<'_>,
-    name: &str,
-    rho: f64,
-    allowed: &[&str],
-    why: &str,
-) -> PyResult<spherify_sparse::weights::Weights> {
+/// The weights named `name` (with exponent `rho` for "chord"); which weights
+/// a method accepts is decided in the core.
+pub fn weights(py: Python<'_>, name: &str, rho: f64) -> PyResult<spherify_sparse::weights::Weights> {
     use spherify_sparse::weights::Weights;
-    if !allowed.contains(&name) {
-        let names: Vec<String> = allowed.iter().map(|a| format!("'{a}'")).collect();
-        return Err(mesh_error(
-            py,
-            format!("weights must be one of {}{why}, got {name:?}", names.join(", ")),
-        ));
-    }
     Ok(match name {
+        "uniform" => Weights::Uniform,
         "chord" if !rho.is_finite() => {
             return Err(mesh_error(py, format!("rho must be finite, got {rho}")))
         }
         "chord" => Weights::Chord { rho },
         "mean_value" => Weights::MeanValue,
         "cotangent" => Weights::Cotangent,
-        _ => Weights::Uniform,
+        other => {
+            return Err(mesh_error(
+                py,
+                format!(
+                    "weights must be one of 'uniform', 'chord', 'mean_value', 'cotangent', got {other:?}"
+                ),
+            ))
+        }
     })
 }
-
-/// Every weight type of `spherify_sparse::weights`.
-pub const ALL_WEIGHTS: [&str; 4] = ["uniform", "chord", "mean_value", "cotangent"];

@@ -1,47 +1,59 @@
-//! Shared conversions for the spherical methods: a core `SphereEmbedding` becomes
-//! `(points, info)` for `spherify.SphereMap`, and a `SphereError` its exception.
-//! Each method's `#[pyfunction]` lives in the file named after it.
+//! `embed` and `methods`: every spherical method through the core's one
+//! entry point, `spherify_sphere::embed`. The method's options are read by the
+//! file named after it; nothing here decides anything about a method.
+
+use std::str::FromStr;
+use std::sync::Arc;
 
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use spherify_sphere::{SphereEmbedding, SphereError};
+use spherify_sphere::{embed as core_embed, GenusZeroMesh, Method, MethodName, SphereError};
 
-use crate::convert::to_numpy;
-use crate::errors::{mesh_error, spherify_error, to_py};
+use crate::errors::{mesh_error, sphere_error};
+use crate::mesh::CoreMesh;
+use crate::options::Options;
+use crate::sphere_map::CoreSphereMap;
 
-/// `(points (n, 3), info dict)` with iterations, status, message and seconds.
-pub fn embedding_to_py<'py>(
-    py: Python<'py>,
-    e: &SphereEmbedding,
-) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyDict>)> {
-    let info = PyDict::new(py);
-    info.set_item("iterations", e.iterations)?;
-    info.set_item("status", e.status.name())?;
-    info.set_item("converged", e.converged())?;
-    info.set_item("message", &e.message)?;
-    let seconds = PyDict::new(py);
-    for (stage, s) in &e.seconds {
-        seconds.set_item(*stage, *s)?;
-    }
-    info.set_item("seconds", seconds)?;
-    Ok((to_numpy(py, &e.points).into_any(), info))
+/// methods() -> list of the method names `embed` accepts, from the core.
+#[pyfunction]
+pub fn methods() -> Vec<&'static str> {
+    MethodName::ALL.iter().map(|m| m.as_str()).collect()
 }
 
-/// Maps a spherical-method error to its Python exception.
-pub fn sphere_error(py: Python<'_>, err: SphereError) -> PyErr {
-    match err {
-        SphereError::Topology(t) => to_py(py, t.into()),
-        SphereError::NoConvergence { ref last } => {
-            let message = err.to_string();
-            match embedding_to_py(py, last) {
-                Ok((points, info)) => match info.set_item("points", points) {
-                    Ok(()) => spherify_error(py, "ConvergenceError", (message, info)),
-                    Err(e) => e,
-                },
-                Err(e) => e,
-            }
-        }
-        SphereError::Solve(s) => crate::tutte::sparse_error(py, s),
-        other => mesh_error(py, other.to_string()),
+fn method(name: MethodName, options: &Options<'_>) -> PyResult<Method> {
+    match name {
+        MethodName::Radial => crate::radial::method(options),
+        MethodName::Relaxation => crate::relaxation::relaxation(options),
+        MethodName::Alexa => crate::relaxation::alexa(options),
+        MethodName::Gotsman => crate::gotsman::method(options),
+        MethodName::ThetaPhi => crate::theta_phi::method(options),
     }
+}
+
+/// embed(mesh, method, options: dict | None, progress: callable | None) -> CoreSphereMap.
+///
+/// Validates and orients the mesh once (`GenusZeroMesh`), runs the method and
+/// certifies the points, all in the core with the GIL released. `progress`
+/// receives `(done, total)` from the stages that report; Ctrl-C stops them.
+#[pyfunction]
+#[pyo3(signature = (mesh, method, options=None, progress=None))]
+pub fn embed(
+    py: Python<'_>,
+    mesh: &CoreMesh,
+    method: &str,
+    options: Option<&Bound<'_, PyDict>>,
+    progress: Option<&Bound<'_, PyAny>>,
+) -> PyResult<CoreSphereMap> {
+    let name = MethodName::from_str(method).map_err(|e| mesh_error(py, e.to_string()))?;
+    let options = Options::new(py, name.as_str(), options)?;
+    let method = self::method(name, &options)?;
+    options.finish()?;
+    let shared = Arc::clone(&mesh.mesh);
+    let result = crate::progress::run(py, progress, |report| {
+        let mesh = GenusZeroMesh::new(shared).map_err(SphereError::from)?;
+        let embedding = core_embed(&mesh, &method, report)?;
+        Ok::<_, SphereError>((mesh, embedding))
+    })?;
+    let (mesh, embedding) = result.map_err(|e| sphere_error(py, e))?;
+    Ok(CoreSphereMap::new(mesh.shared_mesh(), embedding, mesh.reoriented_faces()))
 }

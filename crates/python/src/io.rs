@@ -23,7 +23,7 @@ pub fn load<'py>(
     if let Some(uv) = &loaded.attributes.uv {
         attributes.set_item("uv", to_numpy(py, uv))?;
     }
-    Ok((CoreMesh { mesh: loaded.mesh }, loaded.notes, attributes))
+    Ok((CoreMesh { mesh: loaded.mesh.into() }, loaded.notes, attributes))
 }
 
 /// save(mesh, path, sphere=None, uv=None, ply_encoding="binary_little_endian",

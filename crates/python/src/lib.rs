@@ -12,11 +12,12 @@ mod graph;
 mod io;
 mod mesh;
 mod metrics;
-mod point_map;
+mod options;
 mod progress;
 mod radial;
 mod relaxation;
 mod sphere;
+mod sphere_map;
 mod theta_phi;
 mod tutte;
 mod validate;
@@ -24,9 +25,7 @@ mod validate;
 #[pymodule]
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<mesh::CoreMesh>()?;
-    m.add_class::<point_map::CorePointMap>()?;
-    m.add_function(wrap_pyfunction!(point_map::point_map_theta_phi, m)?)?;
-    m.add_function(wrap_pyfunction!(point_map::point_map_gc, m)?)?;
+    m.add_class::<sphere_map::CoreSphereMap>()?;
     m.add_function(wrap_pyfunction!(io::load, m)?)?;
     m.add_function(wrap_pyfunction!(io::save, m)?)?;
     m.add_function(wrap_pyfunction!(validate::check, m)?)?;
@@ -37,13 +36,11 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(tutte::tutte, m)?)?;
     m.add_function(wrap_pyfunction!(graph::dijkstra, m)?)?;
     m.add_function(wrap_pyfunction!(graph::shortest_path, m)?)?;
-    // Spherical methods (one file each) register below.
-    m.add_function(wrap_pyfunction!(gotsman::embed_gotsman, m)?)?;
+    // Every spherical method goes through embed; each reads its options in
+    // the file named after it.
+    m.add_function(wrap_pyfunction!(embed::embed, m)?)?;
+    m.add_function(wrap_pyfunction!(embed::methods, m)?)?;
     m.add_function(wrap_pyfunction!(metrics::quality, m)?)?;
-    m.add_function(wrap_pyfunction!(relaxation::embed_relaxation, m)?)?;
-    m.add_function(wrap_pyfunction!(relaxation::embed_alexa, m)?)?;
-    m.add_function(wrap_pyfunction!(radial::embed_radial, m)?)?;
-    m.add_function(wrap_pyfunction!(theta_phi::embed_theta_phi, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

@@ -1,5 +1,7 @@
 //! The core mesh handle held by `spherify.Mesh`.
 
+use std::sync::Arc;
+
 use numpy::{PyArray2, PyReadonlyArrayDyn};
 use pyo3::prelude::*;
 use spherify_mesh::Mesh;
@@ -10,7 +12,8 @@ use crate::errors::to_py;
 /// A validated mesh inside the Rust core (finite coordinates, indices in range).
 #[pyclass(frozen, module = "spherify._core")]
 pub struct CoreMesh {
-    pub mesh: Mesh,
+    /// Shared with the maps made of it (an oriented mesh is shared as is).
+    pub mesh: Arc<Mesh>,
 }
 
 #[pymethods]
@@ -25,7 +28,7 @@ impl CoreMesh {
         let positions = rows::<f64, 3>(py, &vertices, "vertices")?;
         let faces = rows::<i64, 3>(py, &faces, "faces")?;
         let mesh = py.detach(|| Mesh::from_signed(positions, &faces)).map_err(|e| to_py(py, e))?;
-        Ok(CoreMesh { mesh })
+        Ok(CoreMesh { mesh: Arc::new(mesh) })
     }
 
     /// (n, 3) float64 copy of the positions.

@@ -1,13 +1,13 @@
-//! `embed_radial`: radial projection from a point, the vertex mean or the
-//! kernel (thesis 3.5, eq. 3.17).
+//! Options of radial projection from a point, the vertex mean or the kernel
+//! (thesis 3.5, eq. 3.17).
 
 use pyo3::prelude::*;
-use pyo3::types::{PyByteArray, PyBytes, PyDict, PyString};
-use spherify_sphere::radial::{radial_map, Center};
+use pyo3::types::{PyByteArray, PyBytes, PyString};
+use spherify_sphere::radial::Center;
+use spherify_sphere::Method;
 
-use crate::embed::{embedding_to_py, sphere_error};
 use crate::errors::mesh_error;
-use crate::mesh::CoreMesh;
+use crate::options::Options;
 
 const EXPECTED: &str =
     "center must be 'kernel', 'centroid' or a point (x, y, z) of three finite numbers";
@@ -45,29 +45,13 @@ fn center_choice(py: Python<'_>, center: &Bound<'_, PyAny>) -> PyResult<Center> 
     }
 }
 
-/// embed_radial(mesh, center="kernel") -> (points (n, 3) float64, info dict).
-///
-/// `center` is "kernel" (the deepest point of the kernel, found by a linear
-/// program; MeshError "not star-shaped" when the kernel is empty), "centroid"
-/// (the vertex mean, eq. 3.18), or a point (x, y, z). `info` adds `center`
-/// (the point used) and, for "kernel", `kernel_depth` and `lp_pivots`.
-#[pyfunction]
-#[pyo3(signature = (mesh, center=None), text_signature = "(mesh, center=\"kernel\")")]
-pub fn embed_radial<'py>(
-    py: Python<'py>,
-    mesh: &CoreMesh,
-    center: Option<&Bound<'py, PyAny>>,
-) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyDict>)> {
-    let center = match center {
-        Some(c) => center_choice(py, c)?,
+/// Radial projection's options: `center` = "kernel" (default: the deepest
+/// point of the kernel, found by a linear program; MeshError "not star-shaped"
+/// when the kernel is empty), "centroid" (the vertex mean, eq. 3.18) or a
+/// point (x, y, z).
+pub fn method(options: &Options<'_>) -> PyResult<Method> {
+    Ok(Method::Radial(match options.take("center")? {
+        Some(c) => center_choice(options.py(), &c)?,
         None => Center::Kernel,
-    };
-    let r = py.detach(|| radial_map(&mesh.mesh, center)).map_err(|e| sphere_error(py, e))?;
-    let (points, info) = embedding_to_py(py, &r.embedding)?;
-    info.set_item("center", (r.center[0], r.center[1], r.center[2]))?;
-    if let Some(k) = &r.kernel {
-        info.set_item("kernel_depth", k.depth)?;
-        info.set_item("lp_pivots", k.pivots)?;
-    }
-    Ok((points, info))
+    }))
 }

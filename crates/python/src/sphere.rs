@@ -3,7 +3,7 @@
 use numpy::PyReadonlyArrayDyn;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use spherify_sphere::check_sphere as check;
+use spherify_sphere::{check_sphere as check, SphereReport};
 
 use crate::convert::rows;
 use crate::errors::mesh_error;
@@ -28,6 +28,11 @@ pub fn check_sphere<'py>(
         ));
     }
     let r = py.detach(|| check(mesh.mesh.faces(), &points));
+    report_to_py(py, &r)
+}
+
+/// A core `SphereReport` as `spherify.SphereReport`.
+pub fn report_to_py<'py>(py: Python<'py>, r: &SphereReport) -> PyResult<Bound<'py, PyAny>> {
     let d = PyDict::new(py);
     d.set_item("valid", r.valid)?;
     d.set_item("n_positive", r.n_positive)?;

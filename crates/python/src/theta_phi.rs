@@ -1,15 +1,15 @@
-//! `embed_theta_phi`: the theta-phi method (thesis ch. 6).
+//! Options and results of the theta-phi method (thesis ch. 6).
 
 use numpy::IntoPyArray;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use spherify_sphere::symmetry::{Symmetry, SymmetryParams};
-use spherify_sphere::theta_phi::{theta_phi_with_progress, PoleChoice, ThetaPhiParams};
+use spherify_sphere::theta_phi::{PoleChoice, ThetaPhi, ThetaPhiParams};
+use spherify_sphere::Method;
 
 use crate::convert::{to_i64_rows, to_numpy};
-use crate::embed::{embedding_to_py, sphere_error};
 use crate::errors::mesh_error;
-use crate::mesh::CoreMesh;
+use crate::options::Options;
 
 const POLES: &str =
     "poles must be 'fast_graph', 'graph', 'physical', 'symmetry' or a (north, south) pair of vertex ids";
@@ -63,63 +63,49 @@ fn symmetry_to_py<'py>(py: Python<'py>, sym: &Symmetry) -> PyResult<Bound<'py, P
     Ok(d)
 }
 
-// The signature spells the default out so that Python shows it; keep it in
-// step with the core's.
-const _: () = assert!(spherify_sphere::symmetry::DEFAULT_MAX_SCORE == 0.05);
-
-/// embed_theta_phi(mesh, poles="fast_graph", weights="uniform", rho=1.0,
-/// max_refinements=8, symmetry_eps=None, symmetry_max_score=0.05, progress=None)
-/// -> (points, info).
-#[pyfunction]
-#[pyo3(signature = (mesh, poles=None, weights="uniform", rho=1.0, max_refinements=8,
-                    symmetry_eps=None, symmetry_max_score=0.05, progress=None))]
-#[allow(clippy::too_many_arguments)]
-pub fn embed_theta_phi<'py>(
-    py: Python<'py>,
-    mesh: &CoreMesh,
-    poles: Option<&Bound<'py, PyAny>>,
-    weights: &str,
-    rho: f64,
-    max_refinements: usize,
-    symmetry_eps: Option<f64>,
-    symmetry_max_score: f64,
-    progress: Option<&Bound<'py, PyAny>>,
-) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyDict>)> {
+/// `poles` ("fast_graph" default, "graph", "physical", "symmetry" or a
+/// (north, south) pair), `weights` ("uniform", "chord" with `rho`,
+/// "mean_value"; the core refuses the others), `max_refinements` (8),
+/// `symmetry_eps` (None: automatic) and `symmetry_max_score` (0.05).
+pub fn method(options: &Options<'_>) -> PyResult<Method> {
+    let py = options.py();
+    let defaults = ThetaPhiParams::default();
     let symmetry = SymmetryParams {
-        eps: symmetry_eps,
-        max_score: symmetry_max_score,
+        eps: options.optional_number("symmetry_eps")?,
+        max_score: options.number("symmetry_max_score", SymmetryParams::default().max_score)?,
         ..SymmetryParams::default()
     };
-    let poles = match poles {
-        Some(p) => pole_choice(py, p, symmetry)?,
+    let poles = match options.take("poles")? {
+        Some(p) => pole_choice(py, &p, symmetry)?,
         None => PoleChoice::FastGraph,
     };
-    let weights =
-        crate::convert::weights(py, weights, rho, &["uniform", "chord", "mean_value"], "")?;
-    let params = ThetaPhiParams { poles, weights, max_refinements };
-    let core = &mesh.mesh;
-    let tp = crate::progress::run(py, progress, |report| {
-        theta_phi_with_progress(core, &params, report)
-    })?
-    .map_err(|e| sphere_error(py, e))?;
-    let (points, info) = embedding_to_py(py, &tp.embedding)?;
+    Ok(Method::ThetaPhi(ThetaPhiParams {
+        poles,
+        weights: crate::relaxation::weights(options)?,
+        max_refinements: options.count("max_refinements", defaults.max_refinements, 0)?,
+    }))
+}
+
+/// What theta-phi computed besides the points, as `SphereMap.details` and
+/// the typed attributes of `ThetaPhiMap`.
+pub fn details<'py>(py: Python<'py>, tp: &ThetaPhi, d: &Bound<'py, PyDict>) -> PyResult<()> {
     let ids = |v: &[u32]| v.iter().map(|&x| i64::from(x)).collect::<Vec<_>>();
-    info.set_item("poles", (tp.poles.north, tp.poles.south))?;
-    info.set_item("cut_path", ids(&tp.cut_path).into_pyarray(py))?;
-    info.set_item("theta_phi", to_numpy(py, &tp.theta_phi))?;
-    info.set_item("cut_vertices", to_numpy(py, tp.cut.mesh.positions()))?;
-    info.set_item("cut_faces", to_numpy(py, &to_i64_rows(tp.cut.mesh.faces())))?;
-    info.set_item("cut_boundary", ids(&tp.cut.boundary).into_pyarray(py))?;
-    info.set_item("cut_original", ids(&tp.cut.original).into_pyarray(py))?;
-    info.set_item("tp_valid", tp.tp_valid)?;
-    info.set_item("tp_flipped_faces", ids(&tp.inverted.flipped).into_pyarray(py))?;
-    info.set_item("tp_degenerate_faces", ids(&tp.inverted.degenerate).into_pyarray(py))?;
-    info.set_item("refinements", tp.refinements)?;
-    info.set_item("re_embedded", tp.re_embedded.to_vec())?;
-    info.set_item("fans_monotone", tp.fans_monotone.to_vec())?;
-    info.set_item("min_area_ratio", tp.min_area_ratio)?;
+    d.set_item("poles", (tp.poles.north, tp.poles.south))?;
+    d.set_item("cut_path", ids(&tp.cut_path).into_pyarray(py))?;
+    d.set_item("theta_phi", to_numpy(py, &tp.theta_phi))?;
+    d.set_item("cut_vertices", to_numpy(py, tp.cut.mesh.positions()))?;
+    d.set_item("cut_faces", to_numpy(py, &to_i64_rows(tp.cut.mesh.faces())))?;
+    d.set_item("cut_boundary", ids(&tp.cut.boundary).into_pyarray(py))?;
+    d.set_item("cut_original", ids(&tp.cut.original).into_pyarray(py))?;
+    d.set_item("tp_valid", tp.tp_valid)?;
+    d.set_item("tp_flipped_faces", ids(&tp.inverted.flipped).into_pyarray(py))?;
+    d.set_item("tp_degenerate_faces", ids(&tp.inverted.degenerate).into_pyarray(py))?;
+    d.set_item("refinements", tp.refinements)?;
+    d.set_item("re_embedded", tp.re_embedded.to_vec())?;
+    d.set_item("fans_monotone", tp.fans_monotone.to_vec())?;
+    d.set_item("min_area_ratio", tp.min_area_ratio)?;
     if let Some(sym) = &tp.symmetry {
-        info.set_item("symmetry", symmetry_to_py(py, sym)?)?;
+        d.set_item("symmetry", symmetry_to_py(py, sym)?)?;
     }
-    Ok((points, info))
+    Ok(())
 }

@@ -4,11 +4,11 @@ use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArrayDyn};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use spherify_mesh::HalfEdgeMesh;
-use spherify_sparse::tutte::{self as core_tutte, BoundaryShape, TutteError, TutteParams};
+use spherify_sparse::tutte::{self as core_tutte, BoundaryShape, TutteParams};
 use spherify_sparse::{SolveParams, SolverKind};
 
-use crate::convert::{rows, to_numpy, ALL_WEIGHTS};
-use crate::errors::{mesh_error, spherify_error, to_py};
+use crate::convert::{rows, to_numpy};
+use crate::errors::{mesh_error, to_py, tutte_error};
 use crate::mesh::CoreMesh;
 
 pub fn solver_kind(py: Python<'_>, name: &str) -> PyResult<SolverKind> {
@@ -34,51 +34,6 @@ pub fn solver_name(kind: SolverKind) -> &'static str {
         SolverKind::CgIc0 => "cg_ic0",
         SolverKind::CgJacobi => "cg_jacobi",
         SolverKind::GaussSeidel => "gauss_seidel",
-    }
-}
-
-pub fn tutte_error(py: Python<'_>, err: TutteError) -> PyErr {
-    match err {
-        TutteError::Topology(t) => to_py(py, t.into()),
-        TutteError::NoConvergence { solver, iterations, residual, ref uv } => {
-            let message = err.to_string();
-            let state = PyDict::new(py);
-            let filled = (|| -> PyResult<()> {
-                state.set_item("solver", solver_name(solver))?;
-                state.set_item("iterations", iterations)?;
-                state.set_item("residual", residual)?;
-                state.set_item("uv", to_numpy(py, uv))?;
-                Ok(())
-            })();
-            match filled {
-                Ok(()) => spherify_error(py, "ConvergenceError", (message, state)),
-                Err(e) => e,
-            }
-        }
-        TutteError::Solve(s) => sparse_error(py, s),
-        other => mesh_error(py, other.to_string()),
-    }
-}
-
-/// A solver failure: running out of iterations is a `ConvergenceError`
-/// (with the last iterate), anything else a `MeshError`.
-pub fn sparse_error(py: Python<'_>, err: spherify_sparse::SparseError) -> PyErr {
-    match err {
-        spherify_sparse::SparseError::NoConvergence { iterations, residual, ref last } => {
-            let message = err.to_string();
-            let state = PyDict::new(py);
-            let filled = (|| -> PyResult<()> {
-                state.set_item("iterations", iterations)?;
-                state.set_item("residual", residual)?;
-                state.set_item("last", last.clone())?;
-                Ok(())
-            })();
-            match filled {
-                Ok(()) => spherify_error(py, "ConvergenceError", (message, state)),
-                Err(e) => e,
-            }
-        }
-        other => mesh_error(py, other.to_string()),
     }
 }
 
@@ -120,7 +75,7 @@ pub fn tutte<'py>(
         }
     };
     let params = TutteParams {
-        weights: crate::convert::weights(py, weights, rho, &ALL_WEIGHTS, "")?,
+        weights: crate::convert::weights(py, weights, rho)?,
         boundary,
         solver: solver_kind(py, solver)?,
         solve: SolveParams { tol, max_iter, x0: None },

@@ -39,7 +39,7 @@ pub fn orient<'py>(py: Python<'py>, mesh: &CoreMesh) -> PyResult<(CoreMesh, Boun
     dict.set_item("flipped_faces", info.flipped_faces)?;
     dict.set_item("components", info.components)?;
     dict.set_item("components_turned_outward", info.components_turned_outward)?;
-    Ok((CoreMesh { mesh: oriented }, dict))
+    Ok((CoreMesh { mesh: oriented.into() }, dict))
 }
 
 fn pairs<'py>(py: Python<'py>, items: &[[u32; 2]]) -> PyResult<Bound<'py, PyList>> {

@@ -1,0 +1,179 @@
+//! `CoreSphereMap`: the core's `Embedding` held for `spherify.SphereMap`.
+//!
+//! The certificate (`valid`, `tp_valid`) is read from the core result and
+//! never accepted back from Python: `to_surface` asks the point map built
+//! from that same result whether h^-1 is defined.
+
+use std::sync::{Arc, OnceLock};
+
+use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArrayDyn};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use spherify_mesh::Mesh;
+use spherify_sphere::point_map::PointMap;
+use spherify_sphere::{Details, Embedding};
+
+use crate::convert::{rows, to_numpy};
+use crate::errors::{mesh_error, point_map_error};
+use crate::mesh::CoreMesh;
+
+/// A map of a mesh onto the sphere, with its certificate.
+#[pyclass(frozen, module = "spherify._core")]
+pub struct CoreSphereMap {
+    /// The oriented mesh the map belongs to.
+    mesh: Arc<Mesh>,
+    embedding: Embedding,
+    reoriented_faces: usize,
+    /// Built on first use (O(F log F)).
+    point_map: OnceLock<PointMap>,
+}
+
+impl CoreSphereMap {
+    pub fn new(mesh: Arc<Mesh>, embedding: Embedding, reoriented_faces: usize) -> CoreSphereMap {
+        CoreSphereMap { mesh, embedding, reoriented_faces, point_map: OnceLock::new() }
+    }
+
+    /// Built with the GIL released, outside the `OnceLock`: a thread that
+    /// waits on the lock may hold the GIL, which the builder would need back
+    /// inside the lock. Two threads racing both build; one result is kept.
+    fn point_map(&self, py: Python<'_>) -> &PointMap {
+        if let Some(map) = self.point_map.get() {
+            return map;
+        }
+        let built = py.detach(|| PointMap::new(Arc::clone(&self.mesh), &self.embedding));
+        self.point_map.get_or_init(|| built)
+    }
+}
+
+#[pymethods]
+impl CoreSphereMap {
+    /// The oriented mesh (shared with the core, not copied).
+    #[getter]
+    fn mesh(&self) -> CoreMesh {
+        CoreMesh { mesh: Arc::clone(&self.mesh) }
+    }
+
+    #[getter]
+    fn method(&self) -> &'static str {
+        self.embedding.method.as_str()
+    }
+
+    /// (n, 3) float64: a new copy on every call.
+    fn points<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        to_numpy(py, &self.embedding.result.points)
+    }
+
+    #[getter]
+    fn iterations(&self) -> usize {
+        self.embedding.result.iterations
+    }
+
+    #[getter]
+    fn status(&self) -> &'static str {
+        self.embedding.result.status.name()
+    }
+
+    #[getter]
+    fn converged(&self) -> bool {
+        self.embedding.result.converged()
+    }
+
+    #[getter]
+    fn message(&self) -> &str {
+        &self.embedding.result.message
+    }
+
+    /// [(stage, seconds)] in order.
+    #[getter]
+    fn seconds(&self) -> Vec<(&'static str, f64)> {
+        self.embedding.result.seconds.clone()
+    }
+
+    /// Faces whose corner order was reversed to orient the mesh outward.
+    #[getter]
+    fn reoriented_faces(&self) -> usize {
+        self.reoriented_faces
+    }
+
+    /// The exact tests of thesis 3.4 on the points, as a `SphereReport`.
+    fn report<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        crate::sphere::report_to_py(py, &self.embedding.certificate)
+    }
+
+    #[getter]
+    fn valid(&self) -> bool {
+        self.embedding.certificate.valid
+    }
+
+    /// The theta-phi rectangle is certified flip-free (theta-phi maps only;
+    /// None otherwise).
+    #[getter]
+    fn tp_valid(&self) -> Option<bool> {
+        match &self.embedding.details {
+            Details::ThetaPhi(tp) => Some(tp.tp_valid),
+            _ => None,
+        }
+    }
+
+    /// What the method computed besides the points: for theta-phi the poles,
+    /// cut and rectangle (see `theta_phi::details`), for radial the centre and
+    /// the kernel LP's account; empty otherwise. Fresh arrays on every call.
+    fn details<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let d = PyDict::new(py);
+        match &self.embedding.details {
+            Details::ThetaPhi(tp) => crate::theta_phi::details(py, tp, &d)?,
+            Details::Radial { center, kernel } => {
+                d.set_item("center", center.to_vec())?;
+                if let Some(k) = kernel {
+                    d.set_item("kernel_depth", k.depth)?;
+                    d.set_item("lp_pivots", k.pivots)?;
+                }
+            }
+            Details::None => {}
+        }
+        Ok(d)
+    }
+
+    /// Why h^-1 is not defined for this map, or None.
+    #[getter]
+    fn not_bijective(&self, py: Python<'_>) -> Option<String> {
+        self.point_map(py).not_bijective().map(str::to_string)
+    }
+
+    /// to_sphere(face_ids (k,) int64, bary (k, 3) float64) -> (k, 3) float64.
+    fn to_sphere<'py>(
+        &self,
+        py: Python<'py>,
+        face_ids: PyReadonlyArrayDyn<'_, i64>,
+        bary: PyReadonlyArrayDyn<'_, f64>,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let ids = face_ids.as_array();
+        if ids.ndim() != 1 {
+            return Err(mesh_error(
+                py,
+                format!("face_ids must have shape (k,), got {:?}", ids.shape()),
+            ));
+        }
+        let ids: Vec<i64> = ids.iter().copied().collect();
+        let bary = rows::<f64, 3>(py, &bary, "bary")?;
+        let map = self.point_map(py);
+        let points = py.detach(|| map.to_sphere(&ids, &bary)).map_err(|e| point_map_error(py, e))?;
+        Ok(to_numpy(py, &points))
+    }
+
+    /// to_surface(points (k, 3) float64) -> (face_ids (k,) int64, bary (k, 3), xyz (k, 3)).
+    #[allow(clippy::type_complexity)]
+    fn to_surface<'py>(
+        &self,
+        py: Python<'py>,
+        points: PyReadonlyArrayDyn<'_, f64>,
+    ) -> PyResult<(Bound<'py, PyArray1<i64>>, Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<f64>>)>
+    {
+        let points = rows::<f64, 3>(py, &points, "points")?;
+        let map = self.point_map(py);
+        let (faces, bary, xyz) =
+            py.detach(|| map.to_surface(&points)).map_err(|e| point_map_error(py, e))?;
+        let faces: Vec<i64> = faces.into_iter().map(i64::from).collect();
+        Ok((faces.into_pyarray(py), to_numpy(py, &bary), to_numpy(py, &xyz)))
+    }
+}
