@@ -94,7 +94,8 @@ def tentacles(n_vertices: int = 20000, arms: int = 8, arm_length: float = 4.0,
         L, s0 = float(lengths[i]), float(straight[i])
 
         def theta(x: Floats) -> Floats:
-            return theta0 + turn[i] * (np.clip((x - s0) / (L - s0), 0.0, 1.0)) ** 2
+            angle: Floats = theta0 + turn[i] * (np.clip((x - s0) / (L - s0), 0.0, 1.0)) ** 2
+            return angle
 
         fine = np.linspace(0.0, L, 4097)
         th = theta(fine)
