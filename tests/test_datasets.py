@@ -1,33 +1,20 @@
 """spherify.datasets: every shape, at every size, is a clean genus-0 mesh.
 
-The invariants are checked here with numpy alone, so they run before the Rust
-extension is built; the tests at the end also ask the core's own ``check``.
+The invariants are checked here with numpy alone, independently of the core;
+the tests at the end also ask the core's own ``check``.
 """
 
 from __future__ import annotations
 
-import importlib.util
 import math
-import pathlib
 
 import numpy as np
 import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-
-def _load_datasets():
-    try:
-        from spherify import datasets
-    except ImportError:  # extension not built yet: the module needs only numpy
-        path = pathlib.Path(__file__).resolve().parents[1] / "python/spherify/datasets.py"
-        spec = importlib.util.spec_from_file_location("spherify_datasets", path)
-        datasets = importlib.util.module_from_spec(spec)
-        spec.loader.exec_module(datasets)
-    return datasets
-
-
-datasets = _load_datasets()
+import spherify
+from spherify import datasets
 
 NAMES = datasets.names()
 SIZES = [100, 1000, 20000]
@@ -38,10 +25,16 @@ MIN_ANGLE = {"icosphere": 50.0, "ellipsoid": 20.0, "bumpy_blob": 30.0,
 _cache: dict = {}
 
 
+def make_arrays(name: str, n, **kwargs):
+    """(vertices, faces) of ``datasets.make(name, n, **kwargs)``."""
+    mesh = datasets.make(name, n, **kwargs)
+    return mesh.vertices, mesh.faces
+
+
 def arrays(name: str, n: int, **kwargs):
     key = (name, n, tuple(sorted(kwargs.items())))
     if key not in _cache:
-        _cache[key] = datasets._make_arrays(name, n, **kwargs)
+        _cache[key] = make_arrays(name, n, **kwargs)
     return _cache[key]
 
 
@@ -183,8 +176,8 @@ def test_vertex_count_near_target(name, size):
 
 @pytest.mark.parametrize("name", NAMES)
 def test_deterministic(name):
-    V1, F1 = datasets._make_arrays(name, 1500)
-    V2, F2 = datasets._make_arrays(name, 1500)
+    V1, F1 = make_arrays(name, 1500)
+    V2, F2 = make_arrays(name, 1500)
     assert np.array_equal(V1, V2) and np.array_equal(F1, F2)
 
 
@@ -204,7 +197,8 @@ def test_no_self_intersections_small(name, size):
 
 def test_crossing_pairs_sees_an_intersection():
     # two tetrahedra, one pushed through a face of the other
-    V, F = datasets._icosphere_arrays(0)
+    mesh = datasets.icosphere(0)
+    V, F = mesh.vertices, mesh.faces
     W = np.concatenate([V, V * 0.5 + [0.9, 0, 0]])
     assert crossing_pairs(W, np.concatenate([F, F + len(V)])) > 0
 
@@ -223,10 +217,11 @@ def test_star_shapes():
 
 def test_icosphere_counts():
     for k in range(5):
-        V, F = datasets._icosphere_arrays(k)
+        mesh = datasets.icosphere(k)
+        V, F = mesh.vertices, mesh.faces
         assert (len(V), len(F)) == (10 * 4**k + 2, 20 * 4**k)
         assert np.allclose(np.linalg.norm(V, axis=1), 1.0)
-        W, G = datasets._make_arrays("icosphere", 10 * 4**k + 2)
+        W, G = make_arrays("icosphere", 10 * 4**k + 2)
         assert np.array_equal(V, W) and np.array_equal(F, G)
 
 
@@ -277,26 +272,26 @@ def test_unusual_parameters(name, kwargs):
 ])
 def test_bad_parameters_raise(name, kwargs):
     with pytest.raises(ValueError):
-        datasets._make_arrays(name, 2000, **kwargs)
+        make_arrays(name, 2000, **kwargs)
 
 
 @pytest.mark.parametrize("bad", [0, -5, 2.5, "100"])
 def test_bad_vertex_count_raises(bad):
     with pytest.raises(ValueError):
-        datasets._make_arrays("ellipsoid", bad)
+        make_arrays("ellipsoid", bad)
 
 
 def test_unknown_name_raises():
     with pytest.raises(ValueError, match="unknown dataset"):
-        datasets._make_arrays("teapot", 1000)
+        make_arrays("teapot", 1000)
     with pytest.raises(TypeError):
-        datasets._make_arrays("icosphere", 1000, spikes=3)
+        make_arrays("icosphere", 1000, spikes=3)
 
 
 @given(name=st.sampled_from(NAMES), n=st.integers(1, 5000), seed=st.integers(0, 2**32 - 1))
 def test_any_size_and_seed(name, n, seed):
     kwargs = {"seed": seed} if name in ("bumpy_blob", "urchin", "tentacles") else {}
-    V, F = datasets._make_arrays(name, n, **kwargs)
+    V, F = make_arrays(name, n, **kwargs)
     assert_clean_sphere(V, F, MIN_ANGLE[name])
     # within 25% of the target, except that a target below the shape's smallest
     # mesh (under 3,000 vertices for the defaults) gives that mesh, and the
@@ -306,31 +301,22 @@ def test_any_size_and_seed(name, n, seed):
         assert len(V) >= 0.75 * n
 
 
-# ---------------------------------------------- with the compiled extension
+# ------------------------------------------------------ with the core's check
 
 @pytest.mark.parametrize("name", NAMES)
 def test_core_check_agrees(name):
-    pytest.importorskip("spherify._core")
-    import spherify
-
     mesh = spherify.datasets.make(name, 2000)
     report = spherify.check(mesh)
     assert report.is_sphere_topology
     assert report.consistently_oriented
     assert report.outward
-    V, F = arrays(name, 2000)
-    assert np.array_equal(mesh.vertices, V) and np.array_equal(mesh.faces, F)
 
 
 def test_public_functions_return_meshes():
-    pytest.importorskip("spherify._core")
-    import spherify
-    from spherify import datasets as ds
-
-    meshes = [ds.icosphere(2), ds.ellipsoid(500), ds.bumpy_blob(500), ds.helix_tube(500),
-              ds.urchin(3000), ds.tentacles(2000)]
+    meshes = [datasets.icosphere(2), datasets.ellipsoid(500), datasets.bumpy_blob(500),
+              datasets.helix_tube(500), datasets.urchin(3000), datasets.tentacles(2000)]
     for mesh in meshes:
         assert isinstance(mesh, spherify.Mesh)
         assert spherify.check(mesh).is_sphere_topology
     with pytest.raises(spherify.MeshError, match="unknown dataset"):
-        ds.make("teapot", 1000)
+        datasets.make("teapot", 1000)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import os
-from typing import Any, Dict, List, Optional, Tuple, Union
+from typing import Any, Dict, List, Literal, Optional, Tuple, Union, overload
 
 import numpy as np
 
@@ -193,7 +193,14 @@ def check(mesh: MeshLike) -> MeshReport:
     return report
 
 
-def orient(mesh: MeshLike, *, return_info: bool = False) -> Any:
+@overload
+def orient(mesh: MeshLike, *, return_info: Literal[False] = False) -> Mesh: ...
+@overload
+def orient(mesh: MeshLike, *, return_info: Literal[True]) -> Tuple[Mesh, Dict[str, int]]: ...
+
+
+def orient(mesh: MeshLike, *,
+           return_info: bool = False) -> Union[Mesh, Tuple[Mesh, Dict[str, int]]]:
     """Orient every face consistently and outward (thesis Alg. 2.9).
 
     Unlike Alg. 2.9 no seed face is needed: each connected component is made

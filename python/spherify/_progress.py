@@ -44,7 +44,7 @@ class TextProgress:
         stream.flush()
 
 
-def as_callback(progress: Any, label: str) -> Optional[ProgressCallback]:
+def as_callback(progress: object, label: str) -> Optional[ProgressCallback]:
     """``True`` -> a :class:`TextProgress` on stderr; ``None`` / ``False`` ->
     None; a callable -> itself."""
     if progress is None or progress is False:
@@ -52,6 +52,6 @@ def as_callback(progress: Any, label: str) -> Optional[ProgressCallback]:
     if progress is True:
         return TextProgress(label)
     if callable(progress):
-        return progress  # type: ignore[no-any-return]
+        return progress
     raise MeshError("progress must be True, False, None or a callable taking (done, total), "
                     f"got {type(progress).__name__}")

@@ -1,0 +1,292 @@
+"""The contract every spherical method keeps (STYLE 12: one suite, every method).
+
+Each test runs for every name in ``sp.methods()``, on small shapes from
+``spherify.datasets`` and on random genus-0 meshes drawn by hypothesis:
+
+* ``points`` holds one unit vector per input vertex, in the input's order;
+* ``valid`` and ``flipped`` agree with an exact check written apart from
+  spherify (``_exact.py``: exact orientation signs and the spherical area sum);
+* ``status`` and ``message`` say how the method ended;
+* a bad option raises ``MeshError``, a surface that is not genus 0
+  ``TopologyError``;
+* on round shapes every method gives a valid map.
+
+A method may refuse a mesh it was not made for (``radial``: not star-shaped,
+with ``MeshError``), and an iterative method may stop with an invalid map on a
+hard mesh: the contract is that what the map says of itself is true, not that
+every method succeeds everywhere.
+"""
+
+from __future__ import annotations
+
+import functools
+from typing import Any, Callable, Dict, Iterator, List, Optional
+
+import numpy as np
+import pytest
+from hypothesis import given
+
+import _meshgen as mg
+import spherify as sp
+from _exact import exact_signs, exact_verdict, fraction_sign
+
+try:
+    from scipy.optimize import linprog
+except ImportError:  # pragma: no cover - scipy is a test dependency
+    linprog = None
+
+METHODS = sp.methods()
+STATUSES = {"converged", "direct", "max_iterations", "collapsed"}
+
+# ------------------------------------------------ what the suite knows per method
+# (from the signatures in crates/python/src/*.rs; a new method must be added here)
+
+# Options that keep the hard shapes quick: iterative methods give up sooner.
+QUICK: Dict[str, Dict[str, Any]] = {
+    "alexa": {"max_iter": 300},
+    "gotsman": {"max_iter": 15},
+    "radial": {},
+    "relaxation": {"max_iter": 300},
+    "theta_phi": {},
+}
+# Values out of each method's range.
+OUT_OF_RANGE: Dict[str, List[Dict[str, Any]]] = {
+    "alexa": [{"max_iter": -1}, {"check_every": 0}, {"c": -1.0}],
+    "gotsman": [{"max_iter": -1}, {"tol": -1.0}, {"weights": "cotangent"}],
+    "radial": [{"center": "nowhere"}, {"center": (0.0, 0.0)}],
+    "relaxation": [{"max_iter": -1}, {"check_every": 0}, {"weights": "nope"}],
+    "theta_phi": [{"poles": "nowhere"}, {"poles": (0, 0)}, {"weights": "nope"},
+                  {"max_refinements": -1}],
+}
+KNOWN_BUGS = {
+    ("theta_phi", "max_refinements"):
+        "embed_theta_phi takes max_refinements as usize: -1 raises OverflowError",
+}
+# Meshes a method may refuse, by the MeshError's message.
+REFUSES = {"radial": "not star-shaped"}
+
+
+def same_choices(method: str, m: sp.SphereMap, new_id: np.ndarray) -> Dict[str, Any]:
+    """Options that make ``method`` choose on a relabelled mesh what it chose for
+    ``m``: theta-phi's fast-graph poles start from a vertex id, so it is given
+    the same poles."""
+    if method == "theta_phi":
+        return {"poles": (int(new_id[m.poles[0]]), int(new_id[m.poles[1]]))}
+    return {}
+
+
+def test_every_method_is_described() -> None:
+    assert set(QUICK) == set(OUT_OF_RANGE) == set(METHODS)
+
+
+# ----------------------------------------------------------------------- meshes
+
+SHAPES: Dict[str, Callable[[], sp.Mesh]] = {
+    "icosphere1": lambda: sp.datasets.icosphere(1),
+    "icosphere2": lambda: sp.datasets.icosphere(2),
+    "ellipsoid": lambda: sp.datasets.ellipsoid(250, axes=(1.0, 0.5, 0.3)),
+    "bumpy_blob": lambda: sp.datasets.bumpy_blob(300, amplitude=0.4),
+    "helix_tube": lambda: sp.datasets.helix_tube(150),    # star-shaped from no point
+    "tentacles": lambda: sp.datasets.tentacles(1),        # the smallest: 1,744 vertices
+    "urchin": lambda: sp.datasets.urchin(1),              # the smallest: 2,786 vertices
+}
+ROUND = ["icosphere1", "icosphere2", "ellipsoid"]
+
+
+@functools.lru_cache(maxsize=None)
+def shape(name: str) -> sp.Mesh:
+    return SHAPES[name]()
+
+
+def torus(n_around: int = 9, n_tube: int = 5) -> sp.Mesh:
+    """A triangulated torus (genus 1), faces outward."""
+    i, j = np.meshgrid(np.arange(n_around), np.arange(n_tube), indexing="ij")
+    u, v = 2 * np.pi * i / n_around, 2 * np.pi * j / n_tube
+    V = np.stack([(1.0 + 0.4 * np.cos(v)) * np.cos(u), (1.0 + 0.4 * np.cos(v)) * np.sin(u),
+                  0.4 * np.sin(v)], -1).reshape(-1, 3)
+    a = (i * n_tube + j).ravel()
+    b = (((i + 1) % n_around) * n_tube + j).ravel()
+    c = (((i + 1) % n_around) * n_tube + (j + 1) % n_tube).ravel()
+    d = (i * n_tube + (j + 1) % n_tube).ravel()
+    return sp.Mesh(V, np.concatenate([np.stack([a, b, c], 1), np.stack([a, c, d], 1)]))
+
+
+def not_genus_zero(name: str) -> sp.Mesh:
+    ico = sp.datasets.icosphere(1)
+    if name == "torus":
+        return torus()
+    if name == "open":                     # one face missing: a disk
+        return sp.Mesh(ico.vertices, ico.faces[1:])
+    if name == "two_spheres":
+        n = ico.n_vertices
+        return sp.Mesh(np.concatenate([ico.vertices, ico.vertices + 3.0]),
+                       np.concatenate([ico.faces, ico.faces + n]))
+    raise ValueError(name)
+
+
+# -------------------------------------------------------------------- contract
+
+def kernel_depth(mesh: sp.Mesh) -> float:
+    """Largest distance from a point to the planes of all faces while on their
+    inner side (positive: star-shaped from that point), by a linear program."""
+    V, F = mesh.vertices, mesh.faces
+    n = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
+    n /= np.linalg.norm(n, axis=1, keepdims=True)
+    # maximise t subject to n_f . x + t <= n_f . a_f, with t <= 1 to stay bounded
+    A = np.column_stack([n, np.ones(len(F))])
+    b = np.einsum("ij,ij->i", n, V[F[:, 0]])
+    result = linprog(c=[0, 0, 0, -1], A_ub=A, b_ub=b,
+                     bounds=[(None, None)] * 3 + [(None, 1.0)], method="highs")
+    assert result.status == 0, result.message
+    return float(-result.fun)
+
+
+def embed_or_refuse(mesh: sp.Mesh, method: str, **options: Any) -> Optional[sp.SphereMap]:
+    """``sp.embed``, or None where the method refuses the mesh as documented
+    (and the refusal is true)."""
+    try:
+        return sp.embed(mesh, method, **options)
+    except sp.MeshError as err:
+        if isinstance(err, sp.TopologyError) or REFUSES.get(method, "\0") not in str(err):
+            raise
+        if linprog is not None:
+            size = float(np.ptp(mesh.vertices, axis=0).max())
+            assert kernel_depth(mesh) <= 1e-9 * size, f"{method} refused a star-shaped mesh: {err}"
+        return None
+
+
+def assert_contract(m: sp.SphereMap, mesh: sp.Mesh, method: str) -> None:
+    n = mesh.n_vertices
+    assert isinstance(m, sp.SphereMap) and m.method == method
+    # One unit vector per input vertex, in the input's order: the map's mesh is
+    # the input's vertices unchanged, and its faces index the rows.
+    assert m.points.shape == (n, 3) and m.points.dtype == np.float64
+    assert np.isfinite(m.points).all()
+    np.testing.assert_allclose(np.linalg.norm(m.points, axis=1), 1.0, rtol=0, atol=1e-12)
+    assert np.array_equal(m.mesh.vertices, mesh.vertices)
+    assert m.mesh.n_faces == mesh.n_faces
+    # What the map says of itself is true.
+    verdict = exact_verdict(m.points, m.mesh.faces)
+    assert m.valid == verdict.valid, (verdict, m.message)
+    assert m.flipped == verdict.flipped, (verdict, m.message)
+    # And it says how it ended.
+    assert m.status in STATUSES, m.status
+    assert isinstance(m.message, str) and m.message.strip()
+    assert m.converged == (m.status in {"converged", "direct"}), (m.status, m.converged)
+    assert isinstance(m.iterations, int) and m.iterations >= 0
+
+
+# ----------------------------------------------------------------------- tests
+
+@pytest.mark.parametrize("name", sorted(SHAPES))
+@pytest.mark.parametrize("method", METHODS)
+def test_contract_on_datasets(method: str, name: str) -> None:
+    mesh = shape(name)
+    m = embed_or_refuse(mesh, method, **QUICK[method])
+    if m is not None:
+        assert_contract(m, mesh, method)
+
+
+@pytest.mark.parametrize("name", ROUND)
+@pytest.mark.parametrize("method", METHODS)
+def test_round_shapes_give_valid_maps(method: str, name: str) -> None:
+    mesh = shape(name)
+    m = sp.embed(mesh, method)
+    assert_contract(m, mesh, method)
+    assert m.valid and m.flipped == 0, m.message
+
+
+@pytest.mark.skipif(linprog is None, reason="scipy is needed to draw random meshes")
+@pytest.mark.parametrize("method", METHODS)
+@given(surface=mg.surfaces(max_vertices=150))
+def test_contract_on_random_genus0_meshes(method: str, surface: mg.Surface) -> None:
+    mesh = sp.Mesh(surface.V, surface.F)
+    m = embed_or_refuse(mesh, method, **QUICK[method])
+    if m is not None:
+        assert_contract(m, mesh, method)
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_relabelled_vertices_relabel_the_rows(method: str) -> None:
+    # A shape every method maps validly without ties between path lengths.
+    mesh = sp.datasets.bumpy_blob(300)
+    V, F = mesh.vertices, mesh.faces
+    old_id = np.random.default_rng(1).permutation(mesh.n_vertices)  # new vertex k is old_id[k]
+    new_id = np.argsort(old_id)
+    relabelled = sp.Mesh(V[old_id], new_id[F])
+    a = sp.embed(mesh, method)
+    b = sp.embed(relabelled, method, **same_choices(method, a, new_id))
+    assert_contract(b, relabelled, method)
+    np.testing.assert_allclose(b.points, a.points[old_id], rtol=0, atol=1e-9)
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_unknown_option_raises_mesh_error(method: str) -> None:
+    with pytest.raises(sp.MeshError, match="no_such_option"):
+        sp.embed(shape("icosphere1"), method, no_such_option=1)
+
+
+def _out_of_range_cases() -> Iterator[Any]:
+    for method in METHODS:
+        for options in OUT_OF_RANGE[method]:
+            (key, value), = options.items()
+            bug = KNOWN_BUGS.get((method, key))
+            marks = [pytest.mark.xfail(raises=OverflowError, strict=True, reason=bug)] if bug else []
+            yield pytest.param(method, options, marks=marks, id=f"{method}-{key}={value!r}")
+
+
+@pytest.mark.parametrize("method, options", list(_out_of_range_cases()))
+def test_out_of_range_option_raises_mesh_error(method: str, options: Dict[str, Any]) -> None:
+    with pytest.raises(sp.MeshError):
+        sp.embed(shape("icosphere1"), method, **options)
+
+
+@pytest.mark.parametrize("surface", ["torus", "open", "two_spheres"])
+@pytest.mark.parametrize("method", METHODS)
+def test_not_genus_zero_raises_topology_error(method: str, surface: str) -> None:
+    mesh = not_genus_zero(surface)
+    with pytest.raises(sp.TopologyError) as err:
+        sp.embed(mesh, method)
+    assert not err.value.report.is_sphere_topology
+
+
+# --------------------------------------------------------- the checker itself
+
+def test_exact_check_on_the_octahedron() -> None:
+    V = np.array([[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]], float)
+    F = np.array([[0, 2, 4], [2, 1, 4], [1, 3, 4], [3, 0, 4],
+                  [2, 0, 5], [1, 2, 5], [3, 1, 5], [0, 3, 5]])
+    good = exact_verdict(V, F)
+    assert good.valid and good.flipped == 0
+    assert abs(good.area_sum - 4 * np.pi) < 1e-12
+    inward = exact_verdict(V, F[:, ::-1])
+    assert not inward.valid and inward.flipped == inward.n_negative == 8
+    assert abs(inward.area_sum + 4 * np.pi) < 1e-12
+    swapped = exact_verdict(V[[2, 1, 0, 3, 4, 5]], F)
+    assert not swapped.valid and swapped.n_negative > 0
+    collapsed = V.copy()
+    collapsed[4] = collapsed[0]
+    assert exact_verdict(collapsed, F).n_zero > 0
+    nan = V.copy()
+    nan[3, 1] = np.nan
+    assert not exact_verdict(nan, F).valid
+
+
+def test_exact_signs_decide_what_floats_cannot() -> None:
+    # c = s a + t b is coplanar with a, b and the origin up to rounding: the
+    # determinant is tiny and its float sign unreliable; the filter must hand
+    # these faces to the rational fallback and agree with it everywhere.
+    rng = np.random.default_rng(7)
+    a, b = rng.normal(size=(2, 400, 3))
+    c = rng.normal(size=(400, 1)) * a + rng.normal(size=(400, 1)) * b
+    c[:200] += rng.normal(scale=1e-14, size=(200, 3))          # some just off the plane
+    P = np.concatenate([a, b, c])
+    F = np.arange(1200).reshape(3, 400).T
+    signs, n_exact = exact_signs(P, F)
+    truth = [fraction_sign(P[i], P[j], P[k]) for i, j, k in F]
+    assert signs.tolist() == truth
+    assert n_exact > 0
+    naive = np.sign(np.linalg.det(P[F]))
+    assert (naive != np.array(truth)).any(), "the sample should fool plain floating point"
+    # Faces the float filter decides never reach the fallback.
+    assert n_exact < len(F)
