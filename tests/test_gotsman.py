@@ -57,7 +57,7 @@ def assert_honest(m: sp.SphereMap, mesh: sp.Mesh, max_iter: int) -> None:
     verdict = exact_verdict(m.points, m.mesh.faces)
     assert (m.valid, m.flipped) == (verdict.valid, verdict.flipped), (verdict, m.message)
     assert m.message.startswith("gotsman: ")
-    assert set(m.seconds) == {"setup", "solve", "iterate"}
+    assert set(m.seconds) == {"setup", "solve", "iterate", "certify"}
 
 
 @pytest.mark.parametrize("weights", ["uniform", "chord"])

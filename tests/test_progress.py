@@ -96,7 +96,7 @@ def test_bad_progress_value_raises() -> None:
     with pytest.raises(sp.MeshError, match="progress"):
         sp.embed(sp.datasets.icosphere(1), poles="graph", progress=3)
     with pytest.raises(sp.MeshError, match="progress"):
-        sp._core.embed_theta_phi(sp.datasets.icosphere(1)._core, poles="graph", progress=3)
+        sp._core.embed(sp.datasets.icosphere(1)._core, "theta_phi", {"poles": "graph"}, 3)
 
 
 def test_cli_progress_flag(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

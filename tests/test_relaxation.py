@@ -51,7 +51,7 @@ def assert_honest(m: sp.SphereMap, mesh: sp.Mesh, max_iter: int) -> None:
     if m.converged:
         assert m.valid, m.message
     assert m.message.startswith(m.method)
-    assert set(m.seconds) == {"setup", "iterate"}
+    assert set(m.seconds) == {"setup", "iterate", "certify"}
 
 
 @pytest.mark.parametrize("method", METHODS)

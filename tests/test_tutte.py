@@ -195,7 +195,8 @@ def test_gauss_seidel_out_of_iterations_raises_with_last_iterate(square_grid: sp
     with pytest.raises(sp.ConvergenceError) as err:
         sp.tutte(square_grid, solver="gauss_seidel", max_iter=1)
     state = err.value.state
-    assert state["uv"].shape == (square_grid.n_vertices, 2)
+    assert state["points"].shape == (square_grid.n_vertices, 2)
+    assert state["status"] == "max_iterations" and state["iterations"] == 1
     assert state["residual"] > 1e-10
     assert isinstance(err.value, RuntimeError)
 

@@ -11,7 +11,7 @@ from ._errors import (ConvergenceError, FormatError, MapError, MeshError, Spheri
                       SpherifyWarning, TopologyError)
 from ._mesh import Mesh, check, check_sphere, dijkstra, load, orient, save, shortest_path
 from ._report import MeshReport, SphereReport
-from ._spheremap import SphereMap
+from ._spheremap import SphereMap, ThetaPhiMap
 from ._tutte import TutteInfo, boundary_loop, tutte
 from ._embed import embed, methods
 from ._quality import quality
@@ -27,6 +27,7 @@ __all__ = [
     "SphereReport",
     "SpherifyError",
     "SpherifyWarning",
+    "ThetaPhiMap",
     "TopologyError",
     "TutteInfo",
     "__version__",

@@ -7,7 +7,7 @@ import numpy.typing as npt
 
 from ._report import MeshReport, SphereReport
 
-__all__ = ["CoreMesh", "CorePointMap", "__version__", "boundary_loop", "check", "check_raw", "check_sphere", "dijkstra", "embed_alexa", "embed_gotsman", "embed_radial", "embed_relaxation", "embed_theta_phi", "load", "orient", "point_map_gc", "point_map_theta_phi", "quality", "save", "shortest_path", "tutte"]
+__all__ = ["CoreMesh", "CoreSphereMap", "__version__", "boundary_loop", "check", "check_raw", "check_sphere", "dijkstra", "embed", "load", "methods", "orient", "quality", "save", "shortest_path", "tutte"]
 
 __version__: str
 
@@ -22,26 +22,39 @@ class CoreMesh:
     def n_faces(self) -> int: ...
 
 @final
-class CorePointMap:
+class CoreSphereMap:
+    @property
+    def mesh(self) -> CoreMesh: ...
+    @property
+    def method(self) -> str: ...
+    def points(self) -> npt.NDArray[np.float64]: ...
+    @property
+    def iterations(self) -> int: ...
+    @property
+    def status(self) -> str: ...
+    @property
+    def converged(self) -> bool: ...
+    @property
+    def message(self) -> str: ...
+    @property
+    def seconds(self) -> List[Tuple[str, float]]: ...
+    @property
+    def reoriented_faces(self) -> int: ...
+    def report(self) -> SphereReport: ...
+    @property
+    def valid(self) -> bool: ...
+    @property
+    def tp_valid(self) -> Optional[bool]: ...
+    def details(self) -> Dict[str, Any]: ...
+    @property
+    def not_bijective(self) -> Optional[str]: ...
     def to_sphere(
         self, face_ids: npt.NDArray[np.int64], bary: npt.NDArray[np.float64]
     ) -> npt.NDArray[np.float64]: ...
     def to_surface(
         self, points: npt.NDArray[np.float64]
     ) -> Tuple[npt.NDArray[np.int64], npt.NDArray[np.float64], npt.NDArray[np.float64]]: ...
-    @property
-    def not_bijective(self) -> Optional[str]: ...
 
-def point_map_theta_phi(
-    mesh: CoreMesh,
-    cut_faces: npt.NDArray[np.int64],
-    theta_phi: npt.NDArray[np.float64],
-    poles: Tuple[int, int],
-    tp_valid: bool,
-) -> CorePointMap: ...
-def point_map_gc(
-    mesh: CoreMesh, points: npt.NDArray[np.float64], valid: bool, flipped: int
-) -> CorePointMap: ...
 def load(path: str | PathLike[str]) -> Tuple[CoreMesh, List[str], Dict[str, npt.NDArray[np.float64]]]: ...
 def save(
     mesh: CoreMesh,
@@ -72,45 +85,11 @@ def tutte(
     tol: float = 1e-10,
     max_iter: int = 10000,
 ) -> Tuple[npt.NDArray[np.float64], Dict[str, Any]]: ...
-def embed_radial(mesh: CoreMesh, center: str | npt.ArrayLike = "kernel") -> Tuple[npt.NDArray[np.float64], Dict[str, Any]]: ...
-def embed_relaxation(
+def methods() -> List[str]: ...
+def embed(
     mesh: CoreMesh,
-    weights: str = "uniform",
-    rho: float = 1.0,
-    max_iter: int = 10000,
-    check_every: int = 10,
-    strict: bool = False,
-    tol: float = 1e-12,
-    center: Optional[str | npt.ArrayLike] = None,
-    initial: Optional[npt.NDArray[np.float64]] = None,
-) -> Tuple[npt.NDArray[np.float64], Dict[str, Any]]: ...
-def embed_alexa(
-    mesh: CoreMesh,
-    c: Optional[float] = None,
-    max_iter: int = 10000,
-    check_every: int = 10,
-    strict: bool = False,
-    tol: float = 1e-12,
-    center: Optional[str | npt.ArrayLike] = None,
-    initial: Optional[npt.NDArray[np.float64]] = None,
-) -> Tuple[npt.NDArray[np.float64], Dict[str, Any]]: ...
-def embed_gotsman(
-    mesh: CoreMesh,
-    weights: str = "uniform",
-    rho: float = 1.0,
-    max_iter: int = 50,
-    tol: float = 1e-10,
-    strict: bool = False,
-    initial: Optional[npt.NDArray[np.float64]] = None,
-) -> Tuple[npt.NDArray[np.float64], Dict[str, Any]]: ...
-def embed_theta_phi(
-    mesh: CoreMesh,
-    poles: Optional[str | Tuple[int, int]] = None,
-    weights: str = "uniform",
-    rho: float = 1.0,
-    max_refinements: int = 8,
-    symmetry_eps: Optional[float] = None,
-    symmetry_max_score: float = 0.05,
+    method: str,
+    options: Optional[Dict[str, Any]] = None,
     progress: Optional[Callable[[int, int], object]] = None,
-) -> Tuple[npt.NDArray[np.float64], Dict[str, Any]]: ...
+) -> CoreSphereMap: ...
 def quality(mesh: CoreMesh, points: npt.NDArray[np.float64]) -> Dict[str, Any]: ...

@@ -1,30 +1,28 @@
-"""sp.embed: one entry point for every spherical method."""
+"""sp.embed: one entry point for every spherical method, a thin call of the
+core's own ``embed`` (validation, orientation, the method and its certificate
+all happen in Rust)."""
 
 from __future__ import annotations
 
 import warnings
-from typing import Any, Callable, Dict, List
+from typing import Any, List
+
+import numpy as np
 
 from . import _core
-from ._errors import MeshError, SpherifyWarning, TopologyError
-from ._mesh import MeshLike, as_mesh, check, orient
+from ._errors import SpherifyWarning
+from ._mesh import MeshLike, as_mesh
 from ._progress import as_callback
-from ._spheremap import SphereMap
-
-
-def _methods() -> Dict[str, Callable[..., Any]]:
-    """The spherical methods the compiled core provides, by name."""
-    prefix = "embed_"
-    return {name[len(prefix):]: getattr(_core, name) for name in dir(_core)
-            if name.startswith(prefix)}
+from ._spheremap import SphereMap, ThetaPhiMap
 
 
 def methods() -> List[str]:
-    """Names accepted by :func:`embed`'s ``method``."""
-    return sorted(_methods())
+    """Names accepted by :func:`embed`'s ``method``: the methods of the core."""
+    return list(_core.methods())
 
 
-def embed(mesh: MeshLike, method: str = "theta_phi", **options: Any) -> SphereMap:
+def embed(mesh: MeshLike, method: str = "theta_phi", *, progress: Any = None,
+          **options: Any) -> SphereMap:
     """Map a closed genus-0 mesh onto the unit sphere.
 
     Parameters
@@ -89,7 +87,8 @@ def embed(mesh: MeshLike, method: str = "theta_phi", **options: Any) -> SphereMa
     -------
     SphereMap
         ``points`` (n, 3) on the unit sphere, and ``valid`` / ``flipped`` decided
-        by the exact tests of thesis 3.4.
+        by the exact tests of thesis 3.4; a :class:`ThetaPhiMap` for
+        ``method="theta_phi"``.
 
     Raises
     ------
@@ -102,27 +101,15 @@ def embed(mesh: MeshLike, method: str = "theta_phi", **options: Any) -> SphereMa
         ``err.state["points"]`` holds where it stopped.
     """
     mesh = as_mesh(mesh)
-    available = _methods()
-    if method not in available:
-        raise MeshError(f"unknown method {method!r}; available: {', '.join(sorted(available))}")
-    report = check(mesh)
-    if not report.is_sphere_topology:
-        raise TopologyError("embed needs a closed, connected, manifold genus-0 mesh: "
-                            + "; ".join(report.problems), report)
-    notes: List[str] = []
-    if not (report.consistently_oriented and report.outward):
-        mesh, info = orient(mesh, return_info=True)
-        notes.append(f"reoriented {info['flipped_faces']} faces to face outward")
-    if "progress" in options:
-        options["progress"] = as_callback(options["progress"], "graph poles")
-    try:
-        points, info = available[method](mesh._core, **options)
-    except TypeError as err:
-        raise MeshError(f"method {method!r}: {err}") from None
-    result = SphereMap(mesh, points, method, info, notes)
-    if method == "theta_phi" and not result.tp_valid:
+    if "initial" in options and options["initial"] is not None:
+        options["initial"] = np.ascontiguousarray(options["initial"], dtype=np.float64)
+    core = _core.embed(mesh._core, method, options, as_callback(progress, "graph poles"))
+    if core.tp_valid is None:
+        return SphereMap(core, mesh)
+    result = ThetaPhiMap(core, mesh)
+    if not result.tp_valid:
         warnings.warn(f"theta-phi: {result.message}", SpherifyWarning, stacklevel=2)
-    symmetry = getattr(result, "details", {}).get("symmetry")
+    symmetry = result.details.get("symmetry")
     if symmetry is not None and symmetry["fallback"] is not None:
         warnings.warn(f"theta-phi: symmetry poles fell back to fast_graph: {symmetry['fallback']}",
                       SpherifyWarning, stacklevel=2)

@@ -1,4 +1,10 @@
-"""SphereMap: the result of :func:`spherify.embed`."""
+"""SphereMap and ThetaPhiMap: the results of :func:`spherify.embed`.
+
+A map holds the core's result, certificate included. Everything that
+describes the certificate is a read-only property read from the core, and
+every array it hands out is read-only: ``to_surface`` asks the core, which
+never takes a verdict back from Python.
+"""
 
 from __future__ import annotations
 
@@ -9,23 +15,29 @@ import numpy.typing as npt
 
 from . import _core
 from ._errors import MeshError
-from ._mesh import Mesh, check_sphere
+from ._mesh import Mesh
 from ._report import SphereReport
+
+
+def _read_only(array: np.ndarray) -> np.ndarray:
+    array.flags.writeable = False
+    return array
 
 
 class SphereMap:
     """Points on the unit sphere, one per vertex, and the verdict on them.
 
-    Attributes
-    ----------
+    Attributes (all read-only)
+    --------------------------
     mesh : Mesh
-        The (consistently, outward oriented) mesh the map belongs to.
+        The (consistently, outward oriented) mesh the map belongs to: the
+        input itself when it needed no reorientation.
     points : (n, 3) float64
         One point on the unit sphere per input vertex, in the input's order.
     method : str
-        The method that made the map.
+        The method that made the map (one of :func:`spherify.methods`).
     iterations : int
-        Iterations of an iterative method (0 for direct methods).
+        Iterations of an iterative method (refinement steps for theta-phi).
     converged : bool
         Whether the method reached its own stopping criterion.
     status : str
@@ -33,14 +45,178 @@ class SphereMap:
     message : str
         Why the method stopped, in words.
     seconds : dict of str to float
-        Time per stage.
+        Time per stage, ending with ``"certify"`` (the exact test of 3.4).
     report : SphereReport
-        The exact validity verdict of thesis 3.4 on ``points``.
+        The exact validity verdict of thesis 3.4 on ``points``, computed in
+        the core with the points.
+    valid, flipped
+        See the properties below.
     notes : list of str
         What was done to the input on the way (e.g. faces reoriented).
+    details : dict
+        What the method computed besides the points (radial: ``center``,
+        ``kernel_depth``, ``lp_pivots``; theta-phi: see :class:`ThetaPhiMap`).
 
-    Theta-phi maps (``method="theta_phi"``) also have
+    Every map also has ``to_sphere`` (the map h from surface points to the
+    sphere) and ``to_surface`` (its inverse), see below.
+    """
 
+    def __init__(self, core: _core.CoreSphereMap, mesh: Mesh) -> None:
+        self._core = core
+        if core.reoriented_faces:
+            mesh = Mesh._from_core(core.mesh, list(mesh.notes), dict(mesh.attributes))
+        self._mesh = mesh
+        self._points = _read_only(core.points())
+        self._report: SphereReport = core.report()
+        self._details: Optional[Dict[str, Any]] = None
+        self._notes = ([f"reoriented {core.reoriented_faces} faces to face outward"]
+                       if core.reoriented_faces else [])
+
+    @property
+    def mesh(self) -> Mesh:
+        return self._mesh
+
+    @property
+    def points(self) -> np.ndarray:
+        return self._points
+
+    @property
+    def method(self) -> str:
+        return self._core.method
+
+    @property
+    def iterations(self) -> int:
+        return self._core.iterations
+
+    @property
+    def converged(self) -> bool:
+        return self._core.converged
+
+    @property
+    def status(self) -> str:
+        return self._core.status
+
+    @property
+    def message(self) -> str:
+        return self._core.message
+
+    @property
+    def seconds(self) -> Dict[str, float]:
+        return dict(self._core.seconds)
+
+    @property
+    def notes(self) -> List[str]:
+        return list(self._notes)
+
+    @property
+    def report(self) -> SphereReport:
+        return self._report
+
+    def _all_details(self) -> Dict[str, Any]:
+        """The core's details, copied once, with read-only arrays."""
+        if self._details is None:
+            self._details = {key: _read_only(value) if isinstance(value, np.ndarray) else value
+                             for key, value in self._core.details().items()}
+        return self._details
+
+    @property
+    def details(self) -> Dict[str, Any]:
+        """A fresh dict on every access; its arrays are read-only."""
+        return dict(self._all_details())
+
+    @property
+    def valid(self) -> bool:
+        """True when the points with minor-arc edges form a valid GC-embedding
+        (thesis 3.1), proven by the exact orientation test and the area test:
+        the map from the mesh to the sphere is then a bijection."""
+        return self._core.valid
+
+    @property
+    def flipped(self) -> int:
+        """Faces failing the orientation test (3.9): upside down or collapsed."""
+        return self._report.n_negative + self._report.n_zero
+
+    def to_sphere(self, face_ids: npt.ArrayLike, bary: npt.ArrayLike) -> np.ndarray:
+        """Map surface points to the sphere: the homeomorphism h.
+
+        For theta-phi maps this is the thesis's own bijection (6.6): the
+        barycentric map into the theta-phi rectangle (h1), the stretch of the
+        pole triangles onto the rectangle's top and bottom lines (h2, eq.
+        6.44-6.56) and the fold onto the sphere (h3, eq. 6.35). It is a
+        bijection whenever ``tp_valid`` holds, even when the folded vertices do
+        not form a valid GC-embedding. For the other methods it is the
+        barycentric map of thesis 3.3: the same weights of the sphere
+        triangle's corners, projected onto the sphere (a bijection when
+        ``valid``).
+
+        Parameters
+        ----------
+        face_ids : (k,) int
+            A face of ``mesh`` per point.
+        bary : (k, 3) float
+            Barycentric weights on that face's corners (in the order of
+            ``mesh.faces``): finite, >= 0 and summing to 1 (within 1e-6; they
+            are rescaled).
+
+        Returns
+        -------
+        (k, 3) float64
+            Unit vectors.
+
+        Raises
+        ------
+        MeshError
+            Wrong shapes, a face id out of range or bad weights (the row is named).
+        """
+        ids = np.asarray(face_ids)
+        if ids.dtype.kind not in "iu":
+            raise MeshError(f"face_ids must be integers, got dtype {ids.dtype}")
+        return self._core.to_sphere(ids.astype(np.int64, copy=False), _float_rows(bary, "bary"))
+
+    def to_surface(self, points: npt.ArrayLike) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Map points of the unit sphere back to the surface: h^-1.
+
+        Each point is located among the cells of the map (a box tree; O(log F)
+        per point, in parallel), then the inverse of :meth:`to_sphere` gives
+        the face and its barycentric weights. Points on an edge or a vertex
+        get one of the faces that share it.
+
+        Parameters
+        ----------
+        points : (k, 3) float
+            Unit vectors (norm within 1e-6 of 1; they are normalised).
+
+        Returns
+        -------
+        face_ids : (k,) int64
+        bary : (k, 3) float64
+            Barycentric weights on the face's corners, >= 0, summing to 1.
+        xyz : (k, 3) float64
+            The surface points themselves.
+
+        Raises
+        ------
+        MapError
+            The map is not a certified bijection (``tp_valid`` False for
+            theta-phi, ``valid`` False otherwise), so h^-1 is not defined. The
+            verdict is the core's own, whatever was done to this object.
+        MeshError
+            Wrong shape, or a point that is not a unit vector (the row is named).
+        """
+        return self._core.to_surface(_float_rows(points, "points"))
+
+    def __repr__(self) -> str:
+        return (f"{type(self).__name__}(method={self.method!r}, n_vertices={len(self.points)}, "
+                f"valid={self.valid}, flipped={self.flipped}, status={self.status!r}, "
+                f"iterations={self.iterations})")
+
+
+class ThetaPhiMap(SphereMap):
+    """A theta-phi map (thesis ch. 6): a :class:`SphereMap` with the poles,
+    the cut and the rectangle it was made from.
+
+    Attributes (all read-only)
+    --------------------------
     poles : (int, int)
         The north and south pole vertex ids (thesis 6.2).
     cut_path : (k + 2,) int64
@@ -78,147 +254,54 @@ class SphereMap:
           fast-graph pole distance; NaN when not reached);
         * ``fallback``: None when the poles and cut path came from the plane,
           else why the fast-graph poles were used instead.
-
-    Every map also has ``to_sphere`` (the map h from surface points to the
-    sphere) and ``to_surface`` (its inverse), see below.
     """
 
-    def __init__(self, mesh: Mesh, points: np.ndarray, method: str, info: Dict[str, Any],
-                 notes: List[str]) -> None:
-        self.mesh = mesh
-        self.points = points
-        self.points.flags.writeable = False
-        self.method = method
-        self.iterations = int(info.get("iterations", 0))
-        self.converged = bool(info.get("converged", True))
-        self.status = str(info.get("status", "direct"))
-        self.message = str(info.get("message", ""))
-        self.seconds: Dict[str, float] = dict(info.get("seconds", {}))
-        self.notes = list(notes)
-        self.report: SphereReport = check_sphere(mesh, points)
-        self._point_map: Optional[_core.CorePointMap] = None
-        if "theta_phi" in info:
-            self.poles = tuple(int(p) for p in info["poles"])
-            self.cut_path = info["cut_path"]
-            self.theta_phi = info["theta_phi"]
-            self._cut_arrays = (info["cut_vertices"], info["cut_faces"])
-            self._cut_mesh: Optional[Mesh] = None
-            self.cut_original = info["cut_original"]
-            self.tp_valid = bool(info["tp_valid"])
-            self.details = {key: info[key] for key in (
-                "refinements", "re_embedded", "fans_monotone", "min_area_ratio",
-                "tp_flipped_faces", "tp_degenerate_faces", "cut_boundary")}
-            if "symmetry" in info:
-                self.details["symmetry"] = info["symmetry"]
+    _THETA_PHI_KEYS = ("poles", "cut_path", "theta_phi", "cut_vertices", "cut_faces",
+                       "cut_original")
 
-    def _points_map(self) -> _core.CorePointMap:
-        """The point-location structure, built on first use (O(F log F))."""
-        if self._point_map is None:
-            if self.method == "theta_phi":
-                self._point_map = _core.point_map_theta_phi(
-                    self.mesh._core, self.cut_mesh.faces, self.theta_phi, self.poles,
-                    self.tp_valid)
-            else:
-                self._point_map = _core.point_map_gc(
-                    self.mesh._core, self.points, self.valid, self.flipped)
-        return self._point_map
+    def __init__(self, core: _core.CoreSphereMap, mesh: Mesh) -> None:
+        super().__init__(core, mesh)
+        self._cut_mesh: Optional[Mesh] = None
 
-    def to_sphere(self, face_ids: npt.ArrayLike, bary: npt.ArrayLike) -> np.ndarray:
-        """Map surface points to the sphere: the homeomorphism h.
+    def _detail(self, key: str) -> Any:
+        return self._all_details()[key]
 
-        For theta-phi maps this is the thesis's own bijection (6.6): the
-        barycentric map into the theta-phi rectangle (h1), the stretch of the
-        pole triangles onto the rectangle's top and bottom lines (h2, eq.
-        6.44-6.56) and the fold onto the sphere (h3, eq. 6.35). It is a
-        bijection whenever ``tp_valid`` holds, even when the folded vertices do
-        not form a valid GC-embedding. For the other methods it is the
-        barycentric map of thesis 3.3: the same weights of the sphere
-        triangle's corners, projected onto the sphere (a bijection when
-        ``valid``).
+    @property
+    def poles(self) -> Tuple[int, int]:
+        north, south = self._detail("poles")
+        return int(north), int(south)
 
-        Parameters
-        ----------
-        face_ids : (k,) int
-            A face of ``mesh`` per point.
-        bary : (k, 3) float
-            Barycentric weights on that face's corners (in the order of
-            ``mesh.faces``): finite, >= 0 and summing to 1 (within 1e-6; they
-            are rescaled).
+    @property
+    def cut_path(self) -> np.ndarray:
+        return self._detail("cut_path")  # type: ignore[no-any-return]
 
-        Returns
-        -------
-        (k, 3) float64
-            Unit vectors.
+    @property
+    def theta_phi(self) -> np.ndarray:
+        return self._detail("theta_phi")  # type: ignore[no-any-return]
 
-        Raises
-        ------
-        MeshError
-            Wrong shapes, a face id out of range or bad weights (the row is named).
-        """
-        ids = np.asarray(face_ids)
-        if ids.dtype.kind not in "iu":
-            raise MeshError(f"face_ids must be integers, got dtype {ids.dtype}")
-        return self._points_map().to_sphere(ids.astype(np.int64, copy=False),
-                                            _float_rows(bary, "bary"))
+    @property
+    def cut_original(self) -> np.ndarray:
+        return self._detail("cut_original")  # type: ignore[no-any-return]
 
-    def to_surface(self, points: npt.ArrayLike) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Map points of the unit sphere back to the surface: h^-1.
+    @property
+    def tp_valid(self) -> bool:
+        return bool(self._core.tp_valid)
 
-        Each point is located among the cells of the map (a box tree; O(log F)
-        per point, in parallel), then the inverse of :meth:`to_sphere` gives
-        the face and its barycentric weights. Points on an edge or a vertex
-        get one of the faces that share it.
-
-        Parameters
-        ----------
-        points : (k, 3) float
-            Unit vectors (norm within 1e-6 of 1; they are normalised).
-
-        Returns
-        -------
-        face_ids : (k,) int64
-        bary : (k, 3) float64
-            Barycentric weights on the face's corners, >= 0, summing to 1.
-        xyz : (k, 3) float64
-            The surface points themselves.
-
-        Raises
-        ------
-        MapError
-            The map is not a certified bijection (``tp_valid`` False for
-            theta-phi, ``valid`` False otherwise), so h^-1 is not defined.
-        MeshError
-            Wrong shape, or a point that is not a unit vector (the row is named).
-        """
-        return self._points_map().to_surface(_float_rows(points, "points"))
+    @property
+    def details(self) -> Dict[str, Any]:
+        """Refinement, pole-fan and rectangle facts (see the class docstring);
+        a fresh dict on every access, its arrays read-only."""
+        return {key: value for key, value in self._all_details().items()
+                if key not in self._THETA_PHI_KEYS and key != "tp_valid"}
 
     @property
     def cut_mesh(self) -> Mesh:
-        """The cut-open disk (theta-phi maps only; see the class docstring).
-        Built on first use: copying it into the core costs as much as the
-        exact validity test, and most callers never look at it."""
-        if self.method != "theta_phi" or not hasattr(self, "_cut_arrays"):
-            raise AttributeError("cut_mesh exists for theta-phi maps only")
+        """The cut-open disk. Built on first use: copying it into the core
+        costs as much as the exact validity test, and most callers never
+        look at it."""
         if self._cut_mesh is None:
-            self._cut_mesh = Mesh(*self._cut_arrays)
+            self._cut_mesh = Mesh(self._detail("cut_vertices"), self._detail("cut_faces"))
         return self._cut_mesh
-
-    @property
-    def valid(self) -> bool:
-        """True when the points with minor-arc edges form a valid GC-embedding
-        (thesis 3.1), proven by the exact orientation test and the area test:
-        the map from the mesh to the sphere is then a bijection."""
-        return self.report.valid
-
-    @property
-    def flipped(self) -> int:
-        """Faces failing the orientation test (3.9): upside down or collapsed."""
-        return self.report.n_negative + self.report.n_zero
-
-    def __repr__(self) -> str:
-        return (f"SphereMap(method={self.method!r}, n_vertices={len(self.points)}, "
-                f"valid={self.valid}, flipped={self.flipped}, status={self.status!r}, "
-                f"iterations={self.iterations})")
 
 
 def _float_rows(data: npt.ArrayLike, what: str) -> np.ndarray:
