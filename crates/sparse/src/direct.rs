@@ -11,9 +11,13 @@
 //! Tutte matrix has no band structure; a modern fill-reducing ordering makes
 //! that moot on planar meshes: nested-dissection-like orderings of a planar
 //! graph give `O(n log n)` fill (Lipton, Rose and Tarjan 1979), and AMD gets
-//! close on meshes. `crate::solve` has the measurements.
+//! close on meshes. docs/benchmarks.md has the measurements.
+//!
+//! [`Factorization`], the public face of a factor kept for many solves (the
+//! iterative refinement of `crate::refine`), lives here too.
 
 use crate::error::SparseError;
+use crate::solve::{find_asymmetry, validate, SolveParams};
 use crate::vector::{residual_into, residual_scale};
 use crate::CsrMatrix;
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
@@ -163,6 +167,20 @@ fn llt_solve<I: Index>(
 }
 
 impl Factor {
+    /// Cholesky when `a` is `symmetric` and turns out positive definite, LU
+    /// otherwise: LU still solves a symmetric indefinite matrix. What
+    /// `SolverKind::Auto` and [`Factorization`] use.
+    pub(crate) fn cholesky_or_lu(a: &CsrMatrix, symmetric: bool) -> Result<Factor, SparseError> {
+        if symmetric {
+            match Factor::cholesky(a) {
+                Ok(factor) => return Ok(factor),
+                Err(SparseError::NotPositiveDefinite { .. }) => {}
+                Err(e) => return Err(e),
+            }
+        }
+        Factor::lu(a)
+    }
+
     /// Sparse Cholesky of a symmetric matrix (square, finite, symmetric within
     /// tolerance: checked by the dispatcher). Only one triangle is read.
     ///
@@ -302,6 +320,38 @@ impl Factor {
             }
             Ok((sol, residuals))
         })
+    }
+}
+
+/// A matrix factorised once for many solves: sparse Cholesky when it is
+/// symmetric (and positive definite), LU otherwise. Used by iterative
+/// refinement ([`crate::refine`]), which solves again and again with one factor.
+pub struct Factorization {
+    factor: Factor,
+    n: usize,
+}
+
+impl Factorization {
+    /// Factorises `a` (square and finite; checked).
+    pub fn new(a: &CsrMatrix) -> Result<Factorization, SparseError> {
+        validate(a, &[], &SolveParams::default())?;
+        let factor = Factor::cholesky_or_lu(a, find_asymmetry(a).is_none())?;
+        Ok(Factorization { factor, n: a.n_rows() })
+    }
+
+    /// Solves `A x = b` for every `b`, with no refinement.
+    pub fn solve(&self, a: &CsrMatrix, rhs: &[Vec<f64>]) -> Result<Vec<Vec<f64>>, SparseError> {
+        for b in rhs {
+            if b.len() != self.n {
+                return Err(SparseError::LengthMismatch {
+                    what: "right-hand side",
+                    got: b.len(),
+                    expected: self.n,
+                });
+            }
+        }
+        // A tolerance of infinity turns the factor's own refinement off.
+        self.factor.solve(a, rhs, f64::INFINITY).map(|(x, _)| x)
     }
 }
 

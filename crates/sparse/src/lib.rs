@@ -29,5 +29,6 @@ mod test_support;
 mod vector;
 
 pub use csr::CsrMatrix;
+pub use direct::Factorization;
 pub use error::SparseError;
-pub use solve::{solve, Factorization, SolveInfo, SolveParams, SolverKind};
+pub use solve::{solve, SolveInfo, SolveParams, SolverKind};
