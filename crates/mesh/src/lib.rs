@@ -24,7 +24,7 @@ pub mod validate;
 pub mod vec3;
 mod volume;
 
-pub use error::{FormatError, Location, MeshError, TopologyError, TopologyProblem};
+pub use error::{FormatError, Location, MeshError, TopologyError, TopologyProblem, UnknownName};
 pub use graph::Adjacency;
 pub use halfedge::HalfEdgeMesh;
 pub use mesh::Mesh;

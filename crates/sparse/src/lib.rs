@@ -24,6 +24,7 @@ mod direct;
 mod gauss_seidel;
 mod preconditioner;
 mod solve;
+mod solver_kind;
 #[cfg(test)]
 mod test_support;
 mod vector;
@@ -31,4 +32,5 @@ mod vector;
 pub use csr::CsrMatrix;
 pub use direct::Factorization;
 pub use error::SparseError;
-pub use solve::{solve, SolveInfo, SolveParams, SolverKind};
+pub use solve::{solve, SolveInfo, SolveParams};
+pub use solver_kind::SolverKind;

@@ -24,30 +24,9 @@
 use crate::direct::Factor;
 use crate::error::SparseError;
 use crate::preconditioner::{Ic0, Jacobi};
-use crate::{cg, gauss_seidel, CsrMatrix};
+use crate::{cg, gauss_seidel, CsrMatrix, SolverKind};
 use rayon::prelude::*;
 use std::time::Instant;
-
-/// Which solver [`solve`] runs.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum SolverKind {
-    /// Let [`solve`] choose (see the module documentation); never reported
-    /// back in [`SolveInfo::solver`].
-    Auto,
-    /// Sparse Cholesky for a symmetric matrix, sparse LU otherwise
-    /// (`crate::direct`). Uses `tol` only to decide whether to refine the
-    /// solution iteratively with the same factor; ignores `max_iter` and `x0`.
-    Direct,
-    /// Conjugate gradients with the Jacobi (diagonal) preconditioner. Needs a
-    /// symmetric positive definite matrix.
-    CgJacobi,
-    /// Conjugate gradients with the zero-fill incomplete Cholesky
-    /// preconditioner. Needs a symmetric positive definite matrix.
-    CgIc0,
-    /// Gauss-Seidel sweeps (thesis 4.5). Needs a positive diagonal; converges
-    /// for the Tutte matrices (Prop. 4.10 and `crate::gauss_seidel`).
-    GaussSeidel,
-}
 
 /// Parameters of [`solve`].
 #[derive(Debug, Clone)]
@@ -289,14 +268,6 @@ mod tests {
     use super::*;
     use crate::test_support::*;
 
-    const ALL: [SolverKind; 5] = [
-        SolverKind::Auto,
-        SolverKind::Direct,
-        SolverKind::CgJacobi,
-        SolverKind::CgIc0,
-        SolverKind::GaussSeidel,
-    ];
-
     fn tight() -> SolveParams {
         SolveParams { tol: 1e-13, max_iter: 200_000, x0: None }
     }
@@ -316,7 +287,7 @@ mod tests {
         for a in &systems {
             let b = wave(a.n_rows(), 0.37);
             let exact = dense_solve(a, &b);
-            for kind in ALL {
+            for kind in SolverKind::ALL {
                 let (x, info) = solve(a, std::slice::from_ref(&b), kind, &tight()).unwrap();
                 assert!(rel_err(&x[0], &exact) < 1e-8, "{kind:?}: {}", rel_err(&x[0], &exact));
                 assert!(info.residual <= 1e-13, "{kind:?}: {}", info.residual);
@@ -331,7 +302,7 @@ mod tests {
         let a = grid_laplacian(60, 60);
         let rhs = [wave(3600, 0.01), wave(3600, 0.3)];
         let (reference, _) = solve(&a, &rhs, SolverKind::Direct, &tight()).unwrap();
-        for kind in ALL {
+        for kind in SolverKind::ALL {
             let (x, info) = solve(&a, &rhs, kind, &tight()).unwrap();
             for k in 0..2 {
                 assert!(rel_err(&x[k], &reference[k]) < 1e-8, "{kind:?} rhs {k}");
@@ -432,12 +403,12 @@ mod tests {
         let a = grid_laplacian(3, 3);
         let mut b = vec![1.0; 9];
         b[4] = f64::NAN;
-        for kind in ALL {
+        for kind in SolverKind::ALL {
             let e = solve(&a, &[vec![1.0; 9], b.clone()], kind, &tight()).unwrap_err();
             assert_eq!(e, SparseError::NonFinite { what: "rhs", index: 9 + 4 });
         }
         let bad = CsrMatrix::from_triplets(2, 2, &[0, 1], &[0, 1], &[1.0, f64::INFINITY]).unwrap();
-        for kind in ALL {
+        for kind in SolverKind::ALL {
             let e = solve(&bad, &[vec![1.0; 2]], kind, &tight()).unwrap_err();
             assert_eq!(e, SparseError::NonFinite { what: "matrix", index: 1 });
         }
@@ -452,7 +423,7 @@ mod tests {
     #[test]
     fn shape_errors() {
         let a = grid_laplacian(3, 3);
-        for kind in ALL {
+        for kind in SolverKind::ALL {
             let e = solve(&a, &[vec![1.0; 8]], kind, &tight()).unwrap_err();
             assert_eq!(e, SparseError::LengthMismatch { what: "rhs", got: 8, expected: 9 });
         }
@@ -494,7 +465,7 @@ mod tests {
     fn two_right_hand_sides_equal_one_at_a_time() {
         let a = grid_laplacian(15, 17);
         let (b1, b2) = (wave(255, 0.2), wave(255, 1.3));
-        for kind in ALL {
+        for kind in SolverKind::ALL {
             let (both, _) = solve(&a, &[b1.clone(), b2.clone()], kind, &tight()).unwrap();
             let (one, _) = solve(&a, std::slice::from_ref(&b1), kind, &tight()).unwrap();
             let (two, _) = solve(&a, std::slice::from_ref(&b2), kind, &tight()).unwrap();
@@ -509,7 +480,7 @@ mod tests {
     #[test]
     fn trivial_cases() {
         let a = grid_laplacian(4, 4);
-        for kind in ALL {
+        for kind in SolverKind::ALL {
             let (x, info) = solve(&a, &[], kind, &tight()).unwrap();
             assert!(x.is_empty());
             assert_eq!(info.residual, 0.0);
@@ -518,7 +489,7 @@ mod tests {
             assert_eq!(info.residual, 0.0);
         }
         let empty = CsrMatrix::from_triplets(0, 0, &[], &[], &[]).unwrap();
-        for kind in ALL {
+        for kind in SolverKind::ALL {
             let (x, _) = solve(&empty, &[vec![]], kind, &tight()).unwrap();
             assert_eq!(x, vec![Vec::<f64>::new()]);
         }

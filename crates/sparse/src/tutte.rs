@@ -13,8 +13,9 @@ use spherify_mesh::{validate, HalfEdgeMesh, Mesh, TopologyError, TopologyProblem
 
 use crate::csr::CsrMatrix;
 use crate::error::SparseError;
-use crate::solve::{solve, SolveInfo, SolveParams, SolverKind};
+use crate::solve::{solve, SolveInfo, SolveParams};
 use crate::weights::{half_edge_weights, BadWeight, Weights};
+use crate::SolverKind;
 
 /// Where the boundary loop goes.
 #[derive(Debug, Clone, PartialEq)]

@@ -111,12 +111,12 @@ pub(super) fn parse_header(bytes: &[u8], name: &str) -> Result<Header, MeshError
         match keyword {
             None | Some(b"comment") | Some(b"obj_info") => {}
             Some(b"format") => {
-                encoding = Some(match next() {
-                    Some(b"ascii") => PlyEncoding::Ascii,
-                    Some(b"binary_little_endian") => PlyEncoding::BinaryLittleEndian,
-                    Some(b"binary_big_endian") => PlyEncoding::BinaryBigEndian,
-                    other => return Err(err(format!("unknown PLY format {}", text::show(other)))),
-                });
+                let token = next();
+                let known = token.and_then(|t| std::str::from_utf8(t).ok()?.parse().ok());
+                encoding = Some(
+                    known
+                        .ok_or_else(|| err(format!("unknown PLY format {}", text::show(token))))?,
+                );
                 match next() {
                     Some(b"1.0") | Some(b"1") => {}
                     other => {

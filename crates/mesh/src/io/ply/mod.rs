@@ -19,9 +19,57 @@ mod write;
 
 pub(crate) use write::write;
 
-use super::{LoadedMesh, PlyEncoding};
-use crate::error::MeshError;
+use super::LoadedMesh;
+use crate::error::{MeshError, UnknownName};
 use crate::mesh::MAX_VERTICES;
+use std::fmt;
+use std::str::FromStr;
+
+/// How a PLY file stores its data.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum PlyEncoding {
+    /// Human-readable text; large and slow, but easy to inspect.
+    Ascii,
+    /// Binary, little endian: the compact default.
+    #[default]
+    BinaryLittleEndian,
+    /// Binary, big endian.
+    BinaryBigEndian,
+}
+
+impl PlyEncoding {
+    /// Every encoding, in the order of [`PlyEncoding::NAMES`].
+    pub const ALL: [PlyEncoding; 3] =
+        [PlyEncoding::Ascii, PlyEncoding::BinaryLittleEndian, PlyEncoding::BinaryBigEndian];
+
+    /// The names of [`PlyEncoding::ALL`]: the words of the PLY `format` line,
+    /// which are also the names the bindings accept.
+    pub const NAMES: [&'static str; 3] = ["ascii", "binary_little_endian", "binary_big_endian"];
+
+    /// The name of this encoding, as in the PLY `format` line.
+    pub const fn as_str(self) -> &'static str {
+        match self {
+            PlyEncoding::Ascii => "ascii",
+            PlyEncoding::BinaryLittleEndian => "binary_little_endian",
+            PlyEncoding::BinaryBigEndian => "binary_big_endian",
+        }
+    }
+}
+
+impl FromStr for PlyEncoding {
+    type Err = UnknownName;
+
+    /// One of [`PlyEncoding::NAMES`], exactly.
+    fn from_str(name: &str) -> Result<Self, UnknownName> {
+        UnknownName::position("PLY encoding", name, &Self::NAMES).map(|k| Self::ALL[k])
+    }
+}
+
+impl fmt::Display for PlyEncoding {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
 
 /// Parses a PLY file held in memory.
 pub(crate) fn read(bytes: &[u8], name: &str) -> Result<LoadedMesh, MeshError> {
@@ -42,6 +90,27 @@ pub(crate) fn read(bytes: &[u8], name: &str) -> Result<LoadedMesh, MeshError> {
         PlyEncoding::BinaryBigEndian => binary::read_body(&header, bytes, true, &mut out, name)?,
     }
     out.into_mesh(name)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn encoding_names_round_trip() {
+        for (encoding, name) in PlyEncoding::ALL.into_iter().zip(PlyEncoding::NAMES) {
+            assert_eq!(encoding.as_str(), name);
+            assert_eq!(encoding.to_string(), name);
+            assert_eq!(name.parse::<PlyEncoding>(), Ok(encoding));
+        }
+        let err = "binary".parse::<PlyEncoding>().unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "unknown PLY encoding 'binary'; expected one of: \
+             ascii, binary_little_endian, binary_big_endian"
+        );
+        assert!("ASCII".parse::<PlyEncoding>().is_err());
+    }
 }
 
 /// Fixtures shared by the tests of the PLY modules.

@@ -14,11 +14,7 @@ pub(crate) fn write<W: Write>(
     attributes: &VertexAttributes,
     encoding: PlyEncoding,
 ) -> std::io::Result<()> {
-    let format = match encoding {
-        PlyEncoding::Ascii => "ascii",
-        PlyEncoding::BinaryLittleEndian => "binary_little_endian",
-        PlyEncoding::BinaryBigEndian => "binary_big_endian",
-    };
+    let format = encoding.as_str();
     let sphere = attributes.sphere.as_deref();
     let uv = attributes.uv.as_deref();
     let index_type = if mesh.n_vertices() > i32::MAX as usize { "uint" } else { "int" };
