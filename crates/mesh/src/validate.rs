@@ -226,8 +226,8 @@ fn count_fans(n: usize, faces: &[[u32; 3]], table: &EdgeTable) -> Capped<u32> {
         for (k, &v) in face.iter().enumerate() {
             fans[v as usize] += 1;
             // A face repeating a vertex is one piece of surface at that vertex.
-            for j in 0..k {
-                if face[j] == v && union(&mut parent, (3 * f + j) as u32, (3 * f + k) as u32) {
+            for (j, &u) in face[..k].iter().enumerate() {
+                if u == v && union(&mut parent, (3 * f + j) as u32, (3 * f + k) as u32) {
                     fans[v as usize] -= 1;
                 }
             }
@@ -292,13 +292,11 @@ fn components(n: usize, faces: &[[u32; 3]], referenced: &[bool]) -> (usize, Vec<
     }
     let mut label = vec![NONE; n];
     let mut count = 0u32;
-    for v in 0..n {
-        if referenced[v] {
-            let root = find(&mut parent, v as u32) as usize;
-            if label[root] == NONE {
-                label[root] = count;
-                count += 1;
-            }
+    for v in (0..n).filter(|&v| referenced[v]) {
+        let root = find(&mut parent, v as u32) as usize;
+        if label[root] == NONE {
+            label[root] = count;
+            count += 1;
         }
     }
     let component_of = faces.iter().map(|f| label[find(&mut parent, f[0]) as usize]).collect();

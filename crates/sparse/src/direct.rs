@@ -109,12 +109,13 @@ fn scratch(req: StackReq) -> Result<MemBuffer, SparseError> {
     MemBuffer::try_new(req).map_err(|e| failed("allocating scratch", e))
 }
 
+/// A Cholesky factor: faer's symbolic structure and the values of `L`.
+type Llt<I> = (SymbolicCholesky<I>, Vec<f64>);
+
 /// Symbolic analysis (AMD ordering) and numeric `L L^T` of the lower
 /// triangle of `m`, with indices of type `I`; `None` when the factor has
 /// more entries than `I` can count.
-fn llt<I: Index>(
-    m: SparseColMatRef<'_, I, f64>,
-) -> Result<Option<(SymbolicCholesky<I>, Vec<f64>)>, SparseError> {
+fn llt<I: Index>(m: SparseColMatRef<'_, I, f64>) -> Result<Option<Llt<I>>, SparseError> {
     // The CSC view is A^T = A (A is symmetric); its lower triangle is A's
     // upper one, equal to A's lower one within the tolerance.
     let symbolic = match factorize_symbolic_cholesky(
