@@ -119,9 +119,7 @@ fn read_element<'a>(
 
 #[cfg(test)]
 mod tests {
-    use super::super::fixtures::{parse, ASCII_TRI, PYRAMID_FACES, SQUARE_PYRAMID};
-    use crate::error::Location;
-    use crate::io::tests::location;
+    use super::super::fixtures::{assert_fails_at_lines, parse, PYRAMID_FACES, SQUARE_PYRAMID};
     use crate::io::VertexAttributes;
 
     #[test]
@@ -148,8 +146,7 @@ mod tests {
 
     #[test]
     fn malformed_ascii_data_is_reported_by_line() {
-        assert!(parse(ASCII_TRI.as_bytes()).is_ok());
-        let cases = [
+        assert_fails_at_lines(&[
             ("1 0 0\n", "1 x 0\n", 11),
             ("0 1 0\n", "0 1 inf\n", 12),
             ("3 0 1 2", "3 0 1 3", 13),
@@ -157,10 +154,6 @@ mod tests {
             ("3 0 1 2", "2 0 1 2", 13),
             ("3 0 1 2", "3 0 1 z", 13),
             ("3 0 1 2\n", "3 0\n\n\n\n", 13),
-        ];
-        for (from, to, line) in cases {
-            let text = ASCII_TRI.replacen(from, to, 1);
-            assert_eq!(location(parse(text.as_bytes())), Location::Line(line), "{from} -> {to}");
-        }
+        ]);
     }
 }

@@ -116,7 +116,8 @@ mod tests {
 /// Fixtures shared by the tests of the PLY modules.
 #[cfg(test)]
 mod fixtures {
-    use crate::error::MeshError;
+    use crate::error::{Location, MeshError};
+    use crate::io::tests::location;
     use crate::io::{read_bytes, FileFormat, LoadedMesh};
 
     pub(super) fn parse(bytes: &[u8]) -> Result<LoadedMesh, MeshError> {
@@ -133,4 +134,14 @@ mod fixtures {
         "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n\
         property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n\
         0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+
+    /// Checks that [`ASCII_TRI`] with `from` replaced by `to` fails at `line`,
+    /// for each `(from, to, line)`.
+    pub(super) fn assert_fails_at_lines(cases: &[(&str, &str, u64)]) {
+        assert!(parse(ASCII_TRI.as_bytes()).is_ok());
+        for &(from, to, line) in cases {
+            let text = ASCII_TRI.replacen(from, to, 1);
+            assert_eq!(location(parse(text.as_bytes())), Location::Line(line), "{from} -> {to}");
+        }
+    }
 }
