@@ -402,11 +402,10 @@ mod tests {
             edges.push(((h - 1) * w + x, (h - 1) * w + x + 1));
         }
         let g = graph((w * h) as usize, &edges);
-        let mut seed = 12345u64;
+        let mut rng = crate::lcg::Lcg::new(12345);
         let p: Vec<[f64; 3]> = (0..w * h)
             .map(|v| {
-                seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-                let jitter = (seed >> 11) as f64 / (1u64 << 53) as f64 * 0.1;
+                let jitter = rng.next_f64() * 0.1;
                 [(v % w) as f64 + jitter, (v / w) as f64, jitter]
             })
             .collect();

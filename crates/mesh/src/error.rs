@@ -41,6 +41,36 @@ impl FormatError {
     }
 }
 
+/// A name outside a closed set of choices (a PLY encoding, a solver, a weight
+/// type): what was given, and every name that would have been accepted, so
+/// the bindings, a command line and the docs all say the same thing.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("unknown {what} '{name}'; expected one of: {}", .expected.join(", "))]
+pub struct UnknownName {
+    /// What the name should have named, e.g. `"weights"`.
+    pub what: &'static str,
+    /// The name given.
+    pub name: String,
+    /// The accepted names, in their documented order.
+    pub expected: Vec<&'static str>,
+}
+
+impl UnknownName {
+    /// The position of `name` in `names`, or the error listing them. Exact,
+    /// case-sensitive match: the names are identifiers, not prose.
+    pub fn position(
+        what: &'static str,
+        name: &str,
+        names: &[&'static str],
+    ) -> Result<usize, UnknownName> {
+        names.iter().position(|&n| n == name).ok_or_else(|| UnknownName {
+            what,
+            name: name.to_string(),
+            expected: names.to_vec(),
+        })
+    }
+}
+
 /// What makes a mesh unusable for an operation that needs a certain topology.
 #[derive(Debug, Clone, PartialEq)]
 pub enum TopologyProblem {

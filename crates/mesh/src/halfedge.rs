@@ -122,8 +122,8 @@ impl HalfEdgeMesh {
         for h in 0..n_he {
             degree[mesh.to[h ^ 1] as usize] += 1;
         }
-        for v in 0..n {
-            if mesh.rotation(v as u32).count() as u32 != degree[v] {
+        for (v, &d) in degree.iter().enumerate() {
+            if mesh.rotation(v as u32).count() as u32 != d {
                 return Err(fail(TopologyProblem::NonManifoldVertex { vertex: v as u32 }));
             }
         }

@@ -8,6 +8,7 @@
 //! * [`cut`]: cutting a closed mesh open along a path into a disk (thesis 6.3).
 //! * [`dijkstra`]: single-source shortest paths on the vertex graph (thesis App. A).
 //! * [`predicates`]: exact orientation signs on which every validity decision rests.
+//! * [`lcg`]: the deterministic generator of the tests of every crate.
 
 pub mod cut;
 pub mod dijkstra;
@@ -16,6 +17,7 @@ pub mod error;
 pub mod graph;
 pub mod halfedge;
 pub mod io;
+pub mod lcg;
 pub mod mesh;
 pub mod orient;
 pub mod predicates;
@@ -24,7 +26,7 @@ pub mod validate;
 pub mod vec3;
 mod volume;
 
-pub use error::{FormatError, Location, MeshError, TopologyError, TopologyProblem};
+pub use error::{FormatError, Location, MeshError, TopologyError, TopologyProblem, UnknownName};
 pub use graph::Adjacency;
 pub use halfedge::HalfEdgeMesh;
 pub use mesh::Mesh;

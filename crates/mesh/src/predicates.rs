@@ -112,6 +112,7 @@ pub fn collinear3(a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::lcg::Lcg;
 
     const E: [[f64; 3]; 3] = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
 
@@ -127,15 +128,6 @@ mod tests {
 
     fn ulps(x: f64, k: i64) -> f64 {
         f64::from_bits((x.to_bits() as i64 + k) as u64)
-    }
-
-    /// A tiny deterministic generator (Knuth's MMIX LCG), uniform in [-1, 1).
-    struct Lcg(u64);
-    impl Lcg {
-        fn value(&mut self) -> f64 {
-            self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            (self.0 >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
-        }
     }
 
     #[test]
@@ -219,12 +211,13 @@ mod tests {
         // a, b near-unit vectors on a 2^-30 grid, so c = (a + b) / 2 is exact and
         // det[a; b; c] = 0 exactly. Nudging c_k by one ulp d gives
         // det = d * (a x b)_k by linearity: the true sign is sign((a x b)_k).
-        let mut rng = Lcg(99);
+        let mut rng = Lcg::new(99);
         let grid = |x: f64| (x * 2f64.powi(30)).round() / 2f64.powi(30);
         let (mut naive_wrong, mut cases) = (0, 0);
         while cases < 2000 {
-            let p = [rng.value(), rng.value(), rng.value()];
-            let q = [p[0] + 1e-3 * rng.value(), p[1] + 1e-3 * rng.value(), p[2]];
+            let mut value = || rng.between(-1.0, 1.0);
+            let p = [value(), value(), value()];
+            let q = [p[0] + 1e-3 * value(), p[1] + 1e-3 * value(), p[2]];
             let (np, nq) = (
                 p.iter().map(|x| x * x).sum::<f64>().sqrt(),
                 q.iter().map(|x| x * x).sum::<f64>().sqrt(),

@@ -12,86 +12,9 @@ use crate::mesh::Mesh;
 use crate::predicates::collinear3;
 use crate::volume::component_volumes;
 
-/// How many offending indices a report lists per kind of problem.
-pub const LIST_CAP: usize = 100;
+mod report;
 
-/// A list of offending items, capped at [`LIST_CAP`], with the true total.
-#[derive(Debug, Clone, PartialEq, Default)]
-pub struct Capped<T> {
-    pub items: Vec<T>,
-    pub total: usize,
-}
-
-impl<T> Capped<T> {
-    fn push(&mut self, item: T) {
-        if self.items.len() < LIST_CAP {
-            self.items.push(item);
-        }
-        self.total += 1;
-    }
-
-    pub fn is_empty(&self) -> bool {
-        self.total == 0
-    }
-}
-
-impl<T: std::fmt::Debug> Capped<T> {
-    fn examples(&self) -> String {
-        let shown: Vec<String> = self.items.iter().take(5).map(|x| format!("{x:?}")).collect();
-        let more = if self.total > shown.len() { ", ..." } else { "" };
-        format!("{}{}", shown.join(", "), more)
-    }
-}
-
-/// Everything [`check`] finds out about a triangle mesh.
-#[derive(Debug, Clone, PartialEq, Default)]
-pub struct MeshReport {
-    pub n_vertices: usize,
-    pub n_faces: usize,
-    pub n_edges: usize,
-    /// Closed, connected, manifold, genus 0, every vertex used, no face repeating a vertex.
-    pub is_sphere_topology: bool,
-    /// Every edge has exactly two faces.
-    pub closed: bool,
-    /// No non-manifold edge and no non-manifold vertex.
-    pub manifold: bool,
-    pub connected: bool,
-    /// Connected components of the surface (unreferenced vertices not counted).
-    pub n_components: usize,
-    /// V - E + F with V the referenced vertices (thesis Cor. 2.7, eq. 2.20).
-    pub euler_characteristic: i64,
-    /// Total genus from eq. 2.20 with boundaries, when the mesh is manifold.
-    pub genus: Option<i64>,
-    /// Edges with one face.
-    pub boundary_edges: usize,
-    /// Boundary loops as vertex cycles in the direction of their faces.
-    pub boundary_loops: Capped<Vec<u32>>,
-    /// Edges with more than two faces.
-    pub nonmanifold_edges: Capped<[u32; 2]>,
-    /// Vertices whose faces form more than one fan.
-    pub nonmanifold_vertices: Capped<u32>,
-    /// Faces that repeat a vertex or have exactly zero area (exact predicate).
-    pub degenerate_faces: Capped<u32>,
-    /// Faces with the same vertex set as an earlier face (either orientation).
-    pub duplicate_faces: Capped<u32>,
-    pub unreferenced_vertices: Capped<u32>,
-    /// Vertices with a NaN or infinite coordinate (only from [`check_raw`]).
-    pub non_finite_vertices: Capped<u32>,
-    /// Faces with an index outside 0..n_vertices (only from [`check_raw`]).
-    pub out_of_range_faces: Capped<u32>,
-    /// Every two-face edge is used once in each direction.
-    pub consistently_oriented: bool,
-    /// Two-face edges used twice in the same direction.
-    pub inconsistent_edges: Capped<[u32; 2]>,
-    /// Closed, consistently oriented and every component encloses positive volume.
-    pub outward: bool,
-    /// Signed enclosed volume (meaningful when closed and consistently oriented).
-    pub signed_volume: f64,
-    /// One sentence per problem found; empty for a clean genus-0 mesh.
-    pub problems: Vec<String>,
-    /// Informational remarks (e.g. from the file reader: polygons triangulated).
-    pub notes: Vec<String>,
-}
+pub use report::{Capped, MeshReport, LIST_CAP};
 
 /// Validates a mesh whose arrays are already known to be finite and in range.
 pub fn check(mesh: &Mesh) -> MeshReport {
@@ -124,19 +47,7 @@ pub fn check_raw(positions: &[[f64; 3]], faces: &[[i64; 3]]) -> MeshReport {
     remap(&mut report.degenerate_faces);
     remap(&mut report.duplicate_faces);
     report.n_faces = faces.len();
-    if !out_of_range.is_empty() {
-        report.problems.insert(
-            0,
-            format!(
-                "{} faces refer to vertices outside 0..{} (faces {})",
-                out_of_range.total,
-                positions.len(),
-                out_of_range.examples()
-            ),
-        );
-        report.is_sphere_topology = false;
-    }
-    report.out_of_range_faces = out_of_range;
+    report.add_out_of_range(out_of_range, positions.len());
     report
 }
 
@@ -189,7 +100,7 @@ fn check_faces(
         && r.euler_characteristic == 2
         && repeated_index == 0
         && r.unreferenced_vertices.is_empty();
-    describe_problems(&mut r, repeated_index);
+    r.describe_problems(repeated_index);
     r
 }
 
@@ -315,8 +226,8 @@ fn count_fans(n: usize, faces: &[[u32; 3]], table: &EdgeTable) -> Capped<u32> {
         for (k, &v) in face.iter().enumerate() {
             fans[v as usize] += 1;
             // A face repeating a vertex is one piece of surface at that vertex.
-            for j in 0..k {
-                if face[j] == v && union(&mut parent, (3 * f + j) as u32, (3 * f + k) as u32) {
+            for (j, &u) in face[..k].iter().enumerate() {
+                if u == v && union(&mut parent, (3 * f + j) as u32, (3 * f + k) as u32) {
                     fans[v as usize] -= 1;
                 }
             }
@@ -381,13 +292,11 @@ fn components(n: usize, faces: &[[u32; 3]], referenced: &[bool]) -> (usize, Vec<
     }
     let mut label = vec![NONE; n];
     let mut count = 0u32;
-    for v in 0..n {
-        if referenced[v] {
-            let root = find(&mut parent, v as u32) as usize;
-            if label[root] == NONE {
-                label[root] = count;
-                count += 1;
-            }
+    for v in (0..n).filter(|&v| referenced[v]) {
+        let root = find(&mut parent, v as u32) as usize;
+        if label[root] == NONE {
+            label[root] = count;
+            count += 1;
         }
     }
     let component_of = faces.iter().map(|f| label[find(&mut parent, f[0]) as usize]).collect();
@@ -434,96 +343,6 @@ fn boundary_loops(n: usize, faces: &[[u32; 3]], boundary_corners: &[u32]) -> Cap
         }
     }
     loops
-}
-
-/// "1 face" / "3 faces", "1 vertex" / "2 vertices".
-fn count(n: usize, singular: &str, plural: &str) -> String {
-    format!("{n} {}", if n == 1 { singular } else { plural })
-}
-
-/// "1 face is" / "3 faces are".
-fn count_is(n: usize, singular: &str, plural: &str) -> String {
-    format!("{} {}", count(n, singular, plural), if n == 1 { "is" } else { "are" })
-}
-
-fn describe_problems(r: &mut MeshReport, repeated_index: usize) {
-    let mut p = Vec::new();
-    if !r.non_finite_vertices.is_empty() {
-        p.push(format!(
-            "{} a NaN or infinite coordinate: vertices {}",
-            count(r.non_finite_vertices.total, "vertex has", "vertices have"),
-            r.non_finite_vertices.examples()
-        ));
-    }
-    if !r.nonmanifold_edges.is_empty() {
-        p.push(format!(
-            "{} non-manifold (shared by more than two faces): {}",
-            count_is(r.nonmanifold_edges.total, "edge", "edges"),
-            r.nonmanifold_edges.examples()
-        ));
-    }
-    if !r.nonmanifold_vertices.is_empty() {
-        p.push(format!(
-            "{} non-manifold (their faces form more than one fan): vertices {}",
-            count_is(r.nonmanifold_vertices.total, "vertex", "vertices"),
-            r.nonmanifold_vertices.examples()
-        ));
-    }
-    if r.boundary_edges > 0 {
-        p.push(format!(
-            "the mesh is open: {} in {} (holes)",
-            count(r.boundary_edges, "boundary edge", "boundary edges"),
-            count(r.boundary_loops.total, "boundary loop", "boundary loops")
-        ));
-    }
-    if r.n_components > 1 {
-        p.push(format!("the mesh has {} connected components", r.n_components));
-    }
-    if r.manifold
-        && r.euler_characteristic != 2 * r.n_components as i64 - r.boundary_loops.total as i64
-    {
-        let genus = r.genus.map(|g| format!("genus {g}: ")).unwrap_or_default();
-        p.push(format!(
-            "{genus}Euler characteristic V - E + F = {} (a sphere has 2)",
-            r.euler_characteristic
-        ));
-    }
-    if !r.degenerate_faces.is_empty() {
-        p.push(format!(
-            "{} degenerate ({} repeating a vertex, {} with exactly zero area): faces {}",
-            count_is(r.degenerate_faces.total, "face", "faces"),
-            repeated_index,
-            r.degenerate_faces.total - repeated_index,
-            r.degenerate_faces.examples()
-        ));
-    }
-    if !r.duplicate_faces.is_empty() {
-        p.push(format!(
-            "{} the vertices of an earlier face: faces {}",
-            count(r.duplicate_faces.total, "face repeats", "faces repeat"),
-            r.duplicate_faces.examples()
-        ));
-    }
-    if !r.unreferenced_vertices.is_empty() {
-        p.push(format!(
-            "{} not used by any face: vertices {}",
-            count_is(r.unreferenced_vertices.total, "vertex", "vertices"),
-            r.unreferenced_vertices.examples()
-        ));
-    }
-    if !r.inconsistent_edges.is_empty() {
-        p.push(format!(
-            "the faces are not consistently oriented: {} used twice in the same direction, e.g. {} (orient fixes this)",
-            count_is(r.inconsistent_edges.total, "edge", "edges"),
-            r.inconsistent_edges.examples()
-        ));
-    } else if r.closed && r.consistently_oriented && !r.outward {
-        p.push(format!(
-            "the faces point inward (signed volume {:.6e}); orient fixes this",
-            r.signed_volume
-        ));
-    }
-    r.problems = p;
 }
 
 #[cfg(test)]

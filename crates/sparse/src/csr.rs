@@ -299,31 +299,14 @@ fn bucket_offsets(n: usize, keys: &[u32]) -> Vec<usize> {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// Knuth's MMIX linear congruential generator: tiny, deterministic, enough
-    /// to scatter test entries.
-    struct Lcg(u64);
-
-    impl Lcg {
-        fn next_u64(&mut self) -> u64 {
-            self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            self.0 >> 11
-        }
-        fn below(&mut self, n: usize) -> u32 {
-            (self.next_u64() % n as u64) as u32
-        }
-        /// Uniform in [-1, 1).
-        fn value(&mut self) -> f64 {
-            (self.next_u64() as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
-        }
-    }
+    use spherify_mesh::lcg::Lcg;
 
     type Triplets = (Vec<u32>, Vec<u32>, Vec<f64>);
 
     fn random_triplets(rng: &mut Lcg, n_rows: usize, n_cols: usize, nnz: usize) -> Triplets {
-        let rows = (0..nnz).map(|_| rng.below(n_rows)).collect();
-        let cols = (0..nnz).map(|_| rng.below(n_cols)).collect();
-        let values = (0..nnz).map(|_| rng.value()).collect();
+        let rows = (0..nnz).map(|_| rng.below(n_rows) as u32).collect();
+        let cols = (0..nnz).map(|_| rng.below(n_cols) as u32).collect();
+        let values = (0..nnz).map(|_| rng.between(-1.0, 1.0)).collect();
         (rows, cols, values)
     }
 
@@ -377,13 +360,13 @@ mod tests {
 
     #[test]
     fn mul_vec_matches_dense() {
-        let mut rng = Lcg(7);
+        let mut rng = Lcg::new(7);
         for &(n_rows, n_cols, nnz) in &[(1, 1, 3), (5, 9, 20), (40, 30, 500), (200, 200, 300)] {
             let t = random_triplets(&mut rng, n_rows, n_cols, nnz);
             let m = CsrMatrix::from_triplets(n_rows, n_cols, &t.0, &t.1, &t.2).unwrap();
             check_invariants(&m);
             let a = dense(n_rows, n_cols, &t);
-            let x: Vec<f64> = (0..n_cols).map(|_| rng.value()).collect();
+            let x: Vec<f64> = (0..n_cols).map(|_| rng.between(-1.0, 1.0)).collect();
             let mut y = vec![f64::NAN; n_rows];
             m.mul_vec(&x, &mut y).unwrap();
             for i in 0..n_rows {
@@ -411,7 +394,7 @@ mod tests {
 
     #[test]
     fn transpose_twice_is_identity() {
-        let mut rng = Lcg(11);
+        let mut rng = Lcg::new(11);
         let t = random_triplets(&mut rng, 37, 53, 400);
         let m = CsrMatrix::from_triplets(37, 53, &t.0, &t.1, &t.2).unwrap();
         let mt = m.transpose();
@@ -444,7 +427,7 @@ mod tests {
 
     #[test]
     fn symmetry_detection() {
-        let mut rng = Lcg(3);
+        let mut rng = Lcg::new(3);
         let t = random_triplets(&mut rng, 30, 30, 200);
         // A + A^T from triplets: symmetric up to rounding of the sums.
         let rows: Vec<u32> = t.0.iter().chain(&t.1).copied().collect();
@@ -464,11 +447,11 @@ mod tests {
 
     #[test]
     fn parallel_and_sequential_agree_bit_for_bit() {
-        let mut rng = Lcg(2024);
+        let mut rng = Lcg::new(2024);
         let n = 50_000;
         let t = random_triplets(&mut rng, n, n, 12 * n);
         let m = CsrMatrix::from_triplets(n, n, &t.0, &t.1, &t.2).unwrap();
-        let x: Vec<f64> = (0..n).map(|_| rng.value() * 1e3).collect();
+        let x: Vec<f64> = (0..n).map(|_| rng.between(-1.0, 1.0) * 1e3).collect();
         let (mut seq, mut par) = (vec![0.0; n], vec![0.0; n]);
         m.mul_vec_sequential(&x, &mut seq);
         m.mul_vec_parallel(&x, &mut par);

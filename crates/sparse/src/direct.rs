@@ -11,9 +11,13 @@
 //! Tutte matrix has no band structure; a modern fill-reducing ordering makes
 //! that moot on planar meshes: nested-dissection-like orderings of a planar
 //! graph give `O(n log n)` fill (Lipton, Rose and Tarjan 1979), and AMD gets
-//! close on meshes. `crate::solve` has the measurements.
+//! close on meshes. docs/benchmarks.md has the measurements.
+//!
+//! [`Factorization`], the public face of a factor kept for many solves (the
+//! iterative refinement of `crate::refine`), lives here too.
 
 use crate::error::SparseError;
+use crate::solve::{find_asymmetry, validate, SolveParams};
 use crate::vector::{residual_into, residual_scale};
 use crate::CsrMatrix;
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
@@ -105,12 +109,13 @@ fn scratch(req: StackReq) -> Result<MemBuffer, SparseError> {
     MemBuffer::try_new(req).map_err(|e| failed("allocating scratch", e))
 }
 
+/// A Cholesky factor: faer's symbolic structure and the values of `L`.
+type Llt<I> = (SymbolicCholesky<I>, Vec<f64>);
+
 /// Symbolic analysis (AMD ordering) and numeric `L L^T` of the lower
 /// triangle of `m`, with indices of type `I`; `None` when the factor has
 /// more entries than `I` can count.
-fn llt<I: Index>(
-    m: SparseColMatRef<'_, I, f64>,
-) -> Result<Option<(SymbolicCholesky<I>, Vec<f64>)>, SparseError> {
+fn llt<I: Index>(m: SparseColMatRef<'_, I, f64>) -> Result<Option<Llt<I>>, SparseError> {
     // The CSC view is A^T = A (A is symmetric); its lower triangle is A's
     // upper one, equal to A's lower one within the tolerance.
     let symbolic = match factorize_symbolic_cholesky(
@@ -163,6 +168,20 @@ fn llt_solve<I: Index>(
 }
 
 impl Factor {
+    /// Cholesky when `a` is `symmetric` and turns out positive definite, LU
+    /// otherwise: LU still solves a symmetric indefinite matrix. What
+    /// `SolverKind::Auto` and [`Factorization`] use.
+    pub(crate) fn cholesky_or_lu(a: &CsrMatrix, symmetric: bool) -> Result<Factor, SparseError> {
+        if symmetric {
+            match Factor::cholesky(a) {
+                Ok(factor) => return Ok(factor),
+                Err(SparseError::NotPositiveDefinite { .. }) => {}
+                Err(e) => return Err(e),
+            }
+        }
+        Factor::lu(a)
+    }
+
     /// Sparse Cholesky of a symmetric matrix (square, finite, symmetric within
     /// tolerance: checked by the dispatcher). Only one triangle is read.
     ///
@@ -302,6 +321,38 @@ impl Factor {
             }
             Ok((sol, residuals))
         })
+    }
+}
+
+/// A matrix factorised once for many solves: sparse Cholesky when it is
+/// symmetric (and positive definite), LU otherwise. Used by iterative
+/// refinement ([`crate::refine`]), which solves again and again with one factor.
+pub struct Factorization {
+    factor: Factor,
+    n: usize,
+}
+
+impl Factorization {
+    /// Factorises `a` (square and finite; checked).
+    pub fn new(a: &CsrMatrix) -> Result<Factorization, SparseError> {
+        validate(a, &[], &SolveParams::default())?;
+        let factor = Factor::cholesky_or_lu(a, find_asymmetry(a).is_none())?;
+        Ok(Factorization { factor, n: a.n_rows() })
+    }
+
+    /// Solves `A x = b` for every `b`, with no refinement.
+    pub fn solve(&self, a: &CsrMatrix, rhs: &[Vec<f64>]) -> Result<Vec<Vec<f64>>, SparseError> {
+        for b in rhs {
+            if b.len() != self.n {
+                return Err(SparseError::LengthMismatch {
+                    what: "right-hand side",
+                    got: b.len(),
+                    expected: self.n,
+                });
+            }
+        }
+        // A tolerance of infinity turns the factor's own refinement off.
+        self.factor.solve(a, rhs, f64::INFINITY).map(|(x, _)| x)
     }
 }
 

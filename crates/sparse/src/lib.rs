@@ -24,10 +24,13 @@ mod direct;
 mod gauss_seidel;
 mod preconditioner;
 mod solve;
+mod solver_kind;
 #[cfg(test)]
 mod test_support;
 mod vector;
 
 pub use csr::CsrMatrix;
+pub use direct::Factorization;
 pub use error::SparseError;
-pub use solve::{solve, Factorization, SolveInfo, SolveParams, SolverKind};
+pub use solve::{solve, SolveInfo, SolveParams};
+pub use solver_kind::SolverKind;

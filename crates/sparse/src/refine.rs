@@ -10,8 +10,8 @@
 //! x is the double nearest the exact solution, give or take an ulp: the best a
 //! double can hold (Wilkinson 1963; Higham, "Accuracy and Stability", ch. 12).
 
+use crate::direct::Factorization;
 use crate::error::SparseError;
-use crate::solve::Factorization;
 use crate::CsrMatrix;
 use rayon::prelude::*;
 

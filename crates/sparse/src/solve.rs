@@ -14,62 +14,19 @@
 //! symmetric matrix turns out not to be positive definite (where an explicit
 //! `Direct` reports [`SparseError::NotPositiveDefinite`] instead).
 //!
-//! Measured with `cargo bench -p spherify-sparse --bench solvers`: the
-//! interior-block 5-point Laplacian of a square grid, two right-hand sides (a
-//! Tutte map of the boundary to a circle), relative residual 1e-8, on the
-//! 2-vCPU development machine (Xeon, shared with other jobs, so +-30%):
-//!
-//! | unknowns | Direct (Cholesky) | CG + IC(0)              | CG + Jacobi              | Gauss-Seidel               |
-//! |----------|-------------------|-------------------------|--------------------------|----------------------------|
-//! | 10k      | 0.018-0.025 s     | 0.042-0.058 s (90 it)   | 0.032-0.038 s (202 it)   | 1.4 s (9,921 sweeps)       |
-//! | 100k     | 0.40 s            | 0.8-1.7 s (247 it)      | 1.0-2.5 s (605 it)       | 114 s (68,609 sweeps)      |
-//! | 1M       | 5.1 s             | 40-47 s (545 it)        | 69-82 s (1,835 it)       | not run (~100x the 100k)   |
-//!
-//! (Ranges: several runs on the shared machine. Gauss-Seidel at 100k is one
-//! uncapped run; the bench caps it and extrapolates.)
-//!
-//! Direct wins at every size, by 2x at 10k and 8x at 1M, and the gap widens
-//! with `n`: CG's iteration count grows like the grid side (`sqrt(cond)`),
-//! Gauss-Seidel's like its square (thesis 4.5 chose it for simplicity, not
-//! speed), while the Cholesky factor of a planar graph stays nearly linear in
-//! size (55M nonzeros at 1M unknowns with AMD). Direct is also exact to
-//! ~1e-14 whatever `tol` says, and its cost does not depend on the right-hand
-//! side or on a starting guess. Of its 5 s at 1M, about 1.5 s is the AMD
-//! ordering and symbolic analysis, 2.5-3 s the numeric factorisation, 0.4 s
-//! the two triangular solves, 0.1 s the symmetry check here. LU on a
-//! non-symmetric matrix (mean-value weights) costs about twice Cholesky (9 s
-//! for the 1M grid: COLAMD ordering and pivoting). What could change the
-//! choice is memory, not time: the factor takes ~0.5 GB at 1M unknowns and
-//! grows a little faster than `n`; for systems far beyond that, ask for
-//! [`SolverKind::CgIc0`] explicitly.
+//! A fill-reducing ordering keeps the factor of a planar Tutte system nearly
+//! linear in size, so Direct beat CG and Gauss-Seidel at every size measured
+//! (10k to 1M unknowns), is exact to ~1e-14 whatever `tol` says, and costs the
+//! same for any right-hand side. Its limit is memory (~0.5 GB at 1M
+//! unknowns): for systems far beyond that, ask for [`SolverKind::CgIc0`].
+//! The timings are in docs/benchmarks.md ("Tutte system solvers").
 
 use crate::direct::Factor;
 use crate::error::SparseError;
 use crate::preconditioner::{Ic0, Jacobi};
-use crate::{cg, gauss_seidel, CsrMatrix};
+use crate::{cg, gauss_seidel, CsrMatrix, SolverKind};
 use rayon::prelude::*;
 use std::time::Instant;
-
-/// Which solver [`solve`] runs.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum SolverKind {
-    /// Let [`solve`] choose (see the module documentation); never reported
-    /// back in [`SolveInfo::solver`].
-    Auto,
-    /// Sparse Cholesky for a symmetric matrix, sparse LU otherwise
-    /// (`crate::direct`). Uses `tol` only to decide whether to refine the
-    /// solution iteratively with the same factor; ignores `max_iter` and `x0`.
-    Direct,
-    /// Conjugate gradients with the Jacobi (diagonal) preconditioner. Needs a
-    /// symmetric positive definite matrix.
-    CgJacobi,
-    /// Conjugate gradients with the zero-fill incomplete Cholesky
-    /// preconditioner. Needs a symmetric positive definite matrix.
-    CgIc0,
-    /// Gauss-Seidel sweeps (thesis 4.5). Needs a positive diagonal; converges
-    /// for the Tutte matrices (Prop. 4.10 and `crate::gauss_seidel`).
-    GaussSeidel,
-}
 
 /// Parameters of [`solve`].
 #[derive(Debug, Clone)]
@@ -153,7 +110,8 @@ pub fn solve(
     validate(a, rhs, params)?;
     let (x, solver, iterations, residuals) = match kind {
         SolverKind::Auto => {
-            let (x, residuals) = solve_auto(a, rhs, params)?;
+            let symmetric = find_asymmetry(a).is_none();
+            let (x, residuals) = Factor::cholesky_or_lu(a, symmetric)?.solve(a, rhs, params.tol)?;
             (x, SolverKind::Direct, 0, residuals)
         }
         SolverKind::Direct => {
@@ -188,23 +146,6 @@ fn worst(residuals: &[f64]) -> f64 {
     residuals
         .iter()
         .fold(0.0, |m: f64, &r| if r.is_nan() || m.is_nan() { f64::NAN } else { m.max(r) })
-}
-
-/// [`SolverKind::Auto`]: see the module documentation.
-fn solve_auto(
-    a: &CsrMatrix,
-    rhs: &[Vec<f64>],
-    params: &SolveParams,
-) -> Result<(Vec<Vec<f64>>, Vec<f64>), SparseError> {
-    if find_asymmetry(a).is_none() {
-        match Factor::cholesky(a) {
-            Ok(factor) => return factor.solve(a, rhs, params.tol),
-            // Symmetric but indefinite: LU still solves it.
-            Err(SparseError::NotPositiveDefinite { .. }) => {}
-            Err(e) => return Err(e),
-        }
-    }
-    Factor::lu(a)?.solve(a, rhs, params.tol)
 }
 
 /// An iterative solver on one right-hand side and its starting guess.
@@ -252,7 +193,11 @@ fn solve_iterative(
 }
 
 /// Checks everything the solvers rely on that does not depend on the solver.
-fn validate(a: &CsrMatrix, rhs: &[Vec<f64>], params: &SolveParams) -> Result<(), SparseError> {
+pub(crate) fn validate(
+    a: &CsrMatrix,
+    rhs: &[Vec<f64>],
+    params: &SolveParams,
+) -> Result<(), SparseError> {
     let n = a.n_rows();
     if a.n_cols() != n {
         return Err(SparseError::NotSquare { n_rows: n, n_cols: a.n_cols() });
@@ -297,7 +242,7 @@ fn check_vectors(what: &'static str, vectors: &[Vec<f64>], n: usize) -> Result<(
 /// The first stored entry (in row order) whose mirror differs by more than
 /// [`SYMMETRY_RTOL`] times the largest entry, as `(row, col, a_rc, a_cr)`;
 /// `None` for a symmetric matrix. O(nnz log d), rows split over rayon.
-fn find_asymmetry(a: &CsrMatrix) -> Option<(usize, usize, f64, f64)> {
+pub(crate) fn find_asymmetry(a: &CsrMatrix) -> Option<(usize, usize, f64, f64)> {
     let largest = a.values().iter().fold(0.0f64, |m, v| m.max(v.abs()));
     let tol = SYMMETRY_RTOL * largest;
     (0..a.n_rows()).into_par_iter().with_min_len(4096).find_map_first(|i| {
@@ -323,14 +268,6 @@ mod tests {
     use super::*;
     use crate::test_support::*;
 
-    const ALL: [SolverKind; 5] = [
-        SolverKind::Auto,
-        SolverKind::Direct,
-        SolverKind::CgJacobi,
-        SolverKind::CgIc0,
-        SolverKind::GaussSeidel,
-    ];
-
     fn tight() -> SolveParams {
         SolveParams { tol: 1e-13, max_iter: 200_000, x0: None }
     }
@@ -350,7 +287,7 @@ mod tests {
         for a in &systems {
             let b = wave(a.n_rows(), 0.37);
             let exact = dense_solve(a, &b);
-            for kind in ALL {
+            for kind in SolverKind::ALL {
                 let (x, info) = solve(a, std::slice::from_ref(&b), kind, &tight()).unwrap();
                 assert!(rel_err(&x[0], &exact) < 1e-8, "{kind:?}: {}", rel_err(&x[0], &exact));
                 assert!(info.residual <= 1e-13, "{kind:?}: {}", info.residual);
@@ -365,7 +302,7 @@ mod tests {
         let a = grid_laplacian(60, 60);
         let rhs = [wave(3600, 0.01), wave(3600, 0.3)];
         let (reference, _) = solve(&a, &rhs, SolverKind::Direct, &tight()).unwrap();
-        for kind in ALL {
+        for kind in SolverKind::ALL {
             let (x, info) = solve(&a, &rhs, kind, &tight()).unwrap();
             for k in 0..2 {
                 assert!(rel_err(&x[k], &reference[k]) < 1e-8, "{kind:?} rhs {k}");
@@ -466,12 +403,12 @@ mod tests {
         let a = grid_laplacian(3, 3);
         let mut b = vec![1.0; 9];
         b[4] = f64::NAN;
-        for kind in ALL {
+        for kind in SolverKind::ALL {
             let e = solve(&a, &[vec![1.0; 9], b.clone()], kind, &tight()).unwrap_err();
             assert_eq!(e, SparseError::NonFinite { what: "rhs", index: 9 + 4 });
         }
         let bad = CsrMatrix::from_triplets(2, 2, &[0, 1], &[0, 1], &[1.0, f64::INFINITY]).unwrap();
-        for kind in ALL {
+        for kind in SolverKind::ALL {
             let e = solve(&bad, &[vec![1.0; 2]], kind, &tight()).unwrap_err();
             assert_eq!(e, SparseError::NonFinite { what: "matrix", index: 1 });
         }
@@ -486,7 +423,7 @@ mod tests {
     #[test]
     fn shape_errors() {
         let a = grid_laplacian(3, 3);
-        for kind in ALL {
+        for kind in SolverKind::ALL {
             let e = solve(&a, &[vec![1.0; 8]], kind, &tight()).unwrap_err();
             assert_eq!(e, SparseError::LengthMismatch { what: "rhs", got: 8, expected: 9 });
         }
@@ -528,7 +465,7 @@ mod tests {
     fn two_right_hand_sides_equal_one_at_a_time() {
         let a = grid_laplacian(15, 17);
         let (b1, b2) = (wave(255, 0.2), wave(255, 1.3));
-        for kind in ALL {
+        for kind in SolverKind::ALL {
             let (both, _) = solve(&a, &[b1.clone(), b2.clone()], kind, &tight()).unwrap();
             let (one, _) = solve(&a, std::slice::from_ref(&b1), kind, &tight()).unwrap();
             let (two, _) = solve(&a, std::slice::from_ref(&b2), kind, &tight()).unwrap();
@@ -543,7 +480,7 @@ mod tests {
     #[test]
     fn trivial_cases() {
         let a = grid_laplacian(4, 4);
-        for kind in ALL {
+        for kind in SolverKind::ALL {
             let (x, info) = solve(&a, &[], kind, &tight()).unwrap();
             assert!(x.is_empty());
             assert_eq!(info.residual, 0.0);
@@ -552,7 +489,7 @@ mod tests {
             assert_eq!(info.residual, 0.0);
         }
         let empty = CsrMatrix::from_triplets(0, 0, &[], &[], &[]).unwrap();
-        for kind in ALL {
+        for kind in SolverKind::ALL {
             let (x, _) = solve(&empty, &[vec![]], kind, &tight()).unwrap();
             assert_eq!(x, vec![Vec::<f64>::new()]);
         }
@@ -568,44 +505,5 @@ mod tests {
             let (_, info) = solve(&a, std::slice::from_ref(&b), kind, &params).unwrap();
             assert_eq!(info.iterations, 0);
         }
-    }
-}
-
-/// A matrix factorised once for many solves: sparse Cholesky when it is
-/// symmetric (and positive definite), LU otherwise. Used by iterative
-/// refinement ([`crate::refine`]), which solves again and again with one factor.
-pub struct Factorization {
-    factor: Factor,
-    n: usize,
-}
-
-impl Factorization {
-    /// Factorises `a` (square and finite; checked).
-    pub fn new(a: &CsrMatrix) -> Result<Factorization, SparseError> {
-        validate(a, &[], &SolveParams::default())?;
-        let factor = match find_asymmetry(a) {
-            None => match Factor::cholesky(a) {
-                Ok(f) => f,
-                Err(SparseError::NotPositiveDefinite { .. }) => Factor::lu(a)?,
-                Err(e) => return Err(e),
-            },
-            Some(_) => Factor::lu(a)?,
-        };
-        Ok(Factorization { factor, n: a.n_rows() })
-    }
-
-    /// Solves `A x = b` for every `b`, with no refinement.
-    pub fn solve(&self, a: &CsrMatrix, rhs: &[Vec<f64>]) -> Result<Vec<Vec<f64>>, SparseError> {
-        for b in rhs {
-            if b.len() != self.n {
-                return Err(SparseError::LengthMismatch {
-                    what: "right-hand side",
-                    got: b.len(),
-                    expected: self.n,
-                });
-            }
-        }
-        // A tolerance of infinity turns the factor's own refinement off.
-        self.factor.solve(a, rhs, f64::INFINITY).map(|(x, _)| x)
     }
 }

@@ -3,20 +3,7 @@
 //! Gaussian elimination as the reference solution.
 
 use crate::CsrMatrix;
-
-/// Knuth's MMIX linear congruential generator: deterministic test data.
-pub(crate) struct Lcg(pub(crate) u64);
-
-impl Lcg {
-    pub(crate) fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-        self.0 >> 11
-    }
-    /// Uniform in [0, 1).
-    pub(crate) fn unit(&mut self) -> f64 {
-        self.next_u64() as f64 / (1u64 << 53) as f64
-    }
-}
+use spherify_mesh::lcg::Lcg;
 
 /// The 5-point Laplacian of an `rows x cols` block of interior grid points
 /// whose boundary is fixed (Dirichlet, eliminated): 4 on the diagonal, -1
@@ -71,13 +58,13 @@ pub(crate) fn laplacian_1d(n: usize) -> CsrMatrix {
 /// but not an M-matrix.
 #[allow(clippy::needless_range_loop)]
 pub(crate) fn random_spd(n: usize, per_row: usize, boost: f64) -> CsrMatrix {
-    let mut rng = Lcg(n as u64 * 31 + per_row as u64);
+    let mut rng = Lcg::new(n as u64 * 31 + per_row as u64);
     let mut l = vec![vec![0.0; n]; n];
     for (i, row) in l.iter_mut().enumerate() {
-        row[i] = 0.5 + rng.unit();
+        row[i] = 0.5 + rng.next_f64();
         for _ in 0..per_row.min(i) {
-            let j = (rng.next_u64() % i as u64) as usize;
-            row[j] = rng.unit() * 2.0 - 1.0;
+            let j = rng.below(i);
+            row[j] = rng.between(-1.0, 1.0);
         }
     }
     let (mut r, mut c, mut v) = (Vec::new(), Vec::new(), Vec::new());
@@ -105,13 +92,13 @@ pub(crate) fn random_spd(n: usize, per_row: usize, boost: f64) -> CsrMatrix {
 #[allow(clippy::needless_range_loop)]
 pub(crate) fn mean_value_like(n: usize, seed: u64) -> (CsrMatrix, Vec<f64>) {
     let w = 10i64;
-    let mut rng = Lcg(seed);
+    let mut rng = Lcg::new(seed);
     let (mut r, mut c, mut v) = (Vec::new(), Vec::new(), Vec::new());
     let mut b = vec![0.0; n];
     for i in 0..n {
         let (y, x) = (i as i64 / w, i as i64 % w);
         let nbrs = [(0, -1), (0, 1), (-1, 0), (1, 0), (-1, -1), (1, 1)];
-        let weights: Vec<f64> = nbrs.iter().map(|_| 0.2 + rng.unit()).collect();
+        let weights: Vec<f64> = nbrs.iter().map(|_| 0.2 + rng.next_f64()).collect();
         let total: f64 = weights.iter().sum();
         r.push(i as u32);
         c.push(i as u32);

@@ -13,8 +13,9 @@ use spherify_mesh::{validate, HalfEdgeMesh, Mesh, TopologyError, TopologyProblem
 
 use crate::csr::CsrMatrix;
 use crate::error::SparseError;
-use crate::solve::{solve, SolveInfo, SolveParams, SolverKind};
+use crate::solve::{solve, SolveInfo, SolveParams};
 use crate::weights::{half_edge_weights, BadWeight, Weights};
+use crate::SolverKind;
 
 /// Where the boundary loop goes.
 #[derive(Debug, Clone, PartialEq)]
@@ -287,7 +288,7 @@ fn boundary_points(
             };
             let lengths: Vec<f64> = (0..m).map(length).collect();
             let total: f64 = lengths.iter().sum();
-            if !(total > 0.0) || lengths.iter().any(|&l| l <= 0.0) {
+            if total.is_nan() || total <= 0.0 || lengths.iter().any(|&l| l <= 0.0) {
                 // Zero-length boundary edges would stack two vertices on one point.
                 return Err(TutteError::BoundaryNotConvex {
                     reason: "the boundary has a zero-length edge, so spacing by length would merge two points".into(),

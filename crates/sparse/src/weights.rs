@@ -6,7 +6,7 @@
 //! within a row matter.
 
 use spherify_mesh::vec3::{cross, dot, norm, sub};
-use spherify_mesh::HalfEdgeMesh;
+use spherify_mesh::{HalfEdgeMesh, UnknownName};
 
 /// Which weights to use.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -38,7 +38,31 @@ pub struct BadWeight {
 }
 
 impl Weights {
-    fn name(&self) -> &'static str {
+    /// The name of each kind of weights, in declaration order: what
+    /// [`Weights::name`] gives and [`Weights::from_name`] takes.
+    pub const NAMES: [&'static str; 4] = ["uniform", "chord", "mean_value", "cotangent"];
+
+    /// The weights called `name` (one of [`Weights::NAMES`], exactly), with
+    /// exponent `rho` for `"chord"` (ignored by the others; not checked here,
+    /// the caller decides what a usable `rho` is).
+    pub fn from_name(name: &str, rho: f64) -> Result<Weights, UnknownName> {
+        let all =
+            [Weights::Uniform, Weights::Chord { rho }, Weights::MeanValue, Weights::Cotangent];
+        UnknownName::position("weights", name, &Self::NAMES).map(|k| all[k])
+    }
+
+    /// The name of these weights, without `rho`.
+    pub const fn name(&self) -> &'static str {
+        match self {
+            Weights::Uniform => "uniform",
+            Weights::Chord { .. } => "chord",
+            Weights::MeanValue => "mean_value",
+            Weights::Cotangent => "cotangent",
+        }
+    }
+
+    /// The weights in words, for error messages.
+    fn label(&self) -> &'static str {
         match self {
             Weights::Uniform => "uniform",
             Weights::Chord { .. } => "chord-length",
@@ -79,7 +103,7 @@ pub fn half_edge_weights(
             }
         };
         if !value.is_finite() {
-            return Err(BadWeight { kind: weights.name(), a: i, b: j, value });
+            return Err(BadWeight { kind: weights.label(), a: i, b: j, value });
         }
         w[h as usize] = value;
     }
@@ -135,6 +159,20 @@ mod tests {
                 assert!((x - expected).abs() < 1e-12, "{w:?}: {x} vs {expected}");
             }
         }
+    }
+
+    #[test]
+    fn names_round_trip() {
+        for name in Weights::NAMES {
+            let weights = Weights::from_name(name, 0.5).unwrap();
+            assert_eq!(weights.name(), name);
+        }
+        assert_eq!(Weights::from_name("chord", -1.0), Ok(Weights::Chord { rho: -1.0 }));
+        let err = Weights::from_name("harmonic", 1.0).unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "unknown weights 'harmonic'; expected one of: uniform, chord, mean_value, cotangent"
+        );
     }
 
     #[test]

@@ -17,6 +17,8 @@ mod ply;
 mod stl;
 mod text;
 
+pub use ply::PlyEncoding;
+
 use crate::error::{FormatError, Location, MeshError};
 use crate::Mesh;
 use std::io::Write;
@@ -54,18 +56,6 @@ pub enum FileFormat {
     Ply,
     /// Stereolithography `.stl` (ascii or binary, single precision).
     Stl,
-}
-
-/// How a PLY file stores its data.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum PlyEncoding {
-    /// Human-readable text; large and slow, but easy to inspect.
-    Ascii,
-    /// Binary, little endian: the compact default.
-    #[default]
-    BinaryLittleEndian,
-    /// Binary, big endian.
-    BinaryBigEndian,
 }
 
 /// Choices for the writers whose format has more than one encoding.
