@@ -22,7 +22,7 @@ import sys
 import time
 import warnings
 from pathlib import Path
-from typing import List, Optional
+from typing import Any, List, Optional
 
 import numpy as np
 
@@ -31,6 +31,7 @@ from ._embed import embed, methods
 from ._errors import SpherifyError, SpherifyWarning, TopologyError
 from ._mesh import Mesh, check, load, orient, save
 from ._quality import quality
+from ._spheremap import ThetaPhiMap
 
 
 def _load(args: argparse.Namespace) -> Mesh:
@@ -76,7 +77,7 @@ def _cmd_orient(args: argparse.Namespace) -> int:
     return 0
 
 
-def _save_npz(path: Path, **arrays: np.ndarray) -> None:
+def _save_npz(path: Path, **arrays: Any) -> None:
     """Write an .npz under a temporary name, then rename it into place."""
     temporary = path.with_name(f".{path.name}.tmp-{os.getpid()}")
     try:
@@ -117,7 +118,7 @@ def _cmd_map(args: argparse.Namespace) -> int:
         print(f"note: {note}")
     print(f"method: {m.method} ({m.status}, {m.iterations} iterations): {m.message}")
     certified = m.valid
-    if m.method == "theta_phi":
+    if isinstance(m, ThetaPhiMap):
         print(f"poles: {m.poles[0]} (north), {m.poles[1]} (south); cut path of {len(m.cut_path)} vertices")
         symmetry = m.details.get("symmetry")
         if symmetry is not None:
@@ -142,7 +143,7 @@ def _cmd_map(args: argparse.Namespace) -> int:
     print(f"seconds: load {loaded - start:.3f}; {stages}; total {mapped - start:.3f}")
     save(Mesh(m.points, m.mesh.faces), out)
     arrays = {"points": m.points, "faces": m.mesh.faces}
-    if m.method == "theta_phi":
+    if isinstance(m, ThetaPhiMap):
         arrays.update(theta_phi=m.theta_phi, poles=np.array(m.poles), cut_path=m.cut_path,
                       cut_faces=m.cut_mesh.faces, cut_original=m.cut_original)
     npz = out.with_suffix(".npz")

@@ -3,6 +3,7 @@
 
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray2, PyReadonlyArrayDyn};
+use spherify_sparse::weights::Weights;
 use pyo3::prelude::*;
 
 use crate::errors::mesh_error;
@@ -58,23 +59,10 @@ pub fn to_i64_rows<const K: usize>(data: &[[u32; K]]) -> Vec<[i64; K]> {
 
 /// The weights named `name` (with exponent `rho` for "chord"); which weights
 /// a method accepts is decided in the core.
-pub fn weights(py: Python<'_>, name: &str, rho: f64) -> PyResult<spherify_sparse::weights::Weights> {
-    use spherify_sparse::weights::Weights;
-    Ok(match name {
-        "uniform" => Weights::Uniform,
-        "chord" if !rho.is_finite() => {
-            return Err(mesh_error(py, format!("rho must be finite, got {rho}")))
-        }
-        "chord" => Weights::Chord { rho },
-        "mean_value" => Weights::MeanValue,
-        "cotangent" => Weights::Cotangent,
-        other => {
-            return Err(mesh_error(
-                py,
-                format!(
-                    "weights must be one of 'uniform', 'chord', 'mean_value', 'cotangent', got {other:?}"
-                ),
-            ))
-        }
-    })
+pub fn weights(py: Python<'_>, name: &str, rho: f64) -> PyResult<Weights> {
+    let weights = Weights::from_name(name, rho).map_err(|e| mesh_error(py, e.to_string()))?;
+    if matches!(weights, Weights::Chord { .. }) && !rho.is_finite() {
+        return Err(mesh_error(py, format!("rho must be finite, got {rho}")));
+    }
+    Ok(weights)
 }

@@ -29,6 +29,9 @@ fn check_vertex(py: Python<'_>, mesh: &CoreMesh, v: i64, what: &str) -> PyResult
     Ok(v as u32)
 }
 
+/// Distances and predecessors, one per vertex.
+type Paths<'py> = (Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<i64>>);
+
 /// dijkstra(mesh, source, weights) -> (distances (n,) float64, predecessors (n,) int64).
 #[pyfunction]
 #[pyo3(signature = (mesh, source, weights="length"))]
@@ -37,7 +40,7 @@ pub fn dijkstra<'py>(
     mesh: &CoreMesh,
     source: i64,
     weights: &str,
-) -> PyResult<(Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<i64>>)> {
+) -> PyResult<Paths<'py>> {
     let source = check_vertex(py, mesh, source, "source")?;
     let w = self::weights(py, mesh, weights)?;
     let paths = py.detach(|| {

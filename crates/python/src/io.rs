@@ -39,17 +39,8 @@ pub fn save(
     ply_encoding: &str,
     stl_binary: bool,
 ) -> PyResult<()> {
-    let ply_encoding = match ply_encoding {
-        "ascii" => PlyEncoding::Ascii,
-        "binary_little_endian" => PlyEncoding::BinaryLittleEndian,
-        "binary_big_endian" => PlyEncoding::BinaryBigEndian,
-        other => {
-            return Err(mesh_error(
-                py,
-                format!("ply_encoding must be 'ascii', 'binary_little_endian' or 'binary_big_endian', got {other:?}"),
-            ))
-        }
-    };
+    let ply_encoding: PlyEncoding =
+        ply_encoding.parse().map_err(|e: spherify_mesh::UnknownName| mesh_error(py, e.to_string()))?;
     let attributes = VertexAttributes {
         sphere: sphere.map(|a| rows::<f64, 3>(py, &a, "sphere")).transpose()?,
         uv: uv.map(|a| rows::<f64, 2>(py, &a, "uv")).transpose()?,

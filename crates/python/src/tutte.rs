@@ -5,37 +5,11 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use spherify_mesh::HalfEdgeMesh;
 use spherify_sparse::tutte::{self as core_tutte, BoundaryShape, TutteParams};
-use spherify_sparse::{SolveParams, SolverKind};
+use spherify_sparse::SolveParams;
 
 use crate::convert::{rows, to_numpy};
 use crate::errors::{mesh_error, to_py, tutte_error};
 use crate::mesh::CoreMesh;
-
-pub fn solver_kind(py: Python<'_>, name: &str) -> PyResult<SolverKind> {
-    Ok(match name {
-        "auto" => SolverKind::Auto,
-        "direct" | "cholesky" => SolverKind::Direct,
-        "cg" | "cg_ic0" => SolverKind::CgIc0,
-        "cg_jacobi" => SolverKind::CgJacobi,
-        "gauss_seidel" => SolverKind::GaussSeidel,
-        other => {
-            return Err(mesh_error(
-                py,
-                format!("solver must be 'auto', 'direct', 'cg', 'cg_ic0', 'cg_jacobi' or 'gauss_seidel', got {other:?}"),
-            ))
-        }
-    })
-}
-
-pub fn solver_name(kind: SolverKind) -> &'static str {
-    match kind {
-        SolverKind::Auto => "auto",
-        SolverKind::Direct => "direct",
-        SolverKind::CgIc0 => "cg_ic0",
-        SolverKind::CgJacobi => "cg_jacobi",
-        SolverKind::GaussSeidel => "gauss_seidel",
-    }
-}
 
 /// boundary_loop(mesh) -> (k,) int64, counter-clockwise; TopologyError unless a disk.
 #[pyfunction]
@@ -77,13 +51,13 @@ pub fn tutte<'py>(
     let params = TutteParams {
         weights: crate::convert::weights(py, weights, rho)?,
         boundary,
-        solver: solver_kind(py, solver)?,
+        solver: solver.parse().map_err(|e: spherify_mesh::UnknownName| mesh_error(py, e.to_string()))?,
         solve: SolveParams { tol, max_iter, x0: None },
     };
     let embedding =
         py.detach(|| core_tutte::tutte(&mesh.mesh, &params)).map_err(|e| tutte_error(py, e))?;
     let info = PyDict::new(py);
-    info.set_item("solver", solver_name(embedding.info.solver))?;
+    info.set_item("solver", embedding.info.solver.as_str())?;
     info.set_item("iterations", embedding.info.iterations)?;
     info.set_item("residual", embedding.info.residual)?;
     info.set_item("seconds", embedding.info.seconds)?;

@@ -49,7 +49,7 @@ pub fn row_stochastic(
         let first = values.len();
         for h in he.rotation(i) {
             let value = w[h as usize];
-            if positivity == Positivity::EveryWeight && !(value > 0.0) {
+            if positivity == Positivity::EveryWeight && (value.is_nan() || value <= 0.0) {
                 return Err(bad(format!("{weights:?}: {value} on edge ({i}, {})", he.head(h))));
             }
             rows.push(i);
