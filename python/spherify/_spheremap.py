@@ -68,6 +68,7 @@ class SphereMap:
         self._mesh = mesh
         self._points = _read_only(core.points())
         self._report: SphereReport = core.report()
+        _read_only(self._report.flipped_faces)
         self._details: Optional[Dict[str, Any]] = None
         self._notes = ([f"reoriented {core.reoriented_faces} faces to face outward"]
                        if core.reoriented_faces else [])
