@@ -17,7 +17,8 @@ import numpy as np
 
 from .._errors import MeshError
 from ._geodesic import EDGE, geodesic
-from ._tubes import TAPER, cap_count, ring_size, ring_steps, tube, zip_rings
+from ._tubes import (MAX_STRETCH, MIN_AROUND, ROW, TAPER, cap_count, pick_edge, ring_size, ring_steps,
+                     tube, zip_rings)
 from ._vectors import Arrays, Floats, Ints, unit
 
 ROOM = 3.5          # arms' bases at least this many base radii apart
@@ -217,3 +218,25 @@ def arm_separation(P: Floats, R: float, r: float, what: str) -> float:
         raise MeshError(f"{len(P)} {what} of radius {r} do not fit on the body; "
                         f"use fewer or thinner {what}")
     return best * R
+
+
+class ArmPlan(NamedTuple):
+    """The sizes a body with arms is built at."""
+    edge: float        # target edge length h
+    around: int        # vertices around each arm
+    spacing: float     # distance between the arms' rings
+    body: HoledBody    # the body with a hole where each arm leaves
+
+
+def plan_arms(n: int, R: float, r: float, separation: float, lengths: Floats,
+              directions: Floats) -> ArmPlan:
+    """The edge length that gives about ``n`` vertices to a body of radius ``R``
+    with arms of radius ``r`` and these ``lengths`` leaving in ``directions``,
+    and the body and ring sizes at that length."""
+    def count(h: float) -> int:
+        return body_arms_count(h, R, r, separation, lengths)
+
+    h = pick_edge(n, count, MAX_STRETCH * 2 * math.pi * r / MIN_AROUND / ROW)
+    nu = body_plan(h, R, r, separation)[0]
+    around, spacing = ring_size(r, h)
+    return ArmPlan(h, around, spacing, holed_body(R, nu, r, directions))

@@ -9,11 +9,10 @@ import numpy as np
 
 from .._errors import MeshError
 from .._mesh import Mesh
-from ._arms import ArmRings, arm_separation, attach_arms, body_arms_count, body_plan, holed_body
+from ._arms import ArmRings, arm_separation, attach_arms, plan_arms
 from ._checks import as_count, as_positive
 from ._guarantees import shape
-from ._tubes import (MAX_STRETCH, MIN_AROUND, ROW, TAPER, check_clearance, pick_edge,
-                     ring_positions, ring_size)
+from ._tubes import TAPER, check_clearance, ring_positions
 from ._vectors import Floats, unit
 
 
@@ -108,13 +107,7 @@ def tentacles(n_vertices: int = 20000, arms: int = 8, arm_length: float = 4.0,
         T = np.cos(ts)[:, None] * out + np.sin(ts)[:, None] * up
         return C, T, np.cross(out, up)
 
-    def count(h: float) -> int:
-        return body_arms_count(h, R, r, separation, lengths)
-
-    h = pick_edge(n, count, MAX_STRETCH * 2 * math.pi * r / MIN_AROUND / ROW)
-    nu = body_plan(h, R, r, separation)[0]
-    m, spacing = ring_size(r, h)
-    body = holed_body(R, nu, r, directions)
+    h, m, spacing, body = plan_arms(n, R, r, separation, lengths, directions)
     bases = body.V[body.centres] / R                     # arms leave from body vertices
 
     # clearance of the arms from each other, themselves and the body, sampled at

@@ -9,11 +9,10 @@ import numpy as np
 
 from .._errors import MeshError
 from .._mesh import Mesh
-from ._arms import ROOM, ArmRings, arm_separation, attach_arms, body_arms_count, body_plan, \
-    holed_body, spread_directions
+from ._arms import ROOM, ArmRings, arm_separation, attach_arms, plan_arms, spread_directions
 from ._checks import as_count, as_positive
 from ._guarantees import shape
-from ._tubes import MAX_STRETCH, MIN_AROUND, ROW, TAPER, pick_edge, ring_positions, ring_size
+from ._tubes import TAPER, ring_positions
 from ._vectors import perpendicular
 
 
@@ -80,14 +79,7 @@ def urchin(n_vertices: int = 20000, spikes: int = 32, spike_length: float = 2.0,
     # spikes are rays from the centre, so they are closest at their bases
     separation = arm_separation(directions, R, r, "spikes")
 
-    def count(h: float) -> int:
-        return body_arms_count(h, R, r, separation, lengths)
-
-    h = pick_edge(n, count, MAX_STRETCH * 2 * math.pi * r / MIN_AROUND / ROW)
-    nu = body_plan(h, R, r, separation)[0]
-    m, spacing = ring_size(r, h)
-
-    body = holed_body(R, nu, r, directions)
+    h, m, spacing, body = plan_arms(n, R, r, separation, lengths, directions)
     rings: List[ArmRings] = []
     for i, d in enumerate(body.V[body.centres] / R):     # spikes leave from body vertices
         s = ring_positions(float(lengths[i]), TAPER, spacing)
