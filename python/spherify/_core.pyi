@@ -7,7 +7,7 @@ import numpy.typing as npt
 
 from ._report import MeshReport, SphereReport
 
-__all__ = ["CoreMesh", "CoreSphereMap", "__version__", "boundary_loop", "check", "check_raw", "check_sphere", "dijkstra", "embed", "load", "methods", "orient", "quality", "save", "shortest_path", "tutte"]
+__all__ = ["CoreMesh", "CoreSphereMap", "__version__", "boundary_loop", "check", "check_raw", "check_sphere", "choices", "dijkstra", "embed", "load", "methods", "orient", "quality", "save", "shortest_path", "tutte"]
 
 __version__: str
 
@@ -86,6 +86,7 @@ def tutte(
     max_iter: int = 10000,
 ) -> Tuple[npt.NDArray[np.float64], Dict[str, Any]]: ...
 def methods() -> List[str]: ...
+def choices() -> Dict[str, List[str]]: ...
 def embed(
     mesh: CoreMesh,
     method: str,

@@ -26,7 +26,7 @@ from typing import Any, List, Optional
 
 import numpy as np
 
-from . import datasets
+from . import _core, datasets
 from ._embed import embed, methods
 from ._errors import SpherifyError, SpherifyWarning, TopologyError
 from ._mesh import Mesh, check, load, orient, save
@@ -167,15 +167,15 @@ def main(argv: Optional[List[str]] = None) -> int:
             p.add_argument("-o", "--output", required=True, help="output mesh file")
         if name == "map":
             p.add_argument("--method", default="theta_phi", choices=methods())
-            p.add_argument("--poles", default="fast_graph",
-                           choices=["fast_graph", "graph", "physical", "symmetry"])
+            p.add_argument("--poles", default="fast_graph", choices=_core.choices()["poles"])
             p.add_argument("--symmetry-eps", type=float, default=None,
                            help="--poles symmetry: band half-width around the plane in mesh "
                                 "units (default: automatic)")
             p.add_argument("--progress", action="store_true",
                            help="--poles graph: show a progress bar even when stderr is not a "
                                 "terminal")
-            p.add_argument("--weights", default="uniform", choices=["uniform", "chord", "mean_value"])
+            p.add_argument("--weights", default="uniform",
+                           choices=_core.choices()["theta_phi_weights"])
         p.set_defaults(func=func)
     args = parser.parse_args(argv)
     try:

@@ -7,6 +7,10 @@ use std::sync::Arc;
 
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
+use spherify_mesh::io::PlyEncoding;
+use spherify_sparse::weights::Weights;
+use spherify_sparse::SolverKind;
+use spherify_sphere::theta_phi::{PoleChoice, ThetaPhiParams};
 use spherify_sphere::{embed as core_embed, GenusZeroMesh, Method, MethodName, SphereError};
 
 use crate::errors::{mesh_error, sphere_error};
@@ -18,6 +22,21 @@ use crate::sphere_map::CoreSphereMap;
 #[pyfunction]
 pub fn methods() -> Vec<&'static str> {
     MethodName::ALL.iter().map(|m| m.as_str()).collect()
+}
+
+/// choices() -> the names of the core's closed choices, for the CLI and the
+/// docs: methods, weights (all, and those theta-phi accepts), pole choices,
+/// solvers and PLY encodings.
+#[pyfunction]
+pub fn choices(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("methods", methods())?;
+    d.set_item("weights", Weights::NAMES.to_vec())?;
+    d.set_item("theta_phi_weights", ThetaPhiParams::WEIGHTS.to_vec())?;
+    d.set_item("poles", PoleChoice::NAMES.to_vec())?;
+    d.set_item("solvers", SolverKind::NAMES.to_vec())?;
+    d.set_item("ply_encodings", PlyEncoding::NAMES.to_vec())?;
+    Ok(d)
 }
 
 fn method(name: MethodName, options: &Options<'_>) -> PyResult<Method> {

@@ -40,6 +40,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     // the file named after it.
     m.add_function(wrap_pyfunction!(embed::embed, m)?)?;
     m.add_function(wrap_pyfunction!(embed::methods, m)?)?;
+    m.add_function(wrap_pyfunction!(embed::choices, m)?)?;
     m.add_function(wrap_pyfunction!(metrics::quality, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())

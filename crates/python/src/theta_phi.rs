@@ -11,8 +11,11 @@ use crate::convert::{to_i64_rows, to_numpy};
 use crate::errors::mesh_error;
 use crate::options::Options;
 
-const POLES: &str =
-    "poles must be 'fast_graph', 'graph', 'physical', 'symmetry' or a (north, south) pair of vertex ids";
+/// What `poles` may be, in words, from the core's list of names.
+fn poles_expected() -> String {
+    let names: Vec<String> = PoleChoice::NAMES.iter().map(|n| format!("'{n}'")).collect();
+    format!("poles must be {} or a (north, south) pair of vertex ids", names.join(", "))
+}
 
 fn pole_choice(
     py: Python<'_>,
@@ -20,19 +23,14 @@ fn pole_choice(
     symmetry: SymmetryParams,
 ) -> PyResult<PoleChoice> {
     if let Ok(name) = poles.extract::<String>() {
-        return match name.as_str() {
-            "fast_graph" => Ok(PoleChoice::FastGraph),
-            "graph" => Ok(PoleChoice::Graph),
-            "physical" => Ok(PoleChoice::Physical),
-            "symmetry" => Ok(PoleChoice::Symmetry(symmetry)),
-            other => Err(mesh_error(py, format!("{POLES}, got {other:?}"))),
-        };
+        return PoleChoice::from_name(&name, symmetry)
+            .map_err(|_| mesh_error(py, format!("{}, got {name:?}", poles_expected())));
     }
     match poles.extract::<(i64, i64)>() {
         Ok((n, s)) if n >= 0 && s >= 0 && n <= u32::MAX as i64 && s <= u32::MAX as i64 => {
             Ok(PoleChoice::Explicit(n as u32, s as u32))
         }
-        _ => Err(mesh_error(py, POLES)),
+        _ => Err(mesh_error(py, poles_expected())),
     }
 }
 

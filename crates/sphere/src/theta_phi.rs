@@ -28,7 +28,9 @@ use std::time::Instant;
 
 use spherify_mesh::cut::{cut_open_with, CutError, CutMesh};
 use spherify_mesh::dijkstra::{dijkstra, dijkstra_to, EdgeWeights};
-use spherify_mesh::{validate, Adjacency, HalfEdgeMesh, Mesh, TopologyError, TopologyProblem};
+use spherify_mesh::{
+    validate, Adjacency, HalfEdgeMesh, Mesh, TopologyError, TopologyProblem, UnknownName,
+};
 use spherify_sparse::refine::refine_step;
 use spherify_sparse::tutte::{inverted_faces, FixedSystem, InvertedFaces, TutteError};
 use spherify_sparse::weights::{half_edge_weights, Weights};
@@ -56,6 +58,32 @@ pub enum PoleChoice {
     Symmetry(SymmetryParams),
     /// The caller's pair.
     Explicit(u32, u32),
+}
+
+impl PoleChoice {
+    /// The choices made by name, as the bindings, the CLI and the docs spell them.
+    pub const NAMES: [&'static str; 4] = ["fast_graph", "graph", "physical", "symmetry"];
+
+    /// The choice named `name`; `symmetry` holds the parameters of "symmetry".
+    pub fn from_name(name: &str, symmetry: SymmetryParams) -> Result<PoleChoice, UnknownName> {
+        Ok(match UnknownName::position("poles", name, &Self::NAMES)? {
+            0 => PoleChoice::FastGraph,
+            1 => PoleChoice::Graph,
+            2 => PoleChoice::Physical,
+            _ => PoleChoice::Symmetry(symmetry),
+        })
+    }
+
+    /// The name of the choice ("explicit" for a caller's pair).
+    pub fn name(&self) -> &'static str {
+        match self {
+            PoleChoice::FastGraph => "fast_graph",
+            PoleChoice::Graph => "graph",
+            PoleChoice::Physical => "physical",
+            PoleChoice::Symmetry(_) => "symmetry",
+            PoleChoice::Explicit(..) => "explicit",
+        }
+    }
 }
 
 /// Parameters of [`theta_phi`].
@@ -107,13 +135,17 @@ fn topology(mesh: &Mesh, problem: TopologyProblem) -> SphereError {
     SphereError::Topology(TopologyError { problem, report: Box::new(validate::check(mesh)) })
 }
 
-/// Tutte's theorem (4.3) needs positive weights; cotangent weights can be
-/// negative, and then the rectangle may fold.
+impl ThetaPhiParams {
+    /// The weights the rectangle accepts: Tutte's theorem (4.3) needs positive
+    /// weights; cotangent weights can be negative, and then the rectangle may fold.
+    pub const WEIGHTS: [&'static str; 3] = ["uniform", "chord", "mean_value"];
+}
+
 fn check_weights(weights: Weights) -> Result<(), SphereError> {
     match weights {
-        Weights::Cotangent => Err(SphereError::InvalidParameter {
+        _ if !ThetaPhiParams::WEIGHTS.contains(&weights.name()) => Err(SphereError::InvalidParameter {
             name: "weights",
-            value: "cotangent".into(),
+            value: weights.name().into(),
             expected: "uniform, chord or mean_value: Tutte's theorem (4.3) needs positive weights",
         }),
         Weights::Chord { rho } if !rho.is_finite() => Err(SphereError::InvalidParameter {
