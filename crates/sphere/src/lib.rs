@@ -26,6 +26,8 @@ pub mod gotsman;
 pub mod h_map;
 pub mod initial;
 pub mod jacobi;
+pub mod kernel;
+pub mod lp;
 pub mod metrics;
 pub mod point_map;
 pub mod poles;
