@@ -17,6 +17,7 @@
 
 pub mod alexa;
 pub mod bvh;
+pub mod cut_path;
 pub mod embed;
 pub mod embedding;
 pub mod error;
@@ -30,6 +31,7 @@ pub mod kernel;
 pub mod lp;
 pub mod metrics;
 pub mod point_map;
+pub mod pole_fans;
 pub mod poles;
 pub mod radial;
 pub mod relaxation;
