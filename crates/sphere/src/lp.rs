@@ -112,9 +112,8 @@ pub fn maximize(
         let drop = if stalled >= BLAND_AFTER {
             negative.min_by_key(|&j| active[j])
         } else {
-            negative.min_by(|&i, &j| {
-                lambda[i].total_cmp(&lambda[j]).then(active[i].cmp(&active[j]))
-            })
+            negative
+                .min_by(|&i, &j| lambda[i].total_cmp(&lambda[j]).then(active[i].cmp(&active[j])))
         };
         match drop {
             Some(j) => {

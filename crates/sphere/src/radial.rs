@@ -159,8 +159,8 @@ mod tests {
     use crate::kernel::tests::{bent_positions, spike};
     use crate::validity::check_sphere;
     use spherify_mesh::solids::lat_long_sphere;
-    use spherify_mesh::Mesh;
     use spherify_mesh::vec3::{cross, dot};
+    use spherify_mesh::Mesh;
 
     /// The method on a test mesh, validated here.
     fn radial(mesh: &Mesh, center: Center) -> Result<SphereEmbedding, SphereError> {
