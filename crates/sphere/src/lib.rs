@@ -18,6 +18,7 @@
 pub mod alexa;
 pub mod bvh;
 pub mod cut_path;
+pub mod dogleg;
 pub mod embed;
 pub mod embedding;
 pub mod error;
