@@ -72,6 +72,43 @@ pub fn octasphere(levels: usize) -> Mesh {
     subdivided(OCTAHEDRON_POSITIONS.to_vec(), OCTAHEDRON_FACES.to_vec(), levels)
 }
 
+/// A latitude-longitude sphere with `n_lat` bands and `n_lon` meridians and its
+/// poles on the x axis (vertex 0 at +x, the last at -x), each coordinate of a
+/// unit direction `u` scaled by `radius(u)` (called once per coordinate, in
+/// vertex order, so a random radius gives a random star-shaped polyhedron).
+/// For a positive radius that is the same for the three coordinates, the mesh
+/// is star-shaped from the origin: the unit sphere is convex round it and
+/// radial scaling keeps every face's orientation seen from there.
+/// Needs `n_lat >= 2` and `n_lon >= 3`.
+pub fn lat_long_sphere(
+    n_lat: usize,
+    n_lon: usize,
+    mut radius: impl FnMut([f64; 3]) -> f64,
+) -> Mesh {
+    let mut p = vec![[1.0, 0.0, 0.0]];
+    for i in 1..n_lat {
+        let theta = std::f64::consts::PI * i as f64 / n_lat as f64;
+        for j in 0..n_lon {
+            let phi = 2.0 * std::f64::consts::PI * j as f64 / n_lon as f64;
+            p.push([theta.cos(), theta.sin() * phi.cos(), theta.sin() * phi.sin()]);
+        }
+    }
+    p.push([-1.0, 0.0, 0.0]);
+    let south = (p.len() - 1) as u32;
+    let ring = |i: usize, j: usize| (1 + (i - 1) * n_lon + j % n_lon) as u32;
+    let mut f = Vec::new();
+    for j in 0..n_lon {
+        f.push([0, ring(1, j), ring(1, j + 1)]);
+        f.push([south, ring(n_lat - 1, j + 1), ring(n_lat - 1, j)]);
+        for i in 1..n_lat - 1 {
+            f.push([ring(i, j), ring(i + 1, j), ring(i + 1, j + 1)]);
+            f.push([ring(i, j), ring(i + 1, j + 1), ring(i, j + 1)]);
+        }
+    }
+    let p = p.into_iter().map(|u| u.map(|x| x * radius(u))).collect();
+    Mesh::new(p, f).expect("a latitude-longitude grid with finite radii is a valid mesh")
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

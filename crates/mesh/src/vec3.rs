@@ -35,6 +35,21 @@ pub fn det3(a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> f64 {
     dot(a, cross(b, c))
 }
 
+/// Solves `m x = b` for a 3x3 matrix given by its rows, by Cramer's rule:
+/// `x_k = det(m with column k replaced by b) / det(m)`. No check: a singular
+/// `m` gives infinities or NaN, so callers test [`det3`] against their own
+/// scale first.
+pub fn solve3(m: [[f64; 3]; 3], b: [f64; 3]) -> [f64; 3] {
+    let d = det3(m[0], m[1], m[2]);
+    let mut x = [0.0; 3];
+    for (k, xk) in x.iter_mut().enumerate() {
+        let mut mk = m;
+        (0..3).for_each(|r| mk[r][k] = b[r]);
+        *xk = det3(mk[0], mk[1], mk[2]) / d;
+    }
+    x
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -50,5 +65,7 @@ mod tests {
             add(sub([1.0, 1.0, 1.0], [1.0, 2.0, 3.0]), scale([0.0, 1.0, 2.0], 2.0)),
             [0.0, 1.0, 2.0]
         );
+        let x = solve3([[2.0, 1.0, 0.0], [1.0, 3.0, 1.0], [0.0, 1.0, 4.0]], [3.0, 5.0, 5.0]);
+        assert!(x.iter().all(|&v| (v - 1.0).abs() < 1e-15), "{x:?}");
     }
 }

@@ -95,11 +95,13 @@ use rayon::prelude::*;
 use spherify_sparse::weights::Weights;
 use spherify_sparse::{solve, CsrMatrix, SolveParams, SolverKind, SparseError};
 
+use crate::dogleg::{dot, resized_radius, Dogleg};
 use crate::embedding::{normalize, SphereEmbedding, Status};
 use crate::error::SphereError;
 use crate::genus_zero::GenusZeroMesh;
 use crate::initial::{initial_points, Initial};
 use crate::weight_matrix::{row_stochastic, Positivity};
+use spherify_mesh::vec3::{cross, det3, dot as dot3, solve3};
 
 /// Spread (see the module documentation) below which the points count as
 /// collapsed: their RMS distance from their mean is below 1% of the radius.
@@ -165,7 +167,10 @@ impl Default for GotsmanParams {
 /// [`SphereError::Solve`] if the sparse LU fails other than by singularity;
 /// [`SphereError::NoConvergence`] (with the last iterate) when `strict` and the
 /// iteration did not converge or collapsed.
-pub fn gotsman(mesh: &GenusZeroMesh, params: &GotsmanParams) -> Result<SphereEmbedding, SphereError> {
+pub fn gotsman(
+    mesh: &GenusZeroMesh,
+    params: &GotsmanParams,
+) -> Result<SphereEmbedding, SphereError> {
     let start = Instant::now();
     if !(params.tol >= 0.0 && params.tol.is_finite()) {
         return Err(SphereError::InvalidParameter {
@@ -200,7 +205,7 @@ pub fn gotsman(mesh: &GenusZeroMesh, params: &GotsmanParams) -> Result<SphereEmb
     // alpha_i = v_i . u_i minimises |u_i - alpha_i v_i| for the start points.
     let u = neighbour_means(&w, &x);
     for i in 0..n {
-        x[4 * i + 3] = dot3(&x[4 * i..4 * i + 3], &u[3 * i..3 * i + 3]);
+        x[4 * i + 3] = dot3(xyz(&x[4 * i..]), xyz(&u[3 * i..]));
     }
 
     let run = newton(&w, x, params)?;
@@ -234,7 +239,7 @@ fn residual(w: &CsrMatrix, x: &[f64]) -> Vec<f64> {
     f.par_chunks_mut(4).enumerate().for_each(|(i, fi)| {
         let (v, alpha) = (&x[4 * i..4 * i + 3], x[4 * i + 3]);
         (0..3).for_each(|k| fi[k] = u[3 * i + k] - alpha * v[k]);
-        fi[3] = 0.5 * (dot3(v, v) - 1.0);
+        fi[3] = 0.5 * (dot3(xyz(v), xyz(v)) - 1.0);
     });
     f
 }
@@ -281,7 +286,7 @@ fn newton_step(w: &CsrMatrix, x: &[f64], f: &[f64]) -> Result<Option<Vec<f64>>, 
         .into_par_iter()
         .map(|i| {
             let vi = v(i);
-            let s = -f[4 * i + 3] / dot3(&vi, &vi);
+            let s = -f[4 * i + 3] / dot3(vi, vi);
             vi.map(|c| s * c)
         })
         .collect();
@@ -299,7 +304,7 @@ fn newton_step(w: &CsrMatrix, x: &[f64], f: &[f64]) -> Result<Option<Vec<f64>>, 
         })
         .collect();
     let rhs: Vec<f64> =
-        (0..n).flat_map(|i| [dot3(&bases[i][0], &b[i]), dot3(&bases[i][1], &b[i])]).collect();
+        (0..n).flat_map(|i| [dot3(bases[i][0], b[i]), dot3(bases[i][1], b[i])]).collect();
     let nnz = 4 * w.nnz() + 2 * n;
     let (mut rows, mut cols, mut values) =
         (Vec::with_capacity(nnz), Vec::with_capacity(nnz), Vec::with_capacity(nnz));
@@ -311,7 +316,7 @@ fn newton_step(w: &CsrMatrix, x: &[f64], f: &[f64]) -> Result<Option<Vec<f64>>, 
                 for c in 0..2 {
                     rows.push(row);
                     cols.push(2 * j + c as u32);
-                    values.push(wij * dot3(&bases[i][a], &bases[j as usize][c]));
+                    values.push(wij * dot3(bases[i][a], bases[j as usize][c]));
                 }
             }
             rows.push(row);
@@ -347,15 +352,15 @@ fn newton_step(w: &CsrMatrix, x: &[f64], f: &[f64]) -> Result<Option<Vec<f64>>, 
                 let j = j as usize;
                 along += wij
                     * dot3(
-                        &vi,
-                        &[
+                        vi,
+                        [
                             step[4 * j] - normal[j][0],
                             step[4 * j + 1] - normal[j][1],
                             step[4 * j + 2] - normal[j][2],
                         ],
                     );
             }
-            (along - dot3(&vi, &b[i])) / dot3(&vi, &vi)
+            (along - dot3(vi, b[i])) / dot3(vi, vi)
         })
         .collect();
     for (i, a) in alpha_steps.into_iter().enumerate() {
@@ -366,16 +371,16 @@ fn newton_step(w: &CsrMatrix, x: &[f64], f: &[f64]) -> Result<Option<Vec<f64>>, 
 
 /// An orthonormal basis of the plane perpendicular to `v` (not zero).
 fn tangent_basis(v: [f64; 3]) -> [[f64; 3]; 2] {
-    let len = dot3(&v, &v).sqrt();
+    let len = dot3(v, v).sqrt();
     let u = v.map(|c| c / len);
     // Cross with the axis least aligned with u, which is never parallel to it.
     let k = (0..3).min_by(|&a, &b| u[a].abs().total_cmp(&u[b].abs())).unwrap_or(0);
     let mut axis = [0.0; 3];
     axis[k] = 1.0;
-    let t1 = cross(&axis, &u);
-    let l1 = dot3(&t1, &t1).sqrt();
+    let t1 = cross(axis, u);
+    let l1 = dot3(t1, t1).sqrt();
     let t1 = t1.map(|c| c / l1);
-    [t1, cross(&u, &t1)]
+    [t1, cross(u, t1)]
 }
 
 /// What the iteration ended with.
@@ -438,11 +443,7 @@ fn newton(w: &CsrMatrix, mut x: Vec<f64>, params: &GotsmanParams) -> Result<Run,
             } else {
                 -1.0
             };
-            if ratio < 0.25 {
-                radius = 0.25 * p_norm;
-            } else if ratio > 0.75 && p_norm >= 0.99 * radius {
-                radius *= 2.0;
-            }
+            radius = resized_radius(radius, ratio, p_norm);
             if ratio > ACCEPT_RATIO {
                 (x, f, f2) = (trial, f_trial, f2_trial);
                 break;
@@ -468,71 +469,6 @@ fn newton(w: &CsrMatrix, mut x: Vec<f64>, params: &GotsmanParams) -> Result<Run,
     })
 }
 
-/// The two ends of the dogleg path and their images under `J`.
-struct Dogleg {
-    /// Cauchy point `-(|g|^2 / |J g|^2) g`, `g = J^T F`, and `J` times it.
-    cauchy: Option<(Vec<f64>, Vec<f64>)>,
-    /// Newton point `-J^-1 F` (rotation removed) and `J` times it.
-    newton: Option<(Vec<f64>, Vec<f64>)>,
-}
-
-impl Dogleg {
-    fn new(jac: &CsrMatrix, f: &[f64], newton: Option<Vec<f64>>) -> Result<Dogleg, SparseError> {
-        let n = f.len();
-        let mut g = vec![0.0; n];
-        jac.transpose().mul_vec(f, &mut g)?;
-        let mut jg = vec![0.0; n];
-        jac.mul_vec(&g, &mut jg)?;
-        let (gg, jgjg) = (dot(&g, &g), dot(&jg, &jg));
-        let cauchy = (gg > 0.0 && jgjg > 0.0 && (gg / jgjg).is_finite()).then(|| {
-            let s = -gg / jgjg;
-            (g.iter().map(|v| s * v).collect(), jg.iter().map(|v| s * v).collect())
-        });
-        let newton = match newton {
-            Some(p) => {
-                let mut jp = vec![0.0; n];
-                jac.mul_vec(&p, &mut jp)?;
-                Some((p, jp))
-            }
-            None => None,
-        };
-        Ok(Dogleg { cauchy, newton })
-    }
-
-    /// The dogleg step for trust radius `radius` and `J` times it; `None` when
-    /// there is no direction to move in.
-    fn step(&self, radius: f64) -> Option<(Vec<f64>, Vec<f64>)> {
-        let scaled = |(p, jp): &(Vec<f64>, Vec<f64>), s: f64| -> (Vec<f64>, Vec<f64>) {
-            (p.iter().map(|v| s * v).collect(), jp.iter().map(|v| s * v).collect())
-        };
-        match (&self.cauchy, &self.newton) {
-            (_, Some(nt)) if dot(&nt.0, &nt.0).sqrt() <= radius => Some(nt.clone()),
-            (Some(c), newton) => {
-                let c_norm = dot(&c.0, &c.0).sqrt();
-                match newton {
-                    Some(nt) if c_norm < radius => {
-                        // p = c + tau (n - c) with |p| = radius, tau in [0, 1].
-                        let d: Vec<f64> = nt.0.iter().zip(&c.0).map(|(a, b)| a - b).collect();
-                        let (a, b, cc) =
-                            (dot(&d, &d), 2.0 * dot(&c.0, &d), c_norm * c_norm - radius * radius);
-                        let tau = (-b + (b * b - 4.0 * a * cc).max(0.0).sqrt()) / (2.0 * a);
-                        let tau = if tau.is_finite() { tau.clamp(0.0, 1.0) } else { 0.0 };
-                        let p = c.0.iter().zip(&d).map(|(ci, di)| ci + tau * di).collect();
-                        let jp =
-                            c.1.iter().zip(&nt.1).map(|(jc, jn)| jc + tau * (jn - jc)).collect();
-                        Some((p, jp))
-                    }
-                    _ => Some(scaled(c, (radius / c_norm).min(1.0))),
-                }
-            }
-            // No Cauchy point (the gradient vanished) but a Newton step longer
-            // than the radius: shorten it.
-            (None, Some(nt)) => Some(scaled(nt, radius / dot(&nt.0, &nt.0).sqrt())),
-            (None, None) => None,
-        }
-    }
-}
-
 /// Subtracts from the point part of the step `p` the infinitesimal rotation
 /// `omega x v_i` that fits it best in least squares:
 /// `sum_i (|v_i|^2 I - v_i v_i^T) omega = sum_i v_i x p_i`. Rotating a
@@ -542,19 +478,19 @@ fn remove_rotation(x: &[f64], p: &mut [f64]) {
     let mut m = [[0.0; 3]; 3];
     let mut rhs = [0.0; 3];
     for (v, d) in x.chunks_exact(4).zip(p.chunks_exact(4)) {
-        let vv = dot3(&v[..3], &v[..3]);
+        let vv = dot3(xyz(v), xyz(v));
         for r in 0..3 {
             for c in 0..3 {
                 m[r][c] -= v[r] * v[c];
             }
             m[r][r] += vv;
         }
-        let c = cross(&v[..3], &d[..3]);
+        let c = cross(xyz(v), xyz(d));
         (0..3).for_each(|k| rhs[k] += c[k]);
     }
-    let Some(omega) = solve3(m, rhs) else { return };
+    let Some(omega) = solve_psd3(m, rhs) else { return };
     for (v, d) in x.chunks_exact(4).zip(p.chunks_exact_mut(4)) {
-        let r = cross(&omega, &v[..3]);
+        let r = cross(omega, xyz(v));
         (0..3).for_each(|k| d[k] -= r[k]);
     }
 }
@@ -562,24 +498,13 @@ fn remove_rotation(x: &[f64], p: &mut [f64]) {
 /// Cramer's rule for a symmetric positive semi-definite 3x3 system; `None`
 /// when it is (nearly) singular, as for collinear points (all at one point or
 /// two antipodes), where there is no rotation to remove reliably.
-fn solve3(m: [[f64; 3]; 3], b: [f64; 3]) -> Option<[f64; 3]> {
-    let det = |a: &[[f64; 3]; 3]| {
-        a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1])
-            - a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0])
-            + a[0][2] * (a[1][0] * a[2][1] - a[1][1] * a[2][0])
-    };
-    let d = det(&m);
+fn solve_psd3(m: [[f64; 3]; 3], b: [f64; 3]) -> Option<[f64; 3]> {
+    let d = det3(m[0], m[1], m[2]);
     let trace = m[0][0] + m[1][1] + m[2][2];
     if d.is_nan() || d <= 1e-12 * trace * trace * trace {
         return None;
     }
-    let mut out = [0.0; 3];
-    for (k, o) in out.iter_mut().enumerate() {
-        let mut mk = m;
-        (0..3).for_each(|r| mk[r][k] = b[r]);
-        *o = det(&mk) / d;
-    }
-    Some(out)
+    Some(solve3(m, b))
 }
 
 /// `sqrt(mean |v_i - c|^2 / mean |v_i|^2)`, `c` the mean point: 1 for points
@@ -589,10 +514,10 @@ fn spread(x: &[f64]) -> f64 {
     let (mut c, mut sq) = ([0.0; 3], 0.0);
     for v in x.chunks_exact(4) {
         (0..3).for_each(|k| c[k] += v[k] / n);
-        sq += dot3(&v[..3], &v[..3]) / n;
+        sq += dot3(xyz(v), xyz(v)) / n;
     }
     // mean |v - c|^2 = mean |v|^2 - |c|^2.
-    let s = ((sq - dot3(&c, &c)) / sq).max(0.0).sqrt();
+    let s = ((sq - dot3(c, c)) / sq).max(0.0).sqrt();
     if s.is_finite() {
         s
     } else {
@@ -646,16 +571,9 @@ fn finish(run: Run, start_points: &[[f64; 3]], params: &GotsmanParams) -> Sphere
     }
 }
 
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
-}
-
-fn dot3(a: &[f64], b: &[f64]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-fn cross(a: &[f64], b: &[f64]) -> [f64; 3] {
-    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+/// The point part `(x, y, z)` of a vertex's `(x, y, z, alpha)`.
+fn xyz(v: &[f64]) -> [f64; 3] {
+    [v[0], v[1], v[2]]
 }
 
 /// Largest absolute value; NaN if any value is NaN (so that it never passes
@@ -703,14 +621,14 @@ mod tests {
         let u = neighbour_means(&w, &x);
         (0..points.len())
             .map(|i| {
-                let ui = &u[3 * i..3 * i + 3];
-                norm3(cross(ui, &points[i])) / dot3(ui, ui).sqrt()
+                let ui = xyz(&u[3 * i..]);
+                norm3(cross(ui, points[i])) / dot3(ui, ui).sqrt()
             })
             .fold(0.0, f64::max)
     }
 
     fn norm3(a: [f64; 3]) -> f64 {
-        dot3(&a, &a).sqrt()
+        spherify_mesh::vec3::norm(a)
     }
 
     #[test]
@@ -881,7 +799,7 @@ mod tests {
         let mut p: Vec<f64> = x
             .chunks(4)
             .flat_map(|v| {
-                let r = cross(&omega, &v[..3]);
+                let r = cross(omega, xyz(v));
                 [r[0], r[1], r[2], 0.5]
             })
             .collect();

@@ -17,6 +17,8 @@
 
 pub mod alexa;
 pub mod bvh;
+pub mod cut_path;
+pub mod dogleg;
 pub mod embed;
 pub mod embedding;
 pub mod error;
@@ -26,8 +28,11 @@ pub mod gotsman;
 pub mod h_map;
 pub mod initial;
 pub mod jacobi;
+pub mod kernel;
+pub mod lp;
 pub mod metrics;
 pub mod point_map;
+pub mod pole_fans;
 pub mod poles;
 pub mod radial;
 pub mod relaxation;

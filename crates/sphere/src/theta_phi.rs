@@ -27,18 +27,19 @@
 use std::time::Instant;
 
 use spherify_mesh::cut::{cut_open_with, CutError, CutMesh};
-use spherify_mesh::dijkstra::{dijkstra, dijkstra_to, EdgeWeights};
-use spherify_mesh::{
-    validate, Adjacency, HalfEdgeMesh, Mesh, TopologyError, TopologyProblem, UnknownName,
-};
+use spherify_mesh::dijkstra::EdgeWeights;
+use spherify_mesh::{validate, HalfEdgeMesh, Mesh, TopologyError, TopologyProblem, UnknownName};
 use spherify_sparse::refine::refine_step;
 use spherify_sparse::tutte::{inverted_faces, FixedSystem, InvertedFaces, TutteError};
 use spherify_sparse::weights::{half_edge_weights, Weights};
 use spherify_sparse::Factorization;
 
+use crate::cut_path::{cut_path, finish_path};
 use crate::embedding::{SphereEmbedding, Status};
 use crate::error::SphereError;
 use crate::genus_zero::GenusZeroMesh;
+use crate::h_map::fold;
+use crate::pole_fans::{pin_fan, pole_fan, rectangle_boundary, strictly_increasing_phi};
 use crate::poles::{self, Poles};
 use crate::symmetry::{self, Symmetry, SymmetryParams};
 
@@ -310,10 +311,7 @@ pub fn theta_phi_with_progress(
     solver.watch.lap("check");
 
     // The fold (6.35); originals keep their labels in the cut mesh.
-    let mut points: Vec<[f64; 3]> = uv[..n_vertices]
-        .iter()
-        .map(|&[t, p]| [t.sin() * p.cos(), t.sin() * p.sin(), t.cos()])
-        .collect();
+    let mut points: Vec<[f64; 3]> = uv[..n_vertices].iter().copied().map(fold).collect();
     points[chosen.north as usize] = [0.0, 0.0, 1.0];
     points[chosen.south as usize] = [0.0, 0.0, -1.0];
     solver.watch.lap("fold");
@@ -439,222 +437,6 @@ impl RectangleSolver {
         }
         Ok(uv)
     }
-}
-
-/// The boundary of eq. 6.31: u_n = (0, pi), u_{p_i} = (i h, 0), u_s = (pi, pi),
-/// u_{N+i} = ((k + 1 - i) h, 2 pi), h = pi / (k + 1), as (theta, phi).
-fn rectangle_boundary(boundary: &[u32], k: usize, n_original: usize) -> Vec<Option<[f64; 2]>> {
-    let h = PI / (k as f64 + 1.0);
-    let mut fixed = vec![None; n_original + k];
-    fixed[boundary[0] as usize] = Some([0.0, PI]);
-    for i in 1..=k {
-        fixed[boundary[i] as usize] = Some([i as f64 * h, 0.0]);
-        fixed[boundary[k + 1 + i] as usize] = Some([(k + 1 - i) as f64 * h, 2.0 * PI]);
-    }
-    fixed[boundary[k + 1] as usize] = Some([PI, PI]);
-    fixed
-}
-
-/// The neighbours of a pole in the cut mesh, ordered by increasing phi in a
-/// valid embedding: P_n = (p_1, v_1, ..., v_l, N+k) for the north pole, and
-/// (p_k, ..., N+1) for the south pole (thesis 6.5.1).
-fn pole_fan(he: &HalfEdgeMesh, pole: u32, south: bool) -> Vec<u32> {
-    let ring = he.vertex_ring(pole);
-    if south {
-        ring.into_iter().rev().collect()
-    } else {
-        ring
-    }
-}
-
-fn strictly_increasing_phi(uv: &[[f64; 2]], fan: &[u32]) -> bool {
-    fan.windows(2).all(|w| uv[w[0] as usize][1] < uv[w[1] as usize][1])
-}
-
-/// Eq. 6.38, made strictly convex: the fan's inner vertices pinned evenly in
-/// phi, the pole then cut off from the free vertices (the graph H = G - n of
-/// eq. 6.36). The thesis puts them on the straight line theta = h1; but when
-/// two of them that are not neighbours in the fan share an edge (a face made of
-/// three pole neighbours, found on small random meshes), that edge lies along
-/// the straight side and Tutte's theorem gives a triangle of zero area, in
-/// exact arithmetic too. So they go on the convex arc
-/// theta = h1 (1 - sin(phi / 2) / 2) instead (mirrored for the south pole),
-/// which keeps the boundary convex, bulges towards the pole and still meets
-/// the rectangle's sides at (h1, 0) and (h1, 2 pi).
-fn pin_fan(fixed: &mut [Option<[f64; 2]>], fan: &[u32], k: usize, south: bool) {
-    let h1 = PI / (k as f64 + 1.0);
-    let inner = &fan[1..fan.len() - 1];
-    let h2 = 2.0 * PI / (inner.len() as f64 + 1.0);
-    for (j, &v) in inner.iter().enumerate() {
-        let phi = (j + 1) as f64 * h2;
-        let depth = h1 * (1.0 - 0.5 * (0.5 * phi).sin());
-        let theta = if south { PI - depth } else { depth };
-        fixed[v as usize] = Some([theta, phi]);
-    }
-}
-
-/// A shortest path from n to s (6.2.4) without chords between its inner
-/// vertices and with at least two of them (k >= 2).
-fn cut_path(graph: &Adjacency, north: u32, south: u32, weights: EdgeWeights) -> Option<Vec<u32>> {
-    let (_, path) = dijkstra_to(graph, north, south, weights)?;
-    finish_path(graph, path, weights)
-}
-
-/// A simple path from its first to its last vertex made chordless, and
-/// lengthened through the whole graph when fewer than 4 vertices remain. A
-/// chord joins two path vertices, so a path inside an induced subgraph (the H
-/// of the symmetry method, eq. 6.21) stays inside it unless lengthened.
-fn finish_path(graph: &Adjacency, mut path: Vec<u32>, weights: EdgeWeights) -> Option<Vec<u32>> {
-    let (north, south) = (*path.first()?, *path.last()?);
-    shortcut_chords(graph, &mut path);
-    if path.len() >= 4 {
-        return Some(path);
-    }
-    lengthen(graph, north, south, weights)
-}
-
-/// Replaces p_i ... p_j by the edge p_i p_j wherever two inner path vertices
-/// more than one step apart are adjacent: such a chord would lie along one side
-/// of the rectangle.
-fn shortcut_chords(graph: &Adjacency, path: &mut Vec<u32>) {
-    'again: loop {
-        let last = path.len() - 1;
-        for i in 1..last {
-            for j in (i + 2..last).rev() {
-                if graph.neighbors(path[i]).contains(&path[j]) {
-                    path.drain(i + 1..j);
-                    continue 'again;
-                }
-            }
-        }
-        return;
-    }
-}
-
-/// A path n, a, ..., s with at least two inner vertices: through a neighbour a
-/// of n not adjacent to s, then a shortest path to s avoiding n; failing that,
-/// n, a, b, s with a ~ n, b ~ a, b ~ s.
-fn lengthen(graph: &Adjacency, north: u32, south: u32, weights: EdgeWeights) -> Option<Vec<u32>> {
-    if let Some(path) = lengthen_clear_of_poles(graph, north, south, weights) {
-        return Some(path);
-    }
-    let n = graph.n_vertices();
-    // The graph without the north pole: drop its edges.
-    let offsets_ok = graph.neighbors(north).iter().any(|&a| a != south);
-    if !offsets_ok {
-        return None;
-    }
-    let mut best: Option<(f64, Vec<u32>)> = None;
-    let without_north = remove_vertex(graph, north);
-    let from_south = dijkstra(&without_north, south, weights)?;
-    for &a in graph.neighbors(north) {
-        if a == south || graph.neighbors(a).contains(&south) {
-            continue;
-        }
-        if let Some(mut tail) = from_south.path_to(a) {
-            tail.reverse(); // a ... s
-            let length = from_south.distances[a as usize];
-            let mut path = vec![north];
-            path.extend(tail);
-            shortcut_chords(graph, &mut path);
-            if path.len() >= 4 && best.as_ref().is_none_or(|(l, _)| length < *l) {
-                best = Some((length, path));
-            }
-        }
-    }
-    if let Some((_, path)) = best {
-        return Some(path);
-    }
-    for &a in graph.neighbors(north) {
-        if a == south {
-            continue;
-        }
-        for &b in graph.neighbors(a) {
-            if b != north && b != south && graph.neighbors(b).contains(&south) {
-                return Some(vec![north, a, b, south]);
-            }
-        }
-    }
-    let _ = n;
-    None
-}
-
-/// The shortest path n, a, ..., b, s in which n is adjacent to no path
-/// vertex but a, and s to none but b. A pole next to a further path vertex
-/// has neighbours on the rectangle's side, so its phi values cannot increase
-/// strictly (6.5.1) and the fan cannot be pinned either (6.38). Such a path
-/// runs from a neighbour a of n that is not one of s through vertices next to
-/// neither pole to a neighbour b of s that is not one of n; the triangle
-/// inequality of edge lengths keeps it from stepping back into N(n) or N(s).
-/// None when every vertex is next to a pole (the octahedron).
-fn lengthen_clear_of_poles(
-    graph: &Adjacency,
-    north: u32,
-    south: u32,
-    weights: EdgeWeights,
-) -> Option<Vec<u32>> {
-    #[derive(Clone, Copy, PartialEq)]
-    enum Role {
-        Pole,
-        NextToNorth,
-        NextToSouth,
-        Free,
-        Blocked,
-    }
-    let mut role = vec![Role::Free; graph.n_vertices()];
-    role[north as usize] = Role::Pole;
-    role[south as usize] = Role::Pole;
-    for &a in graph.neighbors(north) {
-        if role[a as usize] == Role::Free {
-            role[a as usize] = Role::NextToNorth;
-        }
-    }
-    for &b in graph.neighbors(south) {
-        role[b as usize] = match role[b as usize] {
-            Role::Free => Role::NextToSouth,
-            Role::NextToNorth => Role::Blocked,
-            other => other,
-        };
-    }
-    let keep = |u: u32, v: u32| {
-        let (ru, rv) = (role[u as usize], role[v as usize]);
-        let pole_edge = |p: u32, x: Role| {
-            (p == north && x == Role::NextToNorth) || (p == south && x == Role::NextToSouth)
-        };
-        match (ru, rv) {
-            (Role::Pole, x) => pole_edge(u, x),
-            (x, Role::Pole) => pole_edge(v, x),
-            (Role::Blocked, _) | (_, Role::Blocked) => false,
-            (Role::NextToNorth, Role::NextToNorth) | (Role::NextToSouth, Role::NextToSouth) => {
-                false
-            }
-            _ => true,
-        }
-    };
-    let mut offsets = Vec::with_capacity(graph.offsets.len());
-    let mut neighbors = Vec::with_capacity(graph.neighbors.len());
-    offsets.push(0);
-    for v in 0..graph.n_vertices() as u32 {
-        neighbors.extend(graph.neighbors(v).iter().filter(|&&u| keep(v, u)));
-        offsets.push(neighbors.len());
-    }
-    let clear = Adjacency { offsets, neighbors };
-    let (_, mut path) = dijkstra_to(&clear, north, south, weights)?;
-    shortcut_chords(graph, &mut path);
-    (path.len() >= 4).then_some(path)
-}
-
-fn remove_vertex(graph: &Adjacency, removed: u32) -> Adjacency {
-    let mut offsets = Vec::with_capacity(graph.offsets.len());
-    let mut neighbors = Vec::with_capacity(graph.neighbors.len());
-    offsets.push(0);
-    for v in 0..graph.n_vertices() as u32 {
-        if v != removed {
-            neighbors.extend(graph.neighbors(v).iter().filter(|&&u| u != removed));
-        }
-        offsets.push(neighbors.len());
-    }
-    Adjacency { offsets, neighbors }
 }
 
 #[cfg(test)]
@@ -794,11 +576,7 @@ mod tests {
 
     #[test]
     fn tetrahedron_works_with_a_lengthened_path() {
-        let mesh = Mesh::new(
-            vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
-            vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]],
-        )
-        .unwrap();
+        let mesh = spherify_mesh::solids::tetrahedron();
         let tp = theta_phi(&mesh, &ThetaPhiParams::default()).unwrap();
         assert_eq!(tp.cut_path.len(), 4);
         assert!(tp.tp_valid, "{}", tp.embedding.message);
