@@ -25,9 +25,9 @@ impl<const D: usize> Aabb<D> {
     }
 
     fn include(&mut self, p: &[f64; D]) {
-        for i in 0..D {
-            self.min[i] = self.min[i].min(p[i]);
-            self.max[i] = self.max[i].max(p[i]);
+        for ((lo, hi), &x) in self.min.iter_mut().zip(self.max.iter_mut()).zip(p) {
+            *lo = lo.min(x);
+            *hi = hi.max(x);
         }
     }
 

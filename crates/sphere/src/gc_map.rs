@@ -34,7 +34,7 @@ fn spherical_box(t: [[f64; 3]; 3]) -> Aabb<3> {
     );
     let length = norm(normal);
     let d = if length > 0.0 { dot(normal, t[0]) / length } else { 0.0 };
-    if !(d > 1e-3) {
+    if d.is_nan() || d <= 1e-3 {
         return Aabb { min: [-1.0; 3], max: [1.0; 3] };
     }
     let grown = t.map(|p| scale(p, 1.0 / d));
@@ -80,7 +80,7 @@ impl GcMap {
         let [a, b, c] = self.faces[f as usize].map(|v| self.points[v as usize]);
         let w = [det3(p, b, c), det3(a, p, c), det3(a, b, p)];
         let sum = w[0] + w[1] + w[2];
-        if !(sum > 0.0) {
+        if sum.is_nan() || sum <= 0.0 {
             return (w, f64::NAN);
         }
         let w = w.map(|x| x / sum);

@@ -170,7 +170,7 @@ impl PointMap {
             .enumerate()
             .map(|(row, &p)| {
                 let norm = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
-                if !((norm - 1.0).abs() <= NORM_TOLERANCE) {
+                if (norm - 1.0).abs().is_nan() || (norm - 1.0).abs() > NORM_TOLERANCE {
                     return Err(PointMapError::NotOnSphere { row, point: p, norm });
                 }
                 let p = p.map(|x| x / norm);

@@ -130,7 +130,7 @@ fn fan_psi(chain: &[&PoleCell]) -> Option<Vec<f64>> {
                 lo[end] = lo[end].max(-beta / slope);
             } else if slope < 0.0 {
                 hi[end] = hi[end].min(-beta / slope);
-            } else if !(beta > 0.0) {
+            } else if beta.is_nan() || beta <= 0.0 {
                 return None;
             }
         }
@@ -144,7 +144,7 @@ fn fan_psi(chain: &[&PoleCell]) -> Option<Vec<f64>> {
     for j in 1..m {
         let low = lo[j].max(psi[j - 1]);
         let high = upper[j];
-        if !(low < high) {
+        if low.is_nan() || high.is_nan() || low >= high {
             return None;
         }
         if !(x[j] > low && x[j] < high) {

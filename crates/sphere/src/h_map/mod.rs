@@ -330,8 +330,8 @@ impl ThetaPhiMap {
                 let s = [1.0 - mu, lambda * mu, (1.0 - lambda) * mu];
                 let mut w = [0.0; 3];
                 w[cell.pole_corner] = s[0];
-                for k in 0..3 {
-                    w[k] += s[1] * cell.a[k] + s[2] * cell.b[k];
+                for ((wk, ak), bk) in w.iter_mut().zip(cell.a).zip(cell.b) {
+                    *wk += s[1] * ak + s[2] * bk;
                 }
                 (cell.face, w, s[0].min(s[1]).min(s[2]))
             }
