@@ -154,27 +154,23 @@ impl<const D: usize> Bvh<D> {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn lcg(state: &mut u64) -> f64 {
-        *state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-        (*state >> 11) as f64 / (1u64 << 53) as f64
-    }
+    use spherify_mesh::lcg::Lcg;
 
     #[test]
     fn finds_exactly_the_boxes_a_brute_force_scan_finds() {
-        let mut s = 7u64;
+        let mut s = Lcg::new(7);
         let boxes: Vec<Aabb<2>> = (0..500)
             .map(|_| {
-                let (x, y) = (lcg(&mut s), lcg(&mut s));
+                let (x, y) = (s.next_f64(), s.next_f64());
                 // Mixed sizes, including long thin boxes.
-                let (w, h) = (lcg(&mut s).powi(3), lcg(&mut s).powi(6));
+                let (w, h) = (s.next_f64().powi(3), s.next_f64().powi(6));
                 Aabb { min: [x, y], max: [x + w, y + h] }
             })
             .collect();
         let bvh = Bvh::new(&boxes);
         assert_eq!(bvh.len(), 500);
         for _ in 0..300 {
-            let p = [lcg(&mut s) * 1.2, lcg(&mut s) * 1.2];
+            let p = [s.next_f64() * 1.2, s.next_f64() * 1.2];
             let mut got = Vec::new();
             bvh.for_each_containing(&p, 0.0, |i| {
                 if boxes[i as usize].contains(&p, 0.0) {

@@ -1,19 +1,36 @@
 //! spherify-sphere: maps of closed genus-0 meshes onto the unit sphere.
 //!
-//! * [`predicates`]: exact orientation signs (2D orientation, the 3x3 determinant
-//!   of thesis eq. 3.9, collinearity), re-exported from `spherify-mesh`, where they
-//!   live because mesh validation and the 2D Tutte check in `spherify-sparse` need
-//!   them too.
+//! Entry and results:
+//! * [`genus_zero`]: [`GenusZeroMesh`], the validated mesh every method takes (STYLE 5).
+//! * [`embed`]: one entry point, [`embed()`], for every method and its parameters.
+//! * [`embedding`]: [`SphereEmbedding`], the points and account every method returns.
+//! * [`error`]: [`SphereError`], how a method fails.
 //!
-//! * [`validity`]: the orientation and area tests of thesis 3.4 that decide
-//!   whether points on the sphere form a GC-embedding.
+//! The methods:
+//! * [`radial`]: radial projection from a point, the vertex mean or the kernel (3.5, eq. 3.17-3.18).
+//! * [`kernel`]: the kernel of a star-shaped mesh and its deepest point (3.5, 9.3.1).
+//! * [`lp`]: the small active-set simplex method the kernel LP runs on.
+//! * [`relaxation`]: iterative relaxation (5.2, eq. 5.13-5.15).
+//! * [`alexa`]: Alexa's method (5.3, eq. 5.17-5.19).
+//! * [`gotsman`]: Gotsman, Gu and Sheffer's system solved by Newton's method (5.1, eq. 5.10).
+//! * [`dogleg`]: the dogleg trust region of that Newton iteration.
+//! * [`theta_phi`]: the theta-phi method, a bijection for every genus-0 mesh (ch. 6).
+//! * [`poles`]: pole selection for theta-phi (6.2.1-6.2.3).
+//! * [`symmetry`]: poles and cut path near a symmetry plane (6.2.5).
+//! * [`symmetric_eigen`]: 3x3 symmetric eigen-decomposition for the symmetry plane (eq. 6.15).
+//! * [`cut_path`]: the chordless, lengthened north-south cut path (6.2.4).
+//! * [`pole_fans`]: the rectangle boundary and the pole fans (6.4, 6.5.1, eq. 6.31, 6.36-6.38).
+//! * [`initial`]: starting points of the iterative methods and the vertex mean (eq. 3.18, 5.11-5.14).
+//! * [`weight_matrix`]: the row-stochastic weights of the spherical Tutte methods (eq. 5.3-5.4, 5.9).
 //!
-//! Still to come here (see DESIGN.md): the spherical methods of thesis ch. 3
-//! (radial projection, relaxation, Alexa, Gotsman), ch. 5 and ch. 6 (the
-//! theta-phi method: poles, cut path, the two Tutte-like systems of 6.27), the
-//! validity tests of 3.4 built on [`predicates`], quality measures (angle,
-//! conformal, area and stretch distortion), and point maps between surface and
-//! sphere (3.3, 6.6).
+//! Checking and using a map:
+//! * [`validity`]: the exact orientation and area tests of a GC-embedding (3.4).
+//! * [`predicates`]: exact orientation signs, re-exported from `spherify-mesh`.
+//! * [`metrics`]: angle, conformal, area and stretch distortion.
+//! * [`gc_map`]: the surface-sphere map of a valid GC-embedding (3.3, Prop. 3.3).
+//! * [`h_map`]: the theta-phi map h and its inverse (6.6).
+//! * [`point_map`]: many points at once between surface and sphere (3.3, 6.6).
+//! * [`bvh`]: the box tree that locates points for them.
 
 pub mod alexa;
 pub mod bvh;
@@ -27,7 +44,6 @@ pub mod genus_zero;
 pub mod gotsman;
 pub mod h_map;
 pub mod initial;
-pub mod jacobi;
 pub mod kernel;
 pub mod lp;
 pub mod metrics;
@@ -36,6 +52,7 @@ pub mod pole_fans;
 pub mod poles;
 pub mod radial;
 pub mod relaxation;
+pub mod symmetric_eigen;
 pub mod symmetry;
 pub mod theta_phi;
 pub mod validity;

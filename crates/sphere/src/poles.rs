@@ -155,14 +155,7 @@ pub fn graph(
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    struct Lcg(u64);
-    impl Lcg {
-        fn next(&mut self) -> f64 {
-            self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            (self.0 >> 11) as f64 / (1u64 << 53) as f64
-        }
-    }
+    use spherify_mesh::lcg::Lcg;
 
     fn brute_force(p: &[[f64; 3]]) -> (u32, u32, f64) {
         let mut best = (0, 0, -1.0);
@@ -179,13 +172,13 @@ mod tests {
 
     #[test]
     fn physical_matches_brute_force() {
-        let mut rng = Lcg(7);
+        let mut rng = Lcg::new(7);
         for trial in 0..200 {
             let n = 2 + trial % 60;
-            let shape = [1.0 + 3.0 * rng.next(), 1.0, 0.2 + rng.next()];
+            let shape = [1.0 + 3.0 * rng.next_f64(), 1.0, 0.2 + rng.next_f64()];
             let p: Vec<[f64; 3]> = (0..n)
                 .map(|_| {
-                    let mut v = [rng.next() - 0.5, rng.next() - 0.5, rng.next() - 0.5];
+                    let mut v = [rng.next_f64() - 0.5, rng.next_f64() - 0.5, rng.next_f64() - 0.5];
                     if trial % 3 == 0 {
                         // Points on a sphere: the hard case for pruning.
                         let r = dist2(v, [0.0; 3]).sqrt();

@@ -2,7 +2,7 @@
 //!
 //! 1. The area-weighted confidence ellipsoid of the face centroids: centre m
 //!    (eq. 6.11, 6.13, weights = face areas 6.14) and the eigenvectors of
-//!    C = V^T W V (eq. 6.12, 6.15), by [`crate::jacobi`].
+//!    C = V^T W V (eq. 6.12, 6.15), by [`crate::symmetric_eigen`].
 //! 2. Each of the three principal planes through m is scored (below); the
 //!    best plane is the candidate symmetry plane (eq. 6.19).
 //! 3. R = the vertices within `eps` of that plane (eq. 6.20); H = the subgraph
@@ -50,11 +50,12 @@
 //! spread, O(N log N).
 
 use spherify_mesh::dijkstra::{dijkstra_to, EdgeWeights};
+use spherify_mesh::vec3::{cross, dot, sub};
 use spherify_mesh::Adjacency;
 
 use crate::error::SphereError;
-use crate::jacobi::symmetric_eigen;
 use crate::poles::{self, Poles};
+use crate::symmetric_eigen::symmetric_eigen;
 
 /// Default for [`SymmetryParams::max_score`]. On the corpus meshes that are
 /// mirror-symmetric by construction (the cow, the fish, a human model, the
@@ -161,18 +162,6 @@ pub struct Symmetry {
     /// A shortest north-south path inside H; empty on fallback.
     pub path: Vec<u32>,
     pub fallback: Option<Fallback>,
-}
-
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
 }
 
 /// Face centroids (eq. 6.13) and areas (eq. 6.14).

@@ -182,11 +182,8 @@ mod tests {
     fn rotated_diagonal_matrices() {
         // R diag(l) R^T for rotations R built from two angles: eigenvalues and
         // eigenvectors (up to sign) come back.
-        let mut seed = 17u64;
-        let mut next = || {
-            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            (seed >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut rng = spherify_mesh::lcg::Lcg::new(17);
+        let mut next = || rng.next_f64();
         for _ in 0..200 {
             let (a, b, c) = (6.3 * next(), 6.3 * next(), 6.3 * next());
             let rz = [[a.cos(), -a.sin(), 0.0], [a.sin(), a.cos(), 0.0], [0.0, 0.0, 1.0]];
