@@ -3,8 +3,8 @@
 
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray2, PyReadonlyArrayDyn};
-use spherify_sparse::weights::Weights;
 use pyo3::prelude::*;
+use spherify_sparse::weights::Weights;
 
 use crate::errors::mesh_error;
 

@@ -39,8 +39,9 @@ pub fn save(
     ply_encoding: &str,
     stl_binary: bool,
 ) -> PyResult<()> {
-    let ply_encoding: PlyEncoding =
-        ply_encoding.parse().map_err(|e: spherify_mesh::UnknownName| mesh_error(py, e.to_string()))?;
+    let ply_encoding: PlyEncoding = ply_encoding
+        .parse()
+        .map_err(|e: spherify_mesh::UnknownName| mesh_error(py, e.to_string()))?;
     let attributes = VertexAttributes {
         sphere: sphere.map(|a| rows::<f64, 3>(py, &a, "sphere")).transpose()?,
         uv: uv.map(|a| rows::<f64, 2>(py, &a, "uv")).transpose()?,

@@ -101,8 +101,12 @@ impl<'py> Options<'py> {
 
     /// Refuses whatever option the method did not read.
     pub fn finish(self) -> PyResult<()> {
-        let left: Vec<String> =
-            self.given.keys().iter().map(|k| k.str().map(|s| s.to_string())).collect::<Result<_, _>>()?;
+        let left: Vec<String> = self
+            .given
+            .keys()
+            .iter()
+            .map(|k| k.str().map(|s| s.to_string()))
+            .collect::<Result<_, _>>()?;
         if left.is_empty() {
             return Ok(());
         }

@@ -83,7 +83,9 @@ pub fn relaxation(options: &Options<'_>) -> PyResult<Method> {
 pub fn alexa(options: &Options<'_>) -> PyResult<Method> {
     let defaults = AlexaParams::default();
     Ok(Method::Alexa(AlexaParams {
-        step: options.optional_number("c")?.map_or(AlexaStep::InverseLongestEdge, AlexaStep::Constant),
+        step: options
+            .optional_number("c")?
+            .map_or(AlexaStep::InverseLongestEdge, AlexaStep::Constant),
         max_iter: options.count("max_iter", defaults.max_iter, 0)?,
         check_every: options.count("check_every", defaults.check_every, 1)?,
         tol: options.number("tol", defaults.tol)?,

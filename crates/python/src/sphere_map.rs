@@ -157,7 +157,8 @@ impl CoreSphereMap {
         let ids: Vec<i64> = ids.iter().copied().collect();
         let bary = rows::<f64, 3>(py, &bary, "bary")?;
         let map = self.point_map(py);
-        let points = py.detach(|| map.to_sphere(&ids, &bary)).map_err(|e| point_map_error(py, e))?;
+        let points =
+            py.detach(|| map.to_sphere(&ids, &bary)).map_err(|e| point_map_error(py, e))?;
         Ok(to_numpy(py, &points))
     }
 

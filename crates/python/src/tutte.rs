@@ -51,7 +51,9 @@ pub fn tutte<'py>(
     let params = TutteParams {
         weights: crate::convert::weights(py, weights, rho)?,
         boundary,
-        solver: solver.parse().map_err(|e: spherify_mesh::UnknownName| mesh_error(py, e.to_string()))?,
+        solver: solver
+            .parse()
+            .map_err(|e: spherify_mesh::UnknownName| mesh_error(py, e.to_string()))?,
         solve: SolveParams { tol, max_iter, x0: None },
     };
     let embedding =

@@ -57,4 +57,3 @@ pub fn normalize(x: [f64; 3]) -> Option<[f64; 3]> {
     let n = (x[0] * x[0] + x[1] * x[1] + x[2] * x[2]).sqrt();
     (n > 0.0 && n.is_finite()).then(|| [x[0] / n, x[1] / n, x[2] / n])
 }
-

@@ -106,8 +106,8 @@ mod tests {
     #[test]
     fn an_inward_mesh_is_turned_outward() {
         let faces: Vec<[u32; 3]> = OCTAHEDRON_FACES.iter().map(|&[a, b, c]| [a, c, b]).collect();
-        let g = GenusZeroMesh::new(Mesh::new(OCTAHEDRON_POSITIONS.to_vec(), faces).unwrap())
-            .unwrap();
+        let g =
+            GenusZeroMesh::new(Mesh::new(OCTAHEDRON_POSITIONS.to_vec(), faces).unwrap()).unwrap();
         assert_eq!(g.reoriented_faces(), 8);
         assert_eq!(g.faces(), octahedron().faces());
     }

@@ -53,7 +53,8 @@ pub fn initial_points(
         }
         Initial::Centroid => vertex_mean(positions),
     };
-    let from_center = |p: &[f64; 3]| normalize([p[0] - center[0], p[1] - center[1], p[2] - center[2]]);
+    let from_center =
+        |p: &[f64; 3]| normalize([p[0] - center[0], p[1] - center[1], p[2] - center[2]]);
     let mut points = Vec::with_capacity(positions.len());
     for (i, p) in positions.iter().enumerate() {
         match (from_center(p), initial) {

@@ -94,30 +94,17 @@ impl PointMap {
         } else {
             map.problem().map(str::to_string)
         };
-        PointMap {
-            mesh,
-            inner: Inner::ThetaPhi(map),
-            not_bijective,
-        }
+        PointMap { mesh, inner: Inner::ThetaPhi(map), not_bijective }
     }
 
     /// The barycentric map of 3.3 for a GC-embedding; `valid` is its verdict
     /// under the exact tests of 3.4 and `flipped` the number of failing faces.
-    fn gc(
-        mesh: Arc<Mesh>,
-        points: &[[f64; 3]],
-        valid: bool,
-        flipped: usize,
-    ) -> Self {
+    fn gc(mesh: Arc<Mesh>, points: &[[f64; 3]], valid: bool, flipped: usize) -> Self {
         let not_bijective = (!valid).then(|| {
             format!("the points are not a valid GC-embedding ({flipped} faces fail the orientation test of thesis 3.4)")
         });
         let inner = Inner::Gc(GcMap::new(mesh.faces(), points));
-        PointMap {
-            mesh,
-            inner,
-            not_bijective,
-        }
+        PointMap { mesh, inner, not_bijective }
     }
 
     /// Why h^-1 is not defined, if it is not.

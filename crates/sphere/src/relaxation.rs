@@ -38,8 +38,8 @@ use crate::embedding::{normalize, SphereEmbedding, Status};
 use crate::error::SphereError;
 use crate::genus_zero::GenusZeroMesh;
 use crate::initial::{initial_points, Initial};
-use crate::weight_matrix::{row_stochastic, Positivity};
 use crate::validity::check_sphere;
+use crate::weight_matrix::{row_stochastic, Positivity};
 
 /// Parameters of [`relaxation`].
 #[derive(Debug, Clone)]
@@ -102,7 +102,8 @@ pub fn relaxation(
     let w = row_stochastic(mesh, params.weights, Positivity::RowSums)?;
     let points = initial_points(mesh, &params.initial)?;
     // Convex combinations keep points in a hemisphere only when no weight is negative.
-    let cap = if w.values().iter().all(|&x| x >= 0.0) { CapLimit::Hemisphere } else { CapLimit::None };
+    let cap =
+        if w.values().iter().all(|&x| x >= 0.0) { CapLimit::Hemisphere } else { CapLimit::None };
     let setup = start.elapsed().as_secs_f64();
     iterate(
         mesh.faces(),

@@ -144,11 +144,14 @@ impl ThetaPhiParams {
 
 fn check_weights(weights: Weights) -> Result<(), SphereError> {
     match weights {
-        _ if !ThetaPhiParams::WEIGHTS.contains(&weights.name()) => Err(SphereError::InvalidParameter {
-            name: "weights",
-            value: weights.name().into(),
-            expected: "uniform, chord or mean_value: Tutte's theorem (4.3) needs positive weights",
-        }),
+        _ if !ThetaPhiParams::WEIGHTS.contains(&weights.name()) => {
+            Err(SphereError::InvalidParameter {
+                name: "weights",
+                value: weights.name().into(),
+                expected:
+                    "uniform, chord or mean_value: Tutte's theorem (4.3) needs positive weights",
+            })
+        }
         Weights::Chord { rho } if !rho.is_finite() => Err(SphereError::InvalidParameter {
             name: "rho",
             value: rho.to_string(),

@@ -73,8 +73,8 @@ mod tests {
     #[test]
     fn rows_sum_to_one_over_the_neighbours() {
         let mesh = GenusZeroMesh::new(octahedron()).unwrap();
-        let w = row_stochastic(&mesh, Weights::Chord { rho: 1.0 }, Positivity::EveryWeight)
-            .unwrap();
+        let w =
+            row_stochastic(&mesh, Weights::Chord { rho: 1.0 }, Positivity::EveryWeight).unwrap();
         for i in 0..6 {
             let (cols, vals) = w.row(i);
             assert_eq!(cols.len(), 4);
