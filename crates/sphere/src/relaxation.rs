@@ -33,12 +33,11 @@ use std::time::Instant;
 
 use spherify_sparse::weights::Weights;
 
-use crate::embedding::{normalize, SphereEmbedding, Status};
+use crate::embedding::{normalize, SphereEmbedding};
 use crate::error::SphereError;
 use crate::genus_zero::GenusZeroMesh;
 use crate::initial::{initial_points, Initial};
 use crate::weight_matrix::{row_stochastic, Positivity};
-use crate::validity::check_sphere;
 use crate::relaxation_loop::{iterate, CapLimit, Controls};
 
 /// Parameters of [`relaxation`].
@@ -127,6 +126,8 @@ pub fn relaxation(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::embedding::Status;
+    use crate::validity::check_sphere;
     use crate::relaxation_loop::{enclosing_cap, point_sum};
     use spherify_mesh::solids::{
         bent_tube, bumpy, capsule, icosphere, octahedron, octasphere, perturbed_octahedron,
