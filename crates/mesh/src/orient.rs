@@ -146,17 +146,8 @@ mod tests {
     #[test]
     fn tiny_and_huge_meshes_turn_outward() {
         for scale in [1e-120, 1e103] {
-            let p: Vec<[f64; 3]> = [
-                [1.0, 0.0, 0.0],
-                [-1.0, 0.0, 0.0],
-                [0.0, 1.0, 0.0],
-                [0.0, -1.0, 0.0],
-                [0.0, 0.0, 1.0],
-                [0.0, 0.0, -1.0],
-            ]
-            .iter()
-            .map(|q| q.map(|x| x * scale))
-            .collect();
+            let p: Vec<[f64; 3]> =
+                crate::solids::OCTAHEDRON_POSITIONS.iter().map(|q| q.map(|x| x * scale)).collect();
             let inward: Vec<[u32; 3]> = OCTA.iter().map(|&[a, b, c]| [a, c, b]).collect();
             let (fixed, info) = orient(&Mesh::new(p, inward).unwrap()).unwrap();
             assert_eq!(info.components_turned_outward, 1, "scale {scale}");

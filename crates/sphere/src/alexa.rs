@@ -33,7 +33,7 @@ use crate::embedding::{normalize, SphereEmbedding};
 use crate::error::SphereError;
 use crate::genus_zero::GenusZeroMesh;
 use crate::initial::{initial_points, Initial};
-use crate::relaxation::{iterate, CapLimit, Controls};
+use crate::relaxation_loop::{iterate, CapLimit, Controls};
 
 /// The step scale c_i of eq. 5.18.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -132,10 +132,10 @@ pub fn alexa(mesh: &GenusZeroMesh, params: &AlexaParams) -> Result<SphereEmbeddi
 mod tests {
     use super::*;
     use crate::embedding::Status;
-    use crate::relaxation::tests::{
+    use crate::validity::check_sphere;
+    use spherify_mesh::solids::{
         bent_tube, bumpy, capsule, icosphere, octahedron, perturbed_octahedron, scrambled,
     };
-    use crate::validity::check_sphere;
     use spherify_mesh::Mesh;
 
     /// The method on a test mesh, validated here.

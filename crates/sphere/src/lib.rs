@@ -52,6 +52,7 @@ pub mod pole_fans;
 pub mod poles;
 pub mod radial;
 pub mod relaxation;
+pub mod relaxation_loop;
 pub mod symmetric_eigen;
 pub mod symmetry;
 pub mod theta_phi;
