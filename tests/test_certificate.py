@@ -85,3 +85,13 @@ def test_a_certified_map_answers() -> None:
     assert m.valid
     faces, bary, xyz = m.to_surface(m.points[:5])
     np.testing.assert_allclose(xyz, m.mesh.vertices[:5], atol=1e-12)
+
+
+def test_theta_phi_arrays_are_named_and_only_on_theta_phi_maps() -> None:
+    m = sp.embed(sp.datasets.icosphere(1))
+    assert isinstance(m, sp.ThetaPhiMap)
+    np.testing.assert_array_equal(m._core.theta_phi_array("theta_phi"), m.theta_phi)
+    with pytest.raises(sp.MeshError, match="no theta-phi array"):
+        m._core.theta_phi_array("points")
+    with pytest.raises(sp.MeshError, match="no theta-phi array"):
+        invalid_radial()._core.theta_phi_array("theta_phi")

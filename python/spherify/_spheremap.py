@@ -113,17 +113,13 @@ class SphereMap:
     def report(self) -> SphereReport:
         return self._report
 
-    def _all_details(self) -> Dict[str, Any]:
-        """The core's details, copied once, with read-only arrays."""
-        if self._details is None:
-            self._details = {key: _read_only(value) if isinstance(value, np.ndarray) else value
-                             for key, value in self._core.details().items()}
-        return self._details
-
     @property
     def details(self) -> Dict[str, Any]:
         """A fresh dict on every access; its arrays are read-only."""
-        return dict(self._all_details())
+        if self._details is None:
+            self._details = {key: _read_only(value) if isinstance(value, np.ndarray) else value
+                             for key, value in self._core.details().items()}
+        return dict(self._details)
 
     @property
     def valid(self) -> bool:
@@ -257,43 +253,40 @@ class ThetaPhiMap(SphereMap):
           else why the fast-graph poles were used instead.
     """
 
-    _THETA_PHI_KEYS = ("poles", "cut_path", "theta_phi", "cut_vertices", "cut_faces",
-                       "cut_original")
-
     def __init__(self, core: _core.CoreSphereMap, mesh: Mesh) -> None:
         super().__init__(core, mesh)
+        self._arrays: Dict[str, np.ndarray] = {}
         self._cut_mesh: Optional[Mesh] = None
 
-    def _detail(self, key: str) -> Any:
-        return self._all_details()[key]
+    def _array(self, name: str) -> np.ndarray:
+        """One of the core's arrays, copied out on first use and read-only:
+        at a million vertices they are tens of MB, and most callers want none."""
+        if name not in self._arrays:
+            self._arrays[name] = _read_only(self._core.theta_phi_array(name))
+        return self._arrays[name]
 
     @property
     def poles(self) -> Tuple[int, int]:
-        north, south = self._detail("poles")
-        return int(north), int(south)
+        poles = self._core.poles
+        if poles is None:
+            raise AttributeError("the core map has no poles")
+        return poles
 
     @property
     def cut_path(self) -> np.ndarray:
-        return self._detail("cut_path")  # type: ignore[no-any-return]
+        return self._array("cut_path")
 
     @property
     def theta_phi(self) -> np.ndarray:
-        return self._detail("theta_phi")  # type: ignore[no-any-return]
+        return self._array("theta_phi")
 
     @property
     def cut_original(self) -> np.ndarray:
-        return self._detail("cut_original")  # type: ignore[no-any-return]
+        return self._array("cut_original")
 
     @property
     def tp_valid(self) -> bool:
         return bool(self._core.tp_valid)
-
-    @property
-    def details(self) -> Dict[str, Any]:
-        """Refinement, pole-fan and rectangle facts (see the class docstring);
-        a fresh dict on every access, its arrays read-only."""
-        return {key: value for key, value in self._all_details().items()
-                if key not in self._THETA_PHI_KEYS and key != "tp_valid"}
 
     @property
     def cut_mesh(self) -> Mesh:
@@ -301,7 +294,7 @@ class ThetaPhiMap(SphereMap):
         costs as much as the exact validity test, and most callers never
         look at it."""
         if self._cut_mesh is None:
-            self._cut_mesh = Mesh(self._detail("cut_vertices"), self._detail("cut_faces"))
+            self._cut_mesh = Mesh(self._array("cut_vertices"), self._array("cut_faces"))
         return self._cut_mesh
 
 

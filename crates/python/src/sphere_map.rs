@@ -105,6 +105,28 @@ impl CoreSphereMap {
         self.embedding.certificate.valid
     }
 
+    /// The north and south poles (theta-phi maps only; None otherwise).
+    #[getter]
+    fn poles(&self) -> Option<(u32, u32)> {
+        match &self.embedding.details {
+            Details::ThetaPhi(tp) => Some((tp.poles.north, tp.poles.south)),
+            _ => None,
+        }
+    }
+
+    /// theta_phi_array(name) -> a theta-phi map's array: "cut_path",
+    /// "theta_phi", "cut_vertices", "cut_faces" or "cut_original". A new copy
+    /// on every call; MeshError for another name or another kind of map.
+    fn theta_phi_array<'py>(&self, py: Python<'py>, name: &str) -> PyResult<Bound<'py, PyAny>> {
+        let array = match &self.embedding.details {
+            Details::ThetaPhi(tp) => crate::theta_phi::array(py, tp, name),
+            _ => None,
+        };
+        array.ok_or_else(|| {
+            mesh_error(py, format!("no theta-phi array {name:?} in a {} map", self.method()))
+        })
+    }
+
     /// The theta-phi rectangle is certified flip-free (theta-phi maps only;
     /// None otherwise).
     #[getter]
@@ -115,9 +137,10 @@ impl CoreSphereMap {
         }
     }
 
-    /// What the method computed besides the points: for theta-phi the poles,
-    /// cut and rectangle (see `theta_phi::details`), for radial the centre and
-    /// the kernel LP's account; empty otherwise. Fresh arrays on every call.
+    /// What the method computed besides the points, in brief: for theta-phi
+    /// the refinement, pole-fan and rectangle facts (`theta_phi::details`), for
+    /// radial the centre and the kernel LP's account; empty otherwise. Fresh
+    /// arrays on every call.
     fn details<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let d = PyDict::new(py);
         match &self.embedding.details {

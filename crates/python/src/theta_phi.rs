@@ -84,18 +84,16 @@ pub fn method(options: &Options<'_>) -> PyResult<Method> {
     }))
 }
 
-/// What theta-phi computed besides the points, as `SphereMap.details` and
-/// the typed attributes of `ThetaPhiMap`.
+fn ids(v: &[u32]) -> Vec<i64> {
+    v.iter().map(|&x| i64::from(x)).collect()
+}
+
+/// The facts `ThetaPhiMap.details` holds: refinement, pole fans, the
+/// rectangle's thinnest and inverted triangles, the cut's boundary, and what
+/// the symmetry method found. Small: the per-vertex arrays come one at a time
+/// through [`array`], when asked for.
 pub fn details<'py>(py: Python<'py>, tp: &ThetaPhi, d: &Bound<'py, PyDict>) -> PyResult<()> {
-    let ids = |v: &[u32]| v.iter().map(|&x| i64::from(x)).collect::<Vec<_>>();
-    d.set_item("poles", (tp.poles.north, tp.poles.south))?;
-    d.set_item("cut_path", ids(&tp.cut_path).into_pyarray(py))?;
-    d.set_item("theta_phi", to_numpy(py, &tp.theta_phi))?;
-    d.set_item("cut_vertices", to_numpy(py, tp.cut.mesh.positions()))?;
-    d.set_item("cut_faces", to_numpy(py, &to_i64_rows(tp.cut.mesh.faces())))?;
     d.set_item("cut_boundary", ids(&tp.cut.boundary).into_pyarray(py))?;
-    d.set_item("cut_original", ids(&tp.cut.original).into_pyarray(py))?;
-    d.set_item("tp_valid", tp.tp_valid)?;
     d.set_item("tp_flipped_faces", ids(&tp.inverted.flipped).into_pyarray(py))?;
     d.set_item("tp_degenerate_faces", ids(&tp.inverted.degenerate).into_pyarray(py))?;
     d.set_item("refinements", tp.refinements)?;
@@ -106,4 +104,18 @@ pub fn details<'py>(py: Python<'py>, tp: &ThetaPhi, d: &Bound<'py, PyDict>) -> P
         d.set_item("symmetry", symmetry_to_py(py, sym)?)?;
     }
     Ok(())
+}
+
+/// The per-vertex and per-face arrays of a theta-phi map, by name (`None`
+/// for an unknown name): `cut_path`, `theta_phi`, `cut_vertices`,
+/// `cut_faces`, `cut_original`. A new array on every call.
+pub fn array<'py>(py: Python<'py>, tp: &ThetaPhi, name: &str) -> Option<Bound<'py, PyAny>> {
+    Some(match name {
+        "cut_path" => ids(&tp.cut_path).into_pyarray(py).into_any(),
+        "theta_phi" => to_numpy(py, &tp.theta_phi).into_any(),
+        "cut_vertices" => to_numpy(py, tp.cut.mesh.positions()).into_any(),
+        "cut_faces" => to_numpy(py, &to_i64_rows(tp.cut.mesh.faces())).into_any(),
+        "cut_original" => ids(&tp.cut.original).into_pyarray(py).into_any(),
+        _ => return None,
+    })
 }
