@@ -169,3 +169,13 @@ def test_map_with_symmetry_poles(tmp_path: Path, capsys: pytest.CaptureFixture[s
                      "--symmetry-eps", "0.05", "-o", str(out)]) == 0
     text = capsys.readouterr().out
     assert "symmetry poles fell back to fast_graph" in text
+
+
+def test_the_cli_offers_the_core_s_choices(tmp_path: Path) -> None:
+    names = sp._core.choices()
+    assert names["methods"] == sp.methods()
+    assert set(names["theta_phi_weights"]) < set(names["weights"])
+    assert "cotangent" not in names["theta_phi_weights"]
+    with pytest.raises(SystemExit):
+        cli.main(["map", "--dataset", "icosphere", "-o", str(tmp_path / "x.ply"),
+                  "--poles", "nowhere"])

@@ -156,6 +156,7 @@ def main(argv: Optional[List[str]] = None) -> int:
     parser = argparse.ArgumentParser(prog="spherify", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = parser.add_subparsers(dest="command", required=True)
+    names = _core.choices()
     for name, func, text in [("map", _cmd_map, "map a mesh onto the sphere and certify it"),
                              ("check", _cmd_check, "validate a mesh, orient it, print the report"),
                              ("orient", _cmd_orient, "write a consistently outward-oriented copy")]:
@@ -167,7 +168,7 @@ def main(argv: Optional[List[str]] = None) -> int:
             p.add_argument("-o", "--output", required=True, help="output mesh file")
         if name == "map":
             p.add_argument("--method", default="theta_phi", choices=methods())
-            p.add_argument("--poles", default="fast_graph", choices=_core.choices()["poles"])
+            p.add_argument("--poles", default="fast_graph", choices=names["poles"])
             p.add_argument("--symmetry-eps", type=float, default=None,
                            help="--poles symmetry: band half-width around the plane in mesh "
                                 "units (default: automatic)")
@@ -175,7 +176,7 @@ def main(argv: Optional[List[str]] = None) -> int:
                            help="--poles graph: show a progress bar even when stderr is not a "
                                 "terminal")
             p.add_argument("--weights", default="uniform",
-                           choices=_core.choices()["theta_phi_weights"])
+                           choices=names["theta_phi_weights"])
         p.set_defaults(func=func)
     args = parser.parse_args(argv)
     try:

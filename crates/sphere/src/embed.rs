@@ -142,8 +142,8 @@ pub struct Embedding {
 }
 
 impl Embedding {
-    /// Certifies points made elsewhere (a method's, or a caller's own) for
-    /// `mesh`, timing the check as the stage `"certify"`.
+    /// Certifies a method's points for `mesh`, timing the check as the stage
+    /// `"certify"`.
     fn certified(
         mesh: &GenusZeroMesh,
         method: MethodName,

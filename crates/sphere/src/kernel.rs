@@ -329,14 +329,7 @@ pub(crate) mod tests {
     fn a_zero_area_face_is_left_out_of_the_lp() {
         // The octahedron with the midpoint M of edge A = v0, B = v2 put on one
         // side of that edge: face (A, M, B) has exactly collinear corners.
-        let mut p = vec![
-            [1.0, 0.0, 0.0],
-            [-1.0, 0.0, 0.0],
-            [0.0, 1.0, 0.0],
-            [0.0, -1.0, 0.0],
-            [0.0, 0.0, 1.0],
-            [0.0, 0.0, -1.0],
-        ];
+        let mut p = spherify_mesh::solids::OCTAHEDRON_POSITIONS.to_vec();
         p.push([0.5, 0.5, 0.0]);
         // (2, 0, 5) had edge 2->0 (B->A); it becomes (6, 0, 5), (2, 6, 5).
         let f = vec![

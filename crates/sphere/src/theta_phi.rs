@@ -592,4 +592,15 @@ mod tests {
             ThetaPhiParams { poles: PoleChoice::Explicit(3, 3), ..ThetaPhiParams::default() };
         assert!(matches!(theta_phi(&mesh, &params), Err(SphereError::InvalidParameter { .. })));
     }
+
+    #[test]
+    fn pole_choices_round_trip_by_name_and_unknown_names_list_them() {
+        for name in PoleChoice::NAMES {
+            let choice = PoleChoice::from_name(name, SymmetryParams::default()).unwrap();
+            assert_eq!(choice.name(), name);
+        }
+        assert_eq!(PoleChoice::Explicit(0, 1).name(), "explicit");
+        let err = PoleChoice::from_name("north", SymmetryParams::default()).unwrap_err();
+        assert!(err.to_string().contains("fast_graph, graph, physical, symmetry"), "{err}");
+    }
 }
