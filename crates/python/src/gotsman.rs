@@ -6,7 +6,7 @@ use spherify_sphere::gotsman::GotsmanParams;
 use spherify_sphere::Method;
 
 use crate::options::Options;
-use crate::relaxation::{initial, weights};
+use crate::relaxation::initial;
 
 /// `weights` ("uniform" or "chord" with `rho`: the system needs symmetric
 /// positive weights, which the core checks), `max_iter` (50), `tol` (1e-10:
@@ -16,7 +16,7 @@ use crate::relaxation::{initial, weights};
 pub fn method(options: &Options<'_>) -> PyResult<Method> {
     let defaults = GotsmanParams::default();
     Ok(Method::Gotsman(GotsmanParams {
-        weights: weights(options)?,
+        weights: options.weights()?,
         max_iter: options.count("max_iter", defaults.max_iter, 0)?,
         tol: options.number("tol", defaults.tol)?,
         strict: options.flag("strict", defaults.strict)?,

@@ -7,6 +7,7 @@ use std::cell::RefCell;
 
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyString};
+use spherify_sparse::weights::Weights;
 
 use crate::errors::mesh_error;
 
@@ -97,6 +98,14 @@ impl<'py> Options<'py> {
             Ok(s) => Ok(s.to_str()?.to_string()),
             Err(_) => Err(self.bad(name, "a string", &value)),
         }
+    }
+
+    /// `weights` by name, with `rho` for "chord". Which weights a method
+    /// accepts is the core's decision; here only the name is translated.
+    pub fn weights(&self) -> PyResult<Weights> {
+        let name = self.string("weights", "uniform")?;
+        let rho = self.number("rho", 1.0)?;
+        crate::convert::weights(self.py, &name, rho)
     }
 
     /// Refuses whatever option the method did not read.

@@ -4,7 +4,6 @@
 use numpy::PyReadonlyArrayDyn;
 use pyo3::prelude::*;
 use pyo3::types::{PyByteArray, PyBytes, PyString};
-use spherify_sparse::weights::Weights;
 use spherify_sphere::alexa::{AlexaParams, AlexaStep};
 use spherify_sphere::initial::Initial;
 use spherify_sphere::relaxation::RelaxationParams;
@@ -12,14 +11,6 @@ use spherify_sphere::Method;
 
 use crate::errors::mesh_error;
 use crate::options::Options;
-
-/// `weights` by name, with `rho` for "chord". Which weights a method accepts
-/// is the core's decision; here only the name is translated.
-pub fn weights(options: &Options<'_>) -> PyResult<Weights> {
-    let name = options.string("weights", "uniform")?;
-    let rho = options.number("rho", 1.0)?;
-    crate::convert::weights(options.py(), &name, rho)
-}
 
 /// The start of eq. 5.13: the centroid (default), `center` = "centroid" or a
 /// point (x, y, z), or `initial` points (n, 3); not both.
@@ -68,7 +59,7 @@ pub fn initial(options: &Options<'_>) -> PyResult<Initial> {
 pub fn relaxation(options: &Options<'_>) -> PyResult<Method> {
     let defaults = RelaxationParams::default();
     Ok(Method::Relaxation(RelaxationParams {
-        weights: weights(options)?,
+        weights: options.weights()?,
         max_iter: options.count("max_iter", defaults.max_iter, 0)?,
         check_every: options.count("check_every", defaults.check_every, 1)?,
         tol: options.number("tol", defaults.tol)?,

@@ -79,7 +79,7 @@ pub fn method(options: &Options<'_>) -> PyResult<Method> {
     };
     Ok(Method::ThetaPhi(ThetaPhiParams {
         poles,
-        weights: crate::relaxation::weights(options)?,
+        weights: options.weights()?,
         max_refinements: options.count("max_refinements", defaults.max_refinements, 0)?,
     }))
 }
