@@ -48,6 +48,7 @@ QUICK: Dict[str, Dict[str, Any]] = {
     "radial": {},
     "relaxation": {"max_iter": 300},
     "theta_phi": {},
+    "progressive": {"max_iter": 10},
 }
 # Values out of each method's range.
 OUT_OF_RANGE: Dict[str, List[Dict[str, Any]]] = {
@@ -57,7 +58,12 @@ OUT_OF_RANGE: Dict[str, List[Dict[str, Any]]] = {
     "relaxation": [{"max_iter": -1}, {"check_every": 0}, {"weights": "nope"}],
     "theta_phi": [{"poles": "nowhere"}, {"poles": (0, 0)}, {"weights": "nope"},
                   {"max_refinements": -1}],
+    "progressive": [{"max_iter": -1}, {"tol": -1.0}, {"energy": "harmonic"}, {"energy": 3}],
 }
+# Methods whose result depends on the order of the vertices (ties in the
+# progressive method's collapse order and sweep order are broken by vertex id):
+# deterministic for one input, but a relabelled mesh gets another valid map.
+ORDER_DEPENDENT = {"progressive"}
 KNOWN_BUGS: Dict[Tuple[str, str], str] = {}
 # Meshes a method may refuse, by the MeshError's message.
 REFUSES = {"radial": "not star-shaped"}
@@ -233,6 +239,9 @@ def test_relabelled_vertices_relabel_the_rows(method: str) -> None:
     a = sp.embed(mesh, method)
     b = sp.embed(relabelled, method, **same_choices(method, a, new_id))
     assert_contract(b, relabelled, method)
+    if method in ORDER_DEPENDENT:
+        assert a.valid and b.valid
+        return
     np.testing.assert_allclose(b.points, a.points[old_id], rtol=0, atol=1e-9)
 
 

@@ -13,7 +13,7 @@ from ._mesh import Mesh, check, check_sphere, dijkstra, load, orient, save, shor
 from ._report import MeshReport, SphereReport
 from ._spheremap import SphereMap, ThetaPhiMap
 from ._tutte import TutteInfo, boundary_loop, tutte
-from ._embed import embed, methods
+from ._embed import embed, improve, methods
 from ._quality import quality
 
 __all__ = [
@@ -37,6 +37,7 @@ __all__ = [
     "datasets",
     "dijkstra",
     "embed",
+    "improve",
     "load",
     "methods",
     "orient",

@@ -7,7 +7,7 @@ import numpy.typing as npt
 
 from ._report import MeshReport, SphereReport
 
-__all__ = ["CoreMesh", "CoreSphereMap", "__version__", "boundary_loop", "check", "check_raw", "check_sphere", "choices", "dijkstra", "embed", "load", "methods", "orient", "quality", "save", "shortest_path", "tutte"]
+__all__ = ["CoreMesh", "CoreSphereMap", "__version__", "boundary_loop", "check", "check_raw", "check_sphere", "choices", "dijkstra", "embed", "improve", "load", "methods", "orient", "quality", "save", "shortest_path", "tutte"]
 
 __version__: str
 
@@ -93,6 +93,11 @@ def choices() -> Dict[str, List[str]]: ...
 def embed(
     mesh: CoreMesh,
     method: str,
+    options: Optional[Dict[str, Any]] = None,
+    progress: Optional[Callable[[int, int], object]] = None,
+) -> CoreSphereMap: ...
+def improve(
+    sphere_map: CoreSphereMap,
     options: Optional[Dict[str, Any]] = None,
     progress: Optional[Callable[[int, int], object]] = None,
 ) -> CoreSphereMap: ...

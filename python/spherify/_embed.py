@@ -90,6 +90,28 @@ def embed(mesh: MeshLike, method: str = "theta_phi", *, progress: Any = None,
         by the exact tests of thesis 3.4; a :class:`ThetaPhiMap` for
         ``method="theta_phi"``.
 
+    Progressive options
+    -------------------
+    ``method="progressive"`` (thesis 9.3.3; Praun and Hoppe 2003) collapses
+    the mesh to a tetrahedron, maps that, and re-inserts the vertices one
+    level at a time, each at the centre of its ring's kernel, lowering a
+    distortion energy with flip-free moves between levels. Every step is
+    decided by exact predicates, so the map is a GC-embedding as stored, and
+    areas stay in proportion, so long limbs and spikes keep their triangles
+    far above double precision (``m.report.min_area_ratio``).
+
+    energy : str
+        ``"isometric"`` (default; symmetric Dirichlet), ``"conformal"``
+        (MIPS with a barrier below an area ratio of 0.05: an exactly
+        conformal map of a limbed shape cannot be stored in doubles),
+        ``"authalic"`` (area plus a small angle term) or ``"stretch"``
+        (Sander's L2 stretch, as Praun and Hoppe).
+    max_iter : int
+        Sweeps of the final optimisation (default 30).
+    tol : float
+        Stop when a sweep lowers the energy by less than this fraction
+        (default 1e-4).
+
     Raises
     ------
     TopologyError
@@ -98,12 +120,15 @@ def embed(mesh: MeshLike, method: str = "theta_phi", *, progress: Any = None,
         Unknown method or option, or a value out of range.
     ConvergenceError
         An iterative method with ``strict=True`` did not converge;
-        ``err.state["points"]`` holds where it stopped.
+        ``err.state["points"]`` holds where it stopped. Also the progressive
+        method when a vertex finds no place in double precision even after
+        its neighbourhood moved (``err.state["status"] == "insertion_failed"``;
+        the message names the vertex).
     """
     mesh = as_mesh(mesh)
     if "initial" in options and options["initial"] is not None:
         options["initial"] = np.ascontiguousarray(options["initial"], dtype=np.float64)
-    core = _core.embed(mesh._core, method, options, as_callback(progress, "graph poles"))
+    core = _core.embed(mesh._core, method, options, as_callback(progress, "graph poles" if method == "theta_phi" else method))
     if core.tp_valid is None:
         return SphereMap(core, mesh)
     result = ThetaPhiMap(core, mesh)
@@ -114,3 +139,29 @@ def embed(mesh: MeshLike, method: str = "theta_phi", *, progress: Any = None,
         warnings.warn(f"theta-phi: symmetry poles fell back to fast_graph: {symmetry['fallback']}",
                       SpherifyWarning, stacklevel=2)
     return result
+
+
+def improve(sphere_map: SphereMap, *, energy: str = "isometric", max_iter: int = 30,
+            tol: float = 1e-4, progress: Any = None) -> SphereMap:
+    """Lower a distortion energy of a valid map with flip-free moves.
+
+    Thesis 9.3.2's local iteration: each vertex moves in the tangent plane by
+    a Newton step of ``energy`` (see :func:`embed`'s progressive options), cut
+    to the largest step that keeps its faces positive (each det is linear in
+    the step) and accepted only after the exact orientation test of its faces
+    on the stored doubles. Started from a theta-phi, Alexa or Gotsman map, it
+    removes theta-phi's visible seam. The result is never less valid than the
+    start: a plain GC-embedding with ``method == "improve"`` (theta-phi's map
+    h no longer describes the moved points; ``to_sphere`` / ``to_surface``
+    use the barycentric map of thesis 3.3).
+
+    Raises
+    ------
+    MapError
+        ``sphere_map`` is not a valid GC-embedding (``sphere_map.valid`` is False).
+    MeshError
+        An unknown energy or a value out of range.
+    """
+    options = {"energy": energy, "max_iter": max_iter, "tol": tol}
+    core = _core.improve(sphere_map._core, options, as_callback(progress, "improve"))
+    return SphereMap(core, sphere_map.mesh)

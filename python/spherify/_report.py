@@ -139,6 +139,14 @@ class SphereReport:
         Largest | |p| - 1 |; the orientation test does not depend on it.
     bad_points : list of int
         Points that are NaN, infinite or zero.
+    min_det : float
+        Smallest det[v_i, v_j, v_k] over the faces in floating point (its sign
+        is decided exactly): how close the map is to a flip.
+    min_area_ratio : float
+        Smallest spherical triangle area divided by the mean area 4 pi / F:
+        how far the map is from the double-precision floor. A map of a long
+        limb by a harmonic or conformal method goes below 1e-12 here; the
+        progressive method keeps areas in proportion.
     """
 
     valid: bool
@@ -151,9 +159,12 @@ class SphereReport:
     covering_degree: int
     max_norm_error: float
     bad_points: List[int] = field(default_factory=list)
+    min_det: float = float("nan")
+    min_area_ratio: float = float("nan")
 
     def __str__(self) -> str:
         verdict = "valid GC-embedding" if self.valid else "NOT a valid embedding"
         return (f"SphereReport: {verdict}; faces +{self.n_positive} -{self.n_negative} "
                 f"0:{self.n_zero}; area sum {self.area_sum:.12g} (error {self.area_error:.3g}, "
-                f"covers {self.covering_degree}x); max | |p| - 1 | = {self.max_norm_error:.3g}")
+                f"covers {self.covering_degree}x); max | |p| - 1 | = {self.max_norm_error:.3g}; "
+                f"smallest triangle {self.min_area_ratio:.3g} of the mean")

@@ -11,7 +11,9 @@ use spherify_mesh::io::PlyEncoding;
 use spherify_sparse::weights::Weights;
 use spherify_sparse::SolverKind;
 use spherify_sphere::theta_phi::{PoleChoice, ThetaPhiParams};
-use spherify_sphere::{embed as core_embed, GenusZeroMesh, Method, MethodName, SphereError};
+use spherify_sphere::{
+    embed as core_embed, improve_embedding, GenusZeroMesh, Method, MethodName, SphereError,
+};
 
 use crate::errors::{mesh_error, sphere_error};
 use crate::mesh::CoreMesh;
@@ -36,6 +38,7 @@ pub fn choices(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
     d.set_item("poles", PoleChoice::NAMES.to_vec())?;
     d.set_item("solvers", SolverKind::NAMES.to_vec())?;
     d.set_item("ply_encodings", PlyEncoding::NAMES.to_vec())?;
+    d.set_item("energies", spherify_sphere::distortion_energy::Energy::NAMES.to_vec())?;
     Ok(d)
 }
 
@@ -46,6 +49,11 @@ fn method(name: MethodName, options: &Options<'_>) -> PyResult<Method> {
         MethodName::Alexa => crate::relaxation::alexa(options),
         MethodName::Gotsman => crate::gotsman::method(options),
         MethodName::ThetaPhi => crate::theta_phi::method(options),
+        MethodName::Progressive => crate::progressive::method(options),
+        MethodName::Improve => Err(mesh_error(
+            options.py(),
+            "\"improve\" is not a method of embed: call improve on a map",
+        )),
     }
 }
 
@@ -75,4 +83,31 @@ pub fn embed(
     })?;
     let (mesh, embedding) = result.map_err(|e| sphere_error(py, e))?;
     Ok(CoreSphereMap::new(mesh.shared_mesh(), embedding, mesh.reoriented_faces()))
+}
+
+/// improve(sphere_map, options: dict | None, progress) -> CoreSphereMap.
+///
+/// Lowers a distortion energy of a valid map with flip-free moves (thesis
+/// 9.3.2) and certifies the result, in the core with the GIL released. A map
+/// that is not a valid GC-embedding raises MapError.
+#[pyfunction]
+#[pyo3(signature = (sphere_map, options=None, progress=None))]
+pub fn improve(
+    py: Python<'_>,
+    sphere_map: &CoreSphereMap,
+    options: Option<&Bound<'_, PyDict>>,
+    progress: Option<&Bound<'_, PyAny>>,
+) -> PyResult<CoreSphereMap> {
+    let options = Options::new(py, "improve", options)?;
+    let params = crate::progressive::improve_params(&options)?;
+    options.finish()?;
+    let shared = sphere_map.shared_mesh();
+    let start = sphere_map.embedding().clone();
+    let result = crate::progress::run(py, progress, |report| {
+        let mesh = GenusZeroMesh::new(shared).map_err(SphereError::from)?;
+        let embedding = improve_embedding(&mesh, &start, &params, report)?;
+        Ok::<_, SphereError>((mesh, embedding))
+    })?;
+    let (mesh, embedding) = result.map_err(|e| sphere_error(py, e))?;
+    Ok(CoreSphereMap::new(mesh.shared_mesh(), embedding, sphere_map.reoriented()))
 }

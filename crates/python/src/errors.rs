@@ -103,6 +103,15 @@ pub fn sphere_error(py: Python<'_>, err: SphereError) -> PyErr {
             convergence_error(py, err.to_string(), points, *iterations, None, status.name())
         }
         SphereError::Solve(s) => sparse_error(py, s),
+        SphereError::InvalidStart { .. } => spherify_error(py, "MapError", (err.to_string(),)),
+        SphereError::Insertion { .. } => convergence_error(
+            py,
+            err.to_string(),
+            py.None().into_bound(py),
+            0,
+            None,
+            "insertion_failed",
+        ),
         other => mesh_error(py, other.to_string()),
     }
 }

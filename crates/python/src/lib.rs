@@ -14,6 +14,7 @@ mod mesh;
 mod metrics;
 mod options;
 mod progress;
+mod progressive;
 mod radial;
 mod relaxation;
 mod sphere;
@@ -41,6 +42,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(embed::embed, m)?)?;
     m.add_function(wrap_pyfunction!(embed::methods, m)?)?;
     m.add_function(wrap_pyfunction!(embed::choices, m)?)?;
+    m.add_function(wrap_pyfunction!(embed::improve, m)?)?;
     m.add_function(wrap_pyfunction!(metrics::quality, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())

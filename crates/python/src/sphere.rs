@@ -49,6 +49,8 @@ pub fn report_to_py<'py>(py: Python<'py>, r: &SphereReport) -> PyResult<Bound<'p
     d.set_item("area_error", r.area_error)?;
     d.set_item("covering_degree", r.covering_degree)?;
     d.set_item("max_norm_error", r.max_norm_error)?;
+    d.set_item("min_det", r.min_det)?;
+    d.set_item("min_area_ratio", r.min_area_ratio)?;
     d.set_item("bad_points", r.bad_points.iter().map(|&v| i64::from(v)).collect::<Vec<_>>())?;
     py.import("spherify._report")?.getattr("SphereReport")?.call((), Some(&d))
 }

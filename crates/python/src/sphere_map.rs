@@ -33,6 +33,21 @@ impl CoreSphereMap {
         CoreSphereMap { mesh, embedding, reoriented_faces, point_map: OnceLock::new() }
     }
 
+    /// The oriented mesh, shared.
+    pub fn shared_mesh(&self) -> Arc<Mesh> {
+        Arc::clone(&self.mesh)
+    }
+
+    /// The core's result, certificate included (read-only).
+    pub fn embedding(&self) -> &Embedding {
+        &self.embedding
+    }
+
+    /// Faces the core turned to orient the input.
+    pub fn reoriented(&self) -> usize {
+        self.reoriented_faces
+    }
+
     /// Built with the GIL released, outside the `OnceLock`: a thread that
     /// waits on the lock may hold the GIL, which the builder would need back
     /// inside the lock. Two threads racing both build; one result is kept.

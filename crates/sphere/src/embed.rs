@@ -13,6 +13,8 @@ use crate::embedding::SphereEmbedding;
 use crate::error::SphereError;
 use crate::genus_zero::GenusZeroMesh;
 use crate::gotsman::{gotsman, GotsmanParams};
+use crate::improve::{improve, ImproveParams};
+use crate::progressive::{progressive, ProgressiveParams};
 use crate::radial::{radial_map, Center, KernelPoint};
 use crate::relaxation::{relaxation, RelaxationParams};
 use crate::theta_phi::{theta_phi_with_progress, ThetaPhi, ThetaPhiParams};
@@ -31,6 +33,8 @@ pub enum Method {
     Gotsman(GotsmanParams),
     /// The theta-phi method (ch. 6).
     ThetaPhi(ThetaPhiParams),
+    /// Progressive meshes with exact insertion and flip-free optimisation (9.3.3).
+    Progressive(ProgressiveParams),
 }
 
 /// The name of a [`Method`], without parameters: what `sp.methods()` lists.
@@ -41,16 +45,20 @@ pub enum MethodName {
     Alexa,
     Gotsman,
     ThetaPhi,
+    Progressive,
+    /// Not a method of [`embed`]: a map lowered by [`improve_embedding`].
+    Improve,
 }
 
 impl MethodName {
     /// Every method, in the order the documentation lists them.
-    pub const ALL: [MethodName; 5] = [
+    pub const ALL: [MethodName; 6] = [
         MethodName::Radial,
         MethodName::Relaxation,
         MethodName::Alexa,
         MethodName::Gotsman,
         MethodName::ThetaPhi,
+        MethodName::Progressive,
     ];
 
     pub fn as_str(self) -> &'static str {
@@ -60,6 +68,8 @@ impl MethodName {
             MethodName::Alexa => "alexa",
             MethodName::Gotsman => "gotsman",
             MethodName::ThetaPhi => "theta_phi",
+            MethodName::Progressive => "progressive",
+            MethodName::Improve => "improve",
         }
     }
 
@@ -71,6 +81,9 @@ impl MethodName {
             MethodName::Alexa => Method::Alexa(AlexaParams::default()),
             MethodName::Gotsman => Method::Gotsman(GotsmanParams::default()),
             MethodName::ThetaPhi => Method::ThetaPhi(ThetaPhiParams::default()),
+            MethodName::Progressive | MethodName::Improve => {
+                Method::Progressive(ProgressiveParams::default())
+            }
         }
     }
 }
@@ -111,6 +124,7 @@ impl Method {
             Method::Alexa(_) => MethodName::Alexa,
             Method::Gotsman(_) => MethodName::Gotsman,
             Method::ThetaPhi(_) => MethodName::ThetaPhi,
+            Method::Progressive(_) => MethodName::Progressive,
         }
     }
 }
@@ -192,8 +206,34 @@ pub fn embed(
             let (points, tp) = theta_phi_with_progress(mesh, params, progress)?;
             (points, Details::ThetaPhi(Box::new(tp)))
         }
+        Method::Progressive(params) => (progressive(mesh, params, progress)?, Details::None),
     };
     Ok(Embedding::certified(mesh, method.name(), result, details))
+}
+
+/// Lowers a distortion energy of `start`'s points with flip-free moves
+/// ([`improve`]) and certifies the result. The improved map is a plain
+/// GC-embedding (method [`MethodName::Improve`]): a theta-phi start's map h
+/// does not describe the moved points.
+///
+/// # Errors
+/// [`SphereError::InvalidStart`] when `start`'s points are not a valid
+/// GC-embedding; bad parameters; cancellation.
+pub fn improve_embedding(
+    mesh: &GenusZeroMesh,
+    start: &Embedding,
+    params: &ImproveParams,
+    progress: &(dyn Fn(usize, usize) -> bool + Sync),
+) -> Result<Embedding, SphereError> {
+    if !start.certificate.valid {
+        return Err(SphereError::InvalidStart {
+            flipped: start.certificate.flipped_faces.len(),
+            degree: start.certificate.covering_degree,
+        });
+    }
+    let mut result = improve(mesh, &start.result.points, params, progress)?;
+    result.message = format!("improved from {}: {}", start.method, result.message);
+    Ok(Embedding::certified(mesh, MethodName::Improve, result, Details::None))
 }
 
 #[cfg(test)]
@@ -210,7 +250,7 @@ mod tests {
         let err = "tutte".parse::<MethodName>().unwrap_err();
         assert_eq!(
             err.to_string(),
-            "unknown method \"tutte\"; available: radial, relaxation, alexa, gotsman, theta_phi"
+            "unknown method \"tutte\"; available: radial, relaxation, alexa, gotsman, theta_phi, progressive"
         );
     }
 

@@ -22,6 +22,14 @@ pub enum SphereError {
     NoConvergence { last: Box<SphereEmbedding> },
     #[error(transparent)]
     Solve(#[from] SparseError),
+    /// The progressive method found no point for a re-inserted vertex at
+    /// which its faces are positive in double precision, even after moving
+    /// its neighbourhood.
+    #[error("vertex {vertex} (with {neighbours} neighbours at its level) could not be re-inserted: its ring's kernel is too thin for double precision even after moving its neighbourhood")]
+    Insertion { vertex: usize, neighbours: usize },
+    /// A map that was to be improved is not a valid GC-embedding.
+    #[error("the map to improve is not a valid GC-embedding ({flipped} faces not positive, covering degree {degree}): improve only starts from a valid map")]
+    InvalidStart { flipped: usize, degree: i64 },
     /// A progress callback asked a long stage to stop.
     #[error("{stage} stopped by the progress callback after {done} of {total} steps")]
     Cancelled { stage: &'static str, done: usize, total: usize },

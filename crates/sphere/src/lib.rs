@@ -14,6 +14,10 @@
 //! * [`alexa`]: Alexa's method (5.3, eq. 5.17-5.19).
 //! * [`gotsman`]: Gotsman, Gu and Sheffer's system solved by Newton's method (5.1, eq. 5.10).
 //! * [`dogleg`]: the dogleg trust region of that Newton iteration.
+//! * [`progressive`]: progressive meshes with exact insertion and flip-free optimisation (9.3.3).
+//! * [`distortion_energy`]: the isometric, conformal, authalic and stretch energies it lowers.
+//! * [`flip_free`]: vertex moves that keep every face positive (9.3.2).
+//! * [`improve`]: those moves started from any valid map (9.3.2).
 //! * [`theta_phi`]: the theta-phi method, a bijection for every genus-0 mesh (ch. 6).
 //! * [`poles`]: pole selection for theta-phi (6.2.1-6.2.3).
 //! * [`symmetry`]: poles and cut path near a symmetry plane (6.2.5).
@@ -35,14 +39,17 @@
 pub mod alexa;
 pub mod bvh;
 pub mod cut_path;
+pub mod distortion_energy;
 pub mod dogleg;
 pub mod embed;
 pub mod embedding;
 pub mod error;
+pub mod flip_free;
 pub mod gc_map;
 pub mod genus_zero;
 pub mod gotsman;
 pub mod h_map;
+pub mod improve;
 pub mod initial;
 pub mod kernel;
 pub mod lp;
@@ -50,6 +57,7 @@ pub mod metrics;
 pub mod point_map;
 pub mod pole_fans;
 pub mod poles;
+pub mod progressive;
 pub mod radial;
 pub mod relaxation;
 pub mod relaxation_loop;
@@ -59,7 +67,7 @@ pub mod theta_phi;
 pub mod validity;
 pub mod weight_matrix;
 
-pub use embed::{embed, Details, Embedding, Method, MethodName, UnknownMethod};
+pub use embed::{embed, improve_embedding, Details, Embedding, Method, MethodName, UnknownMethod};
 pub use embedding::{SphereEmbedding, Status};
 pub use error::SphereError;
 pub use genus_zero::GenusZeroMesh;

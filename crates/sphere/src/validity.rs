@@ -36,6 +36,12 @@ pub struct SphereReport {
     pub max_norm_error: f64,
     /// Points that are NaN, infinite or at the origin (no direction).
     pub bad_points: Vec<u32>,
+    /// Smallest det[a, b, c] over the faces, in floating point (its sign is
+    /// decided exactly above): how close the map is to a flip.
+    pub min_det: f64,
+    /// Smallest signed spherical triangle area over the mean, 4 pi / F: how far
+    /// the map is from the double-precision floor (about 1e-16 at unit scale).
+    pub min_area_ratio: f64,
 }
 
 /// Runs the orientation and area tests. `faces` index into `points`, which must
@@ -52,14 +58,16 @@ pub fn check_sphere(faces: &[[u32; 3]], points: &[[f64; 3]]) -> SphereReport {
         .map(|p| (norm(*p) - 1.0).abs())
         .reduce(|| 0.0, |a: f64, b: f64| if b.is_nan() || b > a { b } else { a });
     let unit: Vec<[f64; 3]> = points.par_iter().map(|&p| scale(p, 1.0 / norm(p))).collect();
-    let (signs, areas): (Vec<Sign>, Vec<f64>) = faces
+    let (signs, (areas, dets)): (Vec<Sign>, (Vec<f64>, Vec<f64>)) = faces
         .par_iter()
         .map(|&[a, b, c]| {
             let (pa, pb, pc) = (points[a as usize], points[b as usize], points[c as usize]);
             let (ua, ub, uc) = (unit[a as usize], unit[b as usize], unit[c as usize]);
-            (det3_sign(pa, pb, pc), signed_area(ua, ub, uc))
+            (det3_sign(pa, pb, pc), (signed_area(ua, ub, uc), dot(cross(pa, pb), pc)))
         })
         .unzip();
+    let smallest = |values: &[f64]| values.iter().copied().fold(f64::INFINITY, f64::min);
+    let mean_area = 4.0 * std::f64::consts::PI / faces.len().max(1) as f64;
     let mut report = SphereReport {
         valid: false,
         n_positive: 0,
@@ -71,6 +79,8 @@ pub fn check_sphere(faces: &[[u32; 3]], points: &[[f64; 3]]) -> SphereReport {
         covering_degree: 0,
         max_norm_error,
         bad_points,
+        min_det: smallest(&dets),
+        min_area_ratio: smallest(&areas) / mean_area,
     };
     for (f, sign) in signs.iter().enumerate() {
         match sign {

@@ -1,0 +1,226 @@
+//! Distortion energies of a map from a surface triangle to the chord triangle
+//! of its image on the sphere (thesis 9.3: the objective of a progressive map
+//! must keep areas in proportion, which no harmonic or conformal energy does).
+//!
+//! Every energy is a density f(a, d) of the two invariants of the 2x2 Jacobian
+//! J of the affine map from the surface triangle (scaled by `k` in area, so
+//! that the mesh and its image have equal total area) to the chord triangle:
+//! a = |J|_F^2 = s1^2 + s2^2 and d = det J = s1 s2, with s1, s2 the singular
+//! values. A face contributes (area of the scaled surface triangle) * f.
+//! Both invariants come from Gram matrices alone: with G the Gram matrix of
+//! two surface edges from one corner and H that of the matching chord edges,
+//! a = tr(H G^-1), and d is the ratio of the areas.
+//!
+//! The image's area is taken as det[p0, p1, p2] / 2: the chord triangle's
+//! area times the distance of its plane from the centre. For small triangles
+//! the two agree; unlike the chord area, it vanishes exactly when the
+//! spherical triangle does, also for a long sliver along a great circle,
+//! whose chord triangle stays large. So every barrier below guards the exact
+//! orientation test itself.
+
+use spherify_mesh::vec3::{cross, det3, dot, norm, sub};
+
+/// Which distortion a map minimises.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Energy {
+    /// Symmetric Dirichlet, |J|^2 + |J^-1|^2 (Smith and Schaefer 2015): both
+    /// angles and areas, infinite when a triangle collapses.
+    Isometric,
+    /// MIPS, |J|^2 / det J (Hormann and Greiner 2000), plus a barrier below
+    /// an area ratio of [`CONFORMAL_AREA_FLOOR`]: an exactly conformal map of
+    /// a limbed shape shrinks limbs below what a double can hold.
+    Conformal,
+    /// det J + 1 / det J, plus [`AUTHALIC_ANGLE_WEIGHT`] times MIPS.
+    Authalic,
+    /// Sander et al.'s L2 stretch of the map from the sphere back to the
+    /// surface, (s1^-2 + s2^-2) / 2 (Praun and Hoppe 2003 minimise it).
+    Stretch,
+}
+
+/// Area ratio below which the conformal energy's barrier starts.
+pub const CONFORMAL_AREA_FLOOR: f64 = 0.05;
+/// Weight of the angle term of the authalic energy.
+pub const AUTHALIC_ANGLE_WEIGHT: f64 = 0.1;
+
+impl Energy {
+    pub const NAMES: [&'static str; 4] = ["isometric", "conformal", "authalic", "stretch"];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Energy::Isometric => "isometric",
+            Energy::Conformal => "conformal",
+            Energy::Authalic => "authalic",
+            Energy::Stretch => "stretch",
+        }
+    }
+
+    pub fn from_name(name: &str) -> Option<Energy> {
+        [Energy::Isometric, Energy::Conformal, Energy::Authalic, Energy::Stretch]
+            .into_iter()
+            .find(|e| e.name() == name)
+    }
+
+    /// f(a, d) and its partial derivatives; infinite for d <= 0.
+    pub fn density(self, a: f64, d: f64) -> (f64, f64, f64) {
+        if d <= 0.0 || !d.is_finite() || !a.is_finite() {
+            return (f64::INFINITY, 0.0, 0.0);
+        }
+        match self {
+            Energy::Isometric => {
+                let inv2 = 1.0 / (d * d);
+                (a * (1.0 + inv2), 1.0 + inv2, -2.0 * a * inv2 / d)
+            }
+            Energy::Conformal => {
+                let (mut f, f_a, mut f_d) = (a / d, 1.0 / d, -a / (d * d));
+                if d < CONFORMAL_AREA_FLOOR {
+                    let excess = CONFORMAL_AREA_FLOOR / d - 1.0;
+                    f += excess * excess;
+                    f_d -= 2.0 * excess * CONFORMAL_AREA_FLOOR / (d * d);
+                }
+                (f, f_a, f_d)
+            }
+            Energy::Authalic => {
+                let w = AUTHALIC_ANGLE_WEIGHT;
+                (d + 1.0 / d + w * a / d, w / d, 1.0 - 1.0 / (d * d) - w * a / (d * d))
+            }
+            Energy::Stretch => {
+                let inv2 = 1.0 / (d * d);
+                (0.5 * a * inv2, 0.5 * inv2, -a * inv2 / d)
+            }
+        }
+    }
+}
+
+/// A surface triangle seen from one corner: the Gram matrix of its two edges
+/// from that corner, `[g00, g01, g11]`, and its area.
+#[derive(Debug, Clone, Copy)]
+pub struct Reference {
+    pub gram: [f64; 3],
+    pub area: f64,
+}
+
+impl Reference {
+    /// The triangle `(s0, s1, s2)` seen from `s0`. A triangle smaller than
+    /// `area_floor` (degenerate input) is replaced by an equilateral one of
+    /// that area, so that G stays invertible.
+    pub fn new(s0: [f64; 3], s1: [f64; 3], s2: [f64; 3], area_floor: f64) -> Reference {
+        let (e1, e2) = (sub(s1, s0), sub(s2, s0));
+        let area = 0.5 * norm(cross(e1, e2));
+        if area >= area_floor && area.is_finite() {
+            return Reference { gram: [dot(e1, e1), dot(e1, e2), dot(e2, e2)], area };
+        }
+        // Equilateral with side L: area = sqrt(3)/4 L^2, G = L^2 [[1, 1/2], [1/2, 1]].
+        let l2 = area_floor * 4.0 / 3f64.sqrt();
+        Reference { gram: [l2, 0.5 * l2, l2], area: area_floor }
+    }
+}
+
+/// Energy of one face whose image corners are `p0, p1, p2` (the surface seen
+/// from the corner of `p0`), with the surface scaled by `k` in area.
+pub fn face_energy(
+    energy: Energy,
+    r: &Reference,
+    k: f64,
+    p0: [f64; 3],
+    p1: [f64; 3],
+    p2: [f64; 3],
+) -> f64 {
+    let (q1, q2) = (sub(p1, p0), sub(p2, p0));
+    let [g00, g01, g11] = r.gram;
+    let det_g = g00 * g11 - g01 * g01;
+    let a = (dot(q1, q1) * g11 - 2.0 * dot(q1, q2) * g01 + dot(q2, q2) * g00) / (k * det_g);
+    let area_s = k * r.area;
+    let d = 0.5 * det3(p0, p1, p2) / area_s;
+    area_s * energy.density(a, d).0
+}
+
+/// [`face_energy`] and its gradient with respect to `p0`.
+pub fn face_energy_gradient(
+    energy: Energy,
+    r: &Reference,
+    k: f64,
+    p0: [f64; 3],
+    p1: [f64; 3],
+    p2: [f64; 3],
+) -> (f64, [f64; 3]) {
+    let (q1, q2) = (sub(p1, p0), sub(p2, p0));
+    let [g00, g01, g11] = r.gram;
+    let kdet = k * (g00 * g11 - g01 * g01);
+    let a = (dot(q1, q1) * g11 - 2.0 * dot(q1, q2) * g01 + dot(q2, q2) * g00) / kdet;
+    let area_s = k * r.area;
+    let d = 0.5 * det3(p0, p1, p2) / area_s;
+    let (f, f_a, f_d) = energy.density(a, d);
+    if !f.is_finite() {
+        return (f64::INFINITY, [0.0; 3]);
+    }
+    // da/dp0 = (g11 dH00 - 2 g01 dH01 + g00 dH11) / kdet with dH00 = -2 q1,
+    // dH01 = -(q1 + q2), dH11 = -2 q2.
+    let mut grad = [0.0; 3];
+    // d det[p0, p1, p2] / dp0 = p1 x p2.
+    let d_area = cross(p1, p2);
+    for i in 0..3 {
+        let da = (-2.0 * q1[i] * g11 + 2.0 * (q1[i] + q2[i]) * g01 - 2.0 * q2[i] * g00) / kdet;
+        let dd = 0.5 * d_area[i] / area_s;
+        grad[i] = area_s * (f_a * da + f_d * dd);
+    }
+    (area_s * f, grad)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const ALL: [Energy; 4] =
+        [Energy::Isometric, Energy::Conformal, Energy::Authalic, Energy::Stretch];
+
+    #[test]
+    fn an_isometry_has_the_smallest_density_and_collapse_costs_without_bound() {
+        // Isometry: a = 2, d = 1. Stretch alone prefers larger triangles;
+        // the sphere's fixed total area rules those out.
+        for e in ALL {
+            let (f0, _, _) = e.density(2.0, 1.0);
+            for (a, d) in [(2.5, 1.0), (4.0, 1.0), (2.2, 0.9), (3.0, 1.4), (8.0, 0.3)] {
+                if e == Energy::Stretch && d > 1.0 {
+                    continue;
+                }
+                assert!(e.density(a, d).0 > f0 - 1e-12, "{e:?} at ({a}, {d})");
+            }
+            // a >= 2 d always; shrinking a triangle to a point keeps a = 2 d.
+            assert!(e.density(2e-9, 1e-9).0 > 1e6 * f0, "{e:?} has no barrier");
+            assert_eq!(e.density(1.0, 0.0).0, f64::INFINITY);
+        }
+    }
+
+    #[test]
+    fn the_gradient_is_the_derivative_of_the_energy() {
+        let r = Reference::new([0.0, 0.0, 0.0], [1.0, 0.1, 0.0], [0.3, 0.8, 0.2], 1e-12);
+        let (p0, p1, p2) = ([0.9, 0.1, 0.2], [0.1, 0.95, 0.1], [0.15, 0.2, 0.95]);
+        for e in ALL {
+            let (f, g) = face_energy_gradient(e, &r, 0.7, p0, p1, p2);
+            assert!((f - face_energy(e, &r, 0.7, p0, p1, p2)).abs() < 1e-12 * f.abs());
+            for i in 0..3 {
+                let h = 1e-6;
+                let (mut plus, mut minus) = (p0, p0);
+                plus[i] += h;
+                minus[i] -= h;
+                let numeric = (face_energy(e, &r, 0.7, plus, p1, p2)
+                    - face_energy(e, &r, 0.7, minus, p1, p2))
+                    / (2.0 * h);
+                assert!(
+                    (numeric - g[i]).abs() < 1e-5 * (1.0 + g[i].abs()),
+                    "{e:?} {i}: {numeric} vs {}",
+                    g[i]
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn names_round_trip() {
+        for e in ALL {
+            assert_eq!(Energy::from_name(e.name()), Some(e));
+        }
+        assert_eq!(Energy::NAMES.map(|n| Energy::from_name(n).unwrap().name()), Energy::NAMES);
+        assert_eq!(Energy::from_name("harmonic"), None);
+    }
+}

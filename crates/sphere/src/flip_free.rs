@@ -1,0 +1,358 @@
+//! Flip-free vertex moves on the sphere (thesis 9.3.2: local updates that keep
+//! every triangle positively oriented).
+//!
+//! A vertex `p` with ring `r_0 .. r_{m-1}` owns the faces `(p, r_j, r_j+1)`.
+//! Moving it along `p + t D` changes each det[p, r_j, r_j+1] linearly in `t`,
+//! so the largest step that keeps every face positive has a closed form. A
+//! move is a Newton step of the vertex's share of a [`Energy`] in the tangent
+//! plane (the 2x2 Hessian by differences of the exact gradient), cut to a
+//! fraction of that safe step and backtracked until the energy falls (Armijo).
+//! The new point is normalised and its faces are then tested with the exact
+//! predicate on the very doubles that are stored: a move that fails the test
+//! is not taken. Vertices of one colour class share no face, so a class moves
+//! in parallel and the result does not depend on the number of threads.
+
+use rayon::prelude::*;
+use spherify_mesh::predicates::{det3_sign, Sign};
+use spherify_mesh::vec3::{add, cross, det3, dot, norm, scale, sub};
+
+use crate::distortion_energy::{face_energy, face_energy_gradient, Energy, Reference};
+use crate::embedding::normalize;
+
+/// The energy to lower and the surface it measures against.
+#[derive(Debug, Clone, Copy)]
+pub struct Problem<'a> {
+    pub energy: Energy,
+    /// Surface positions, one per vertex.
+    pub surface: &'a [[f64; 3]],
+    /// Surface triangles smaller than this count as this large (see
+    /// [`Reference::new`]).
+    pub area_floor: f64,
+}
+
+/// Backtracking halvings before a move is given up.
+const MAX_HALVINGS: usize = 12;
+/// Fraction of the largest flip-free step a move may take.
+const SAFE_FRACTION: f64 = 0.8;
+
+impl Problem<'_> {
+    fn reference(&self, i: u32, a: u32, b: u32) -> Reference {
+        let s = self.surface;
+        Reference::new(s[i as usize], s[a as usize], s[b as usize], self.area_floor)
+    }
+
+    /// The energy of the faces around `i` with `i` at `p`.
+    pub fn star_energy(
+        &self,
+        k: f64,
+        i: u32,
+        p: [f64; 3],
+        ring: &[u32],
+        points: &[[f64; 3]],
+    ) -> f64 {
+        let m = ring.len();
+        (0..m)
+            .map(|j| {
+                let (a, b) = (ring[j], ring[(j + 1) % m]);
+                face_energy(
+                    self.energy,
+                    &self.reference(i, a, b),
+                    k,
+                    p,
+                    points[a as usize],
+                    points[b as usize],
+                )
+            })
+            .sum()
+    }
+
+    fn star_gradient(
+        &self,
+        k: f64,
+        i: u32,
+        p: [f64; 3],
+        ring: &[u32],
+        points: &[[f64; 3]],
+    ) -> (f64, [f64; 3]) {
+        let m = ring.len();
+        let mut total = (0.0, [0.0; 3]);
+        for j in 0..m {
+            let (a, b) = (ring[j], ring[(j + 1) % m]);
+            let r = self.reference(i, a, b);
+            let (e, g) =
+                face_energy_gradient(self.energy, &r, k, p, points[a as usize], points[b as usize]);
+            total.0 += e;
+            total.1 = add(total.1, g);
+        }
+        total
+    }
+
+    /// Sum of image areas (det / 2, see [`crate::distortion_energy`]) over
+    /// surface areas of the current faces:
+    /// the `k` that gives mesh and image equal total area.
+    pub fn area_scale(&self, rings: &[Vec<u32>], points: &[[f64; 3]]) -> f64 {
+        let per_vertex: Vec<(f64, f64)> = rings
+            .par_iter()
+            .enumerate()
+            .map(|(i, ring)| {
+                let mut sums = (0.0, 0.0);
+                let m = ring.len();
+                for j in 0..m {
+                    let (a, b) = (ring[j], ring[(j + 1) % m]);
+                    let [p, pa, pb] = [i as u32, a, b].map(|v| points[v as usize]);
+                    sums.0 += 0.5 * det3(p, pa, pb);
+                    sums.1 += self.reference(i as u32, a, b).area;
+                }
+                sums
+            })
+            .collect();
+        // A fixed order of summation: the same scale on every thread count.
+        let (chord, surface) = per_vertex.iter().fold((0.0, 0.0), |s, x| (s.0 + x.0, s.1 + x.1));
+        if surface > 0.0 && chord > 0.0 {
+            chord / surface
+        } else {
+            1.0
+        }
+    }
+
+    /// Total energy of the current faces (each face counted once).
+    pub fn total_energy(&self, k: f64, rings: &[Vec<u32>], points: &[[f64; 3]]) -> f64 {
+        let per_vertex: Vec<f64> = rings
+            .par_iter()
+            .enumerate()
+            .map(|(i, ring)| self.star_energy(k, i as u32, points[i], ring, points))
+            .collect();
+        // A fixed order of summation: the same total on every thread count.
+        per_vertex.iter().sum::<f64>() / 3.0
+    }
+
+    /// One flip-free move of vertex `i`: the new point, or `None` when no step
+    /// lowers the energy and passes the exact test.
+    pub fn move_vertex(
+        &self,
+        k: f64,
+        i: u32,
+        ring: &[u32],
+        points: &[[f64; 3]],
+    ) -> Option<[f64; 3]> {
+        let p = points[i as usize];
+        let (e0, g) = self.star_gradient(k, i, p, ring, points);
+        if !e0.is_finite() {
+            return None;
+        }
+        let (e1, e2) = tangent_basis(p);
+        let gt = [dot(g, e1), dot(g, e2)];
+        let gnorm = gt[0].hypot(gt[1]);
+        if gnorm == 0.0 || !gnorm.is_finite() {
+            return None;
+        }
+        let reach =
+            ring.iter().map(|&r| norm(sub(points[r as usize], p))).fold(f64::INFINITY, f64::min);
+        // Newton direction from a difference Hessian of the exact gradient.
+        let h = 1e-6 * reach;
+        let column = |e: [f64; 3]| -> Option<[f64; 2]> {
+            let q = normalize(add(p, scale(e, h)))?;
+            let (eq, gq) = self.star_gradient(k, i, q, ring, points);
+            eq.is_finite().then(|| [(dot(gq, e1) - gt[0]) / h, (dot(gq, e2) - gt[1]) / h])
+        };
+        let mut dir = None;
+        if let (Some(c1), Some(c2)) = (column(e1), column(e2)) {
+            let (h00, h11, h01) = (c1[0], c2[1], 0.5 * (c1[1] + c2[0]));
+            let det = h00 * h11 - h01 * h01;
+            if det > 0.0 && h00 > 0.0 {
+                let d = [-(h11 * gt[0] - h01 * gt[1]) / det, -(h00 * gt[1] - h01 * gt[0]) / det];
+                let len = d[0].hypot(d[1]);
+                if len.is_finite() && len > 0.0 {
+                    let cap = (0.5 * reach / len).min(1.0);
+                    dir = Some([d[0] * cap, d[1] * cap]);
+                }
+            }
+        }
+        let d = dir.unwrap_or([-gt[0] * 0.25 * reach / gnorm, -gt[1] * 0.25 * reach / gnorm]);
+        let slope = gt[0] * d[0] + gt[1] * d[1];
+        if slope >= 0.0 {
+            return None;
+        }
+        let step = add(scale(e1, d[0]), scale(e2, d[1]));
+        // det[p + t step, a, b] = det[p, a, b] + t det[step, a, b].
+        let m = ring.len();
+        let mut t_safe = f64::INFINITY;
+        for j in 0..m {
+            let (a, b) = (points[ring[j] as usize], points[ring[(j + 1) % m] as usize]);
+            let rate = det3(step, a, b);
+            if rate < 0.0 {
+                t_safe = t_safe.min(-det3(p, a, b) / rate);
+            }
+        }
+        let mut t = (SAFE_FRACTION * t_safe).min(1.0);
+        for _ in 0..MAX_HALVINGS {
+            if let Some(q) = normalize(add(p, scale(step, t))) {
+                let e = self.star_energy(k, i, q, ring, points);
+                if e <= e0 + 1e-4 * t * slope && positive_star(q, ring, points) {
+                    return Some(q);
+                }
+            }
+            t *= 0.5;
+        }
+        None
+    }
+
+    /// One pass over `classes` (vertex sets of which no two share a face),
+    /// class after class, the vertices of a class in parallel. Returns how
+    /// many vertices moved; `stop()` is asked between classes.
+    pub fn sweep(
+        &self,
+        k: f64,
+        classes: &[Vec<u32>],
+        rings: &[Vec<u32>],
+        points: &mut [[f64; 3]],
+        stop: &(dyn Fn() -> bool + Sync),
+    ) -> Result<usize, Stopped> {
+        let mut moved = 0;
+        for class in classes {
+            if stop() {
+                return Err(Stopped);
+            }
+            let shared: &[[f64; 3]] = points;
+            let moves: Vec<Option<[f64; 3]>> = class
+                .par_iter()
+                .with_min_len(64)
+                .map(|&i| self.move_vertex(k, i, &rings[i as usize], shared))
+                .collect();
+            for (&i, q) in class.iter().zip(moves) {
+                if let Some(q) = q {
+                    points[i as usize] = q;
+                    moved += 1;
+                }
+            }
+        }
+        Ok(moved)
+    }
+}
+
+/// A sweep was asked to stop.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Stopped;
+
+/// Whether every face `(p, r_j, r_j+1)` is positively oriented, exactly.
+pub fn positive_star(p: [f64; 3], ring: &[u32], points: &[[f64; 3]]) -> bool {
+    let m = ring.len();
+    (0..m).all(|j| {
+        let (a, b) = (points[ring[j] as usize], points[ring[(j + 1) % m] as usize]);
+        det3_sign(p, a, b) == Sign::Positive
+    })
+}
+
+/// An orthonormal basis of the plane orthogonal to the unit vector `p`.
+pub fn tangent_basis(p: [f64; 3]) -> ([f64; 3], [f64; 3]) {
+    let axis = if p[0].abs() <= p[1].abs() && p[0].abs() <= p[2].abs() {
+        [1.0, 0.0, 0.0]
+    } else if p[1].abs() <= p[2].abs() {
+        [0.0, 1.0, 0.0]
+    } else {
+        [0.0, 0.0, 1.0]
+    };
+    let e1 = cross(p, axis);
+    let e1 = scale(e1, 1.0 / norm(e1));
+    (e1, cross(p, e1))
+}
+
+/// Greedy colouring of the vertices with non-empty rings, in index order:
+/// each class holds vertices no two of which are neighbours (so no two share
+/// a face). Deterministic.
+pub fn colour_classes(rings: &[Vec<u32>]) -> Vec<Vec<u32>> {
+    const NONE: u16 = u16::MAX;
+    let mut colour = vec![NONE; rings.len()];
+    let mut classes: Vec<Vec<u32>> = Vec::new();
+    let mut used: Vec<bool> = Vec::new();
+    for (i, ring) in rings.iter().enumerate() {
+        if ring.is_empty() {
+            continue;
+        }
+        used.iter_mut().for_each(|u| *u = false);
+        for &r in ring {
+            let c = colour[r as usize];
+            if c != NONE {
+                used[c as usize] = true;
+            }
+        }
+        let c = used.iter().position(|u| !u).unwrap_or(used.len());
+        if c == used.len() {
+            used.push(false);
+            classes.push(Vec::new());
+        }
+        colour[i] = c as u16;
+        classes[c].push(i as u32);
+    }
+    classes
+}
+
+/// How [`Problem::optimise`] ended.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Optimised {
+    pub sweeps: usize,
+    /// Total energy per unit of (scaled) surface area at the end.
+    pub energy: f64,
+    /// Relative fall of the energy in the last sweep.
+    pub last_change: f64,
+    pub converged: bool,
+}
+
+impl Problem<'_> {
+    /// Sweeps over every vertex with a ring until the energy falls by less
+    /// than `tolerance` (relative) in a sweep, or `max_sweeps` sweeps.
+    pub fn optimise(
+        &self,
+        rings: &[Vec<u32>],
+        points: &mut [[f64; 3]],
+        max_sweeps: usize,
+        tolerance: f64,
+        stop: &(dyn Fn(usize) -> bool + Sync),
+    ) -> Result<Optimised, Stopped> {
+        let classes = colour_classes(rings);
+        let mut k = self.area_scale(rings, points);
+        let mut energy = self.total_energy(k, rings, points);
+        let mut result =
+            Optimised { sweeps: 0, energy, last_change: f64::INFINITY, converged: false };
+        while result.sweeps < max_sweeps {
+            let sweeps = result.sweeps;
+            let moved = self.sweep(k, &classes, rings, points, &|| stop(sweeps))?;
+            result.sweeps += 1;
+            k = self.area_scale(rings, points);
+            let next = self.total_energy(k, rings, points);
+            result.last_change = (energy - next).abs() / energy.abs().max(f64::MIN_POSITIVE);
+            energy = next;
+            if moved == 0 || result.last_change < tolerance {
+                result.converged = true;
+                break;
+            }
+        }
+        result.energy = energy / (k * self.surface_area(rings)).max(f64::MIN_POSITIVE);
+        Ok(result)
+    }
+
+    /// This problem on a coarse level of a progressive mesh: surface triangles
+    /// smaller than [`crate::progressive::LEVEL_AREA_FLOOR`] times the
+    /// level's mean face area count as that large.
+    pub fn at_level(&self, rings: &[Vec<u32>]) -> Problem<'_> {
+        let faces: usize = rings.iter().map(Vec::len).sum::<usize>() / 3;
+        let mean = self.surface_area(rings) / faces.max(1) as f64;
+        let floor = crate::progressive::LEVEL_AREA_FLOOR * mean;
+        Problem {
+            area_floor: self.area_floor.max(if floor.is_finite() { floor } else { 0.0 }),
+            ..*self
+        }
+    }
+
+    fn surface_area(&self, rings: &[Vec<u32>]) -> f64 {
+        let per_vertex: Vec<f64> = rings
+            .par_iter()
+            .enumerate()
+            .map(|(i, ring)| {
+                let m = ring.len();
+                (0..m).map(|j| self.reference(i as u32, ring[j], ring[(j + 1) % m]).area).sum()
+            })
+            .collect();
+        per_vertex.iter().sum::<f64>() / 3.0
+    }
+}

@@ -1,0 +1,262 @@
+//! The progressive method (thesis 9.3.3, after Praun and Hoppe 2003): a
+//! sphere map that keeps every triangle's area in proportion, so that long
+//! limbs and spikes never need more digits than a double has, and that is
+//! bijective as stored because every step is decided by exact predicates.
+//!
+//! 1. [`hierarchy`]: collapse the mesh to a tetrahedron in rounds of
+//!    independent half-edge collapses, flat regions first.
+//! 2. Map the tetrahedron onto a regular tetrahedron on the sphere.
+//! 3. Undo the rounds, last first; each re-inserted vertex goes to the
+//!    Chebyshev centre of its ring's kernel ([`placement`]), and every new
+//!    face is tested exactly. When the kernel is too thin for doubles the
+//!    neighbourhood is moved (flip-free) and the vertex tried again; if that
+//!    fails the method stops with an error naming the vertex.
+//! 4. Whenever the mesh has grown by [`LEVEL_GROWTH`], and at the end, lower
+//!    the distortion [`Energy`] with flip-free moves ([`crate::flip_free`]).
+//!
+//! Every state the method passes through is a valid GC-embedding of the
+//! current mesh: the tetrahedron is one, an insertion into the kernel keeps
+//! one (the new faces tile the old fan), and a move keeps one (all faces stay
+//! positive along the straight path, so the covering degree cannot jump).
+
+mod hierarchy;
+mod placement;
+mod ring_mesh;
+
+use std::time::Instant;
+
+use rayon::prelude::*;
+use spherify_mesh::predicates::{det3_sign, Sign};
+
+use crate::distortion_energy::Energy;
+use crate::embedding::{normalize, SphereEmbedding, Status};
+use crate::error::SphereError;
+use crate::flip_free::{colour_classes, Problem};
+use crate::genus_zero::GenusZeroMesh;
+use ring_mesh::{Collapse, RingMesh};
+
+/// Optimise the current level when it has grown by this factor since the last time.
+pub const LEVEL_GROWTH: f64 = 2.0;
+/// Vertex moves spent on a level: coarse levels, where limbs win or lose
+/// their share of the sphere, get many sweeps (measured on 20k-vertex
+/// `tentacles`: L2 stretch 24.6 with two sweeps per level, 3.4 with this).
+const LEVEL_MOVES: usize = 100_000;
+/// Fewest and most sweeps over a level.
+const LEVEL_SWEEPS: usize = 2;
+const MAX_LEVEL_SWEEPS: usize = 100;
+/// At a coarse level, surface triangles below this fraction of the level's
+/// mean face area count as that large: three nearly collinear survivors of
+/// the decimation make a face with almost no area, which an isometric map
+/// would copy onto the sphere.
+pub const LEVEL_AREA_FLOOR: f64 = 1e-2;
+/// Rounds of moving a failed vertex's neighbourhood before giving up on it.
+const INSERTION_RETRIES: usize = 4;
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct ProgressiveParams {
+    pub energy: Energy,
+    /// Most sweeps of the final optimisation.
+    pub max_iter: usize,
+    /// The final optimisation stops when a sweep lowers the energy by less
+    /// than this fraction.
+    pub tolerance: f64,
+}
+
+impl Default for ProgressiveParams {
+    fn default() -> Self {
+        ProgressiveParams { energy: Energy::Isometric, max_iter: 30, tolerance: 1e-4 }
+    }
+}
+
+/// Maps `mesh` onto the sphere with the progressive method.
+///
+/// `progress(done, total)` hears after every round of the hierarchy, every
+/// round of insertion and every sweep; returning `false` stops the method
+/// with [`SphereError::Cancelled`].
+///
+/// # Errors
+/// [`SphereError::InvalidParameter`] for a negative or non-finite tolerance;
+/// [`SphereError::Insertion`] when a vertex finds no place in double precision;
+/// [`SphereError::Cancelled`].
+pub fn progressive(
+    mesh: &GenusZeroMesh,
+    params: &ProgressiveParams,
+    progress: &(dyn Fn(usize, usize) -> bool + Sync),
+) -> Result<SphereEmbedding, SphereError> {
+    if !(params.tolerance >= 0.0 && params.tolerance.is_finite()) {
+        return Err(SphereError::InvalidParameter {
+            name: "tolerance",
+            value: params.tolerance.to_string(),
+            expected: "a finite number >= 0",
+        });
+    }
+    let n = mesh.n_vertices();
+    let total = 3 * n;
+    let positions = mesh.positions();
+    let cancelled =
+        |stage: &'static str, done: usize| SphereError::Cancelled { stage, done, total };
+    let mut seconds = Vec::new();
+
+    let started = Instant::now();
+    let mut rings = RingMesh::from_faces(n, mesh.faces());
+    let hierarchy =
+        hierarchy::decimate(&mut rings, positions, &mut |removed| progress(removed, total))
+            .ok_or_else(|| cancelled("hierarchy", n - rings.n_alive))?;
+    seconds.push(("hierarchy", started.elapsed().as_secs_f64()));
+
+    let started = Instant::now();
+    let mut points = vec![[0.0; 3]; n];
+    place_tetrahedron(&rings, &mut points);
+    let problem =
+        Problem { energy: params.energy, surface: positions, area_floor: area_floor(mesh) };
+    let mut optimised_at = 4usize;
+    let mut inserted = 0usize;
+    for round in hierarchy.rounds.iter().rev() {
+        let collapses = &hierarchy.collapses[round.clone()];
+        let shared: &[[f64; 3]] = &points;
+        let placed: Vec<Option<[f64; 3]>> = collapses
+            .par_iter()
+            .with_min_len(64)
+            .map(|c| placement::place(&c.ring, shared))
+            .collect();
+        let mut failed = Vec::new();
+        for (c, q) in collapses.iter().zip(placed) {
+            match q {
+                Some(q) => insert(&mut rings, &mut points, c, q),
+                None => failed.push(c),
+            }
+        }
+        let k = if failed.is_empty() { 1.0 } else { problem.area_scale(&rings.rings, &points) };
+        for c in failed {
+            let q = retry_placement(&problem, k, &rings, &mut points, c)
+                .ok_or(SphereError::Insertion { vertex: c.u as usize, neighbours: c.ring.len() })?;
+            insert(&mut rings, &mut points, c, q);
+        }
+        inserted += collapses.len();
+        let done = n + inserted;
+        if !progress(done, total) {
+            return Err(cancelled("insertion", done));
+        }
+        if rings.n_alive as f64 >= LEVEL_GROWTH * optimised_at as f64 && rings.n_alive < n {
+            optimised_at = rings.n_alive;
+            let classes = colour_classes(&rings.rings);
+            let level = problem.at_level(&rings.rings);
+            let sweeps = (LEVEL_MOVES / rings.n_alive).clamp(LEVEL_SWEEPS, MAX_LEVEL_SWEEPS);
+            for _ in 0..sweeps {
+                let k = level.area_scale(&rings.rings, &points);
+                level
+                    .sweep(k, &classes, &rings.rings, &mut points, &|| !progress(done, total))
+                    .map_err(|_| cancelled("insertion", done))?;
+            }
+        }
+    }
+    seconds.push(("insertion", started.elapsed().as_secs_f64()));
+
+    let started = Instant::now();
+    let max_iter = params.max_iter.max(1);
+    let stop = |sweep: usize| !progress(2 * n + n * sweep / max_iter, total);
+    let end = problem
+        .optimise(&rings.rings, &mut points, params.max_iter, params.tolerance, &stop)
+        .map_err(|_| cancelled("optimisation", 2 * n))?;
+    seconds.push(("optimisation", started.elapsed().as_secs_f64()));
+    progress(total, total);
+
+    let status = if end.converged { Status::Converged } else { Status::MaxIterations };
+    let message = format!(
+        "{} collapses in {} rounds undone; {} final sweeps of the {} energy, {:.4} per unit area \
+         (last relative change {:.1e})",
+        hierarchy.collapses.len(),
+        hierarchy.rounds.len(),
+        end.sweeps,
+        params.energy.name(),
+        end.energy,
+        end.last_change
+    );
+    Ok(SphereEmbedding { points, iterations: end.sweeps, status, message, seconds })
+}
+
+/// Surface triangles below a millionth of the mean area count as that large.
+pub(crate) fn area_floor(mesh: &GenusZeroMesh) -> f64 {
+    let p = mesh.positions();
+    let total: f64 = mesh
+        .faces()
+        .iter()
+        .map(|&[a, b, c]| {
+            let [pa, pb, pc] = [a, b, c].map(|v| p[v as usize]);
+            0.5 * spherify_mesh::vec3::norm(spherify_mesh::vec3::cross(
+                spherify_mesh::vec3::sub(pb, pa),
+                spherify_mesh::vec3::sub(pc, pa),
+            ))
+        })
+        .sum();
+    let floor = 1e-6 * total / mesh.n_faces().max(1) as f64;
+    if floor > 0.0 && floor.is_finite() {
+        floor
+    } else {
+        f64::MIN_POSITIVE
+    }
+}
+
+/// The neighbour lists of `mesh`, counter-clockwise seen from outside.
+pub(crate) fn rings_of(mesh: &GenusZeroMesh) -> Vec<Vec<u32>> {
+    RingMesh::from_faces(mesh.n_vertices(), mesh.faces()).rings
+}
+
+fn insert(rings: &mut RingMesh, points: &mut [[f64; 3]], c: &Collapse, q: [f64; 3]) {
+    rings.undo(c);
+    points[c.u as usize] = q;
+}
+
+/// The four remaining vertices onto a regular tetrahedron, oriented so that
+/// its four faces are positive.
+fn place_tetrahedron(rings: &RingMesh, points: &mut [[f64; 3]]) {
+    let base: Vec<u32> = (0..rings.rings.len() as u32).filter(|&v| rings.is_alive(v)).collect();
+    let corners = [[1.0, 1.0, 1.0], [1.0, -1.0, -1.0], [-1.0, 1.0, -1.0], [-1.0, -1.0, 1.0]]
+        .map(|p| normalize(p).expect("non-zero"));
+    for (&v, p) in base.iter().zip(corners) {
+        points[v as usize] = p;
+    }
+    let a = base[0];
+    let ring = &rings.rings[a as usize];
+    let positive =
+        det3_sign(points[a as usize], points[ring[0] as usize], points[ring[1] as usize]);
+    if positive != Sign::Positive {
+        points.swap(base[2] as usize, base[3] as usize);
+    }
+}
+
+/// Moves the neighbourhood of a vertex whose kernel was too thin, flip-free
+/// and lowering the energy, and tries to place it again, widening the
+/// neighbourhood each time.
+fn retry_placement(
+    problem: &Problem<'_>,
+    k: f64,
+    rings: &RingMesh,
+    points: &mut [[f64; 3]],
+    c: &Collapse,
+) -> Option<[f64; 3]> {
+    let mut region: Vec<u32> = c.ring.clone();
+    for _ in 0..INSERTION_RETRIES {
+        for _ in 0..4 {
+            for &i in &region {
+                if let Some(q) = problem.move_vertex(k, i, &rings.rings[i as usize], points) {
+                    points[i as usize] = q;
+                }
+            }
+        }
+        if let Some(q) = placement::place(&c.ring, points) {
+            return Some(q);
+        }
+        let mut wider = region.clone();
+        for &i in &region {
+            wider.extend(rings.rings[i as usize].iter().copied());
+        }
+        wider.sort_unstable();
+        wider.dedup();
+        region = wider;
+    }
+    None
+}
+
+#[cfg(test)]
+mod tests;

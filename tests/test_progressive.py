@@ -1,0 +1,148 @@
+"""The progressive method (thesis 9.3.3) and ``sp.improve`` (9.3.2).
+
+Beyond the every-method contract of ``test_methods.py``, the progressive
+method promises a valid map on every genus-0 mesh, limbed or not, held by
+the independent exact check of ``_exact.py``, with every triangle far above
+the double-precision floor, and the same bits on every run.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any, Dict
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+
+import _meshgen as mg
+import spherify as sp
+from _exact import exact_verdict
+
+ENERGIES = ["isometric", "conformal", "authalic", "stretch"]
+FLOOR = 1e-12
+
+
+def spherical_areas(points: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    a, b, c = (points[faces[:, k]] for k in range(3))
+    det = np.einsum("ij,ij->i", np.cross(a, b), c)
+    den = 1 + np.einsum("ij,ij->i", a, b) + np.einsum("ij,ij->i", b, c) + np.einsum("ij,ij->i", c, a)
+    return 2 * np.arctan2(det, den)
+
+
+def assert_certified(m: sp.SphereMap, mesh: sp.Mesh) -> None:
+    verdict = exact_verdict(m.points, m.mesh.faces)
+    assert verdict.valid and verdict.flipped == 0, (verdict, m.message)
+    assert m.valid and m.flipped == 0
+    ratio = spherical_areas(m.points, m.mesh.faces).min() / (4 * np.pi / mesh.n_faces)
+    assert ratio >= FLOOR, ratio
+    assert m.report.min_area_ratio == pytest.approx(ratio, rel=1e-9)
+
+
+@pytest.mark.parametrize("energy", ENERGIES)
+@pytest.mark.parametrize("name", ["tentacles", "urchin", "helix_tube", "bumpy_blob", "ellipsoid"])
+def test_valid_and_far_from_the_floor_on_the_datasets(name: str, energy: str) -> None:
+    mesh = sp.datasets.make(name, 2000)
+    m = sp.embed(mesh, "progressive", energy=energy)
+    assert m.method == "progressive"
+    assert_certified(m, mesh)
+
+
+@settings(max_examples=200, deadline=None)
+@given(surface=mg.surfaces(max_vertices=300))
+def test_valid_on_random_genus0_meshes(surface: mg.Surface) -> None:
+    mesh = sp.Mesh(surface.V, surface.F)
+    assert_certified(sp.embed(mesh, "progressive"), mesh)
+
+
+@settings(max_examples=25, deadline=None)
+@given(surface=mg.surfaces(min_vertices=300, max_vertices=2000))
+def test_valid_on_larger_random_genus0_meshes(surface: mg.Surface) -> None:
+    mesh = sp.Mesh(surface.V, surface.F)
+    assert_certified(sp.embed(mesh, "progressive"), mesh)
+
+
+def test_limbs_keep_their_area_where_theta_phi_cannot() -> None:
+    # At 20k vertices theta-phi's rectangle no longer fits in doubles on the
+    # tentacles; the progressive map keeps every triangle above 1e-5 of the mean.
+    mesh = sp.datasets.make("tentacles", 20000)
+    m = sp.embed(mesh, "progressive")
+    assert_certified(m, mesh)
+    assert m.report.min_area_ratio > 1e-5
+    q = sp.quality(mesh, m.points)
+    with pytest.warns(sp.SpherifyWarning, match="double precision cannot hold"):
+        t = sp.quality(mesh, sp.embed(mesh, "theta_phi").points)
+    assert q["angle_mean_deg"] < t["angle_mean_deg"]
+    assert q["area_log_std"] < 0.2 * t["area_log_std"]
+
+
+def test_the_same_input_gives_the_same_bits() -> None:
+    mesh = sp.datasets.make("urchin", 3000)
+    a = sp.embed(mesh, "progressive")
+    b = sp.embed(mesh, "progressive")
+    assert np.array_equal(a.points, b.points)
+
+
+def test_to_surface_inverts_to_sphere() -> None:
+    mesh = sp.datasets.make("helix_tube", 2000)
+    m = sp.embed(mesh, "progressive")
+    rng = np.random.default_rng(3)
+    faces = rng.integers(0, mesh.n_faces, 500)
+    bary = rng.dirichlet([1.0, 1.0, 1.0], 500)
+    on_sphere = m.to_sphere(faces, bary)
+    _, _, again = m.to_surface(on_sphere)
+    surface = np.einsum("ij,ijk->ik", bary, mesh.vertices[mesh.faces[faces]])
+    np.testing.assert_allclose(again, surface, atol=1e-9)
+
+
+def test_progress_reaches_the_end_and_can_stop_the_method() -> None:
+    mesh = sp.datasets.make("bumpy_blob", 2000)
+    seen = []
+    sp.embed(mesh, "progressive", progress=lambda d, t: seen.append((d, t)))
+    assert seen and seen[-1][0] == seen[-1][1]
+    assert all(a[0] < b[0] for a, b in zip(seen, seen[1:]))
+
+    class Stop(Exception):
+        pass
+
+    def stop(done: int, total: int) -> None:
+        if done > total // 2:
+            raise Stop()
+
+    with pytest.raises(Stop):
+        sp.embed(mesh, "progressive", progress=stop)
+
+
+def test_improve_lowers_theta_phi_distortion_and_stays_valid() -> None:
+    mesh = sp.datasets.make("bumpy_blob", 2000)
+    start = sp.embed(mesh, "theta_phi")
+    assert start.valid
+    better = sp.improve(start)
+    assert better.method == "improve" and "theta_phi" in better.message
+    assert_certified(better, mesh)
+    q0, q1 = sp.quality(mesh, start.points), sp.quality(mesh, better.points)
+    assert q1["angle_mean_deg"] < 0.5 * q0["angle_mean_deg"]
+    # to_surface works on it through the barycentric map of 3.3.
+    faces, bary, xyz = better.to_surface(better.points[:10])
+    np.testing.assert_allclose(xyz, mesh.vertices[:10], atol=1e-9)
+
+
+def test_improve_refuses_a_map_that_is_not_valid() -> None:
+    mesh = sp.datasets.make("tentacles", 20000)
+    with pytest.warns(sp.SpherifyWarning):
+        start = sp.embed(mesh, "theta_phi")
+    assert not start.valid
+    with pytest.raises(sp.MapError, match="not a valid GC-embedding"):
+        sp.improve(start)
+
+
+@pytest.mark.parametrize("options", [{"energy": "harmonic"}, {"max_iter": -1}, {"tol": -1.0}])
+def test_improve_refuses_bad_options(options: Dict[str, Any]) -> None:
+    start = sp.embed(sp.datasets.icosphere(2), "theta_phi")
+    with pytest.raises(sp.MeshError):
+        sp.improve(start, **options)
+
+
+def test_every_corpus_mesh_gets_a_valid_map(valid_corpus_entry: Dict[str, Any]) -> None:
+    mesh = sp.load(Path(valid_corpus_entry["file"]))
+    assert_certified(sp.embed(mesh, "progressive"), mesh)
