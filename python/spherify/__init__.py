@@ -5,7 +5,7 @@ The Rust core does the work; this package is its Python face. See README.md.
 
 from __future__ import annotations
 
-from . import datasets
+from . import datasets, harmonics
 from ._core import __version__
 from ._errors import (ConvergenceError, FormatError, MapError, MeshError, SpherifyError,
                       SpherifyWarning, TopologyError)
@@ -37,6 +37,7 @@ __all__ = [
     "datasets",
     "dijkstra",
     "embed",
+    "harmonics",
     "load",
     "methods",
     "orient",

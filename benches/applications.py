@@ -1,0 +1,115 @@
+"""Pictures of the applications of a sphere map for docs/applications.md
+(thesis ch. 8, Fig. 8.1-8.3).
+
+    python benches/applications.py [--out docs] [--small] [--only harmonics ...]
+
+``--small`` uses small generated shapes (the test suite runs it that way, so
+the script cannot rot); without it the corpus meshes of ../shared/meshes are
+used where present (the hand, as in Fig. 8.1), else generated shapes. Needs
+matplotlib. Renders headless (Agg).
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+import warnings
+from pathlib import Path
+from typing import Callable, Dict, List
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+from mpl_toolkits.mplot3d.art3d import Poly3DCollection  # noqa: E402
+
+import spherify as sp  # noqa: E402
+
+SHARED = Path(__file__).resolve().parents[2] / "shared" / "meshes"
+LIGHT = np.array([0.3, 0.4, 0.85]) / np.linalg.norm([0.3, 0.4, 0.85])
+
+
+def corpus_or(name: str, fallback: Callable[[], sp.Mesh], small: bool) -> sp.Mesh:
+    for ext in ("obj", "ply", "off"):
+        path = SHARED / f"{name}.{ext}"
+        if not small and path.exists():
+            return sp.load(path)
+    return fallback()
+
+
+def certified_map(mesh: sp.Mesh) -> sp.SphereMap:
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", sp.SpherifyWarning)
+        m = sp.embed(mesh)
+    assert isinstance(m, sp.ThetaPhiMap) and m.tp_valid, "the theta-phi map is not certified"
+    return m
+
+
+def draw(ax, V: np.ndarray, F: np.ndarray, title: str, colors=None, view=(20, -60)) -> None:
+    """A shaded mesh on a 3D axis, equal scale, no axes."""
+    tri = V[F]
+    normal = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    normal /= np.linalg.norm(normal, axis=1)[:, None] + 1e-300
+    shade = 0.35 + 0.65 * np.clip(normal @ LIGHT, 0, 1)
+    if colors is None:
+        face = plt.cm.Greys(0.25 + 0.6 * shade)
+    else:
+        face = colors.copy()
+        face[:, :3] *= shade[:, None]
+    ax.add_collection3d(Poly3DCollection(tri, facecolors=face, edgecolor="none"))
+    lo, hi = V.min(0), V.max(0)
+    c, r = (lo + hi) / 2, (hi - lo).max() / 2
+    ax.set_xlim(c[0] - r, c[0] + r)
+    ax.set_ylim(c[1] - r, c[1] + r)
+    ax.set_zlim(c[2] - r, c[2] + r)
+    ax.view_init(*view)
+    ax.set_box_aspect((1, 1, 1), zoom=1.5)
+    ax.set_axis_off()
+    ax.set_title(title, fontsize=9)
+
+
+def harmonics_picture(out: Path, small: bool) -> List[str]:
+    """Fig. 8.1's analogue: the hand low-passed at several cut-offs."""
+    mesh = corpus_or("hand", lambda: sp.datasets.bumpy_blob(600 if small else 8000), small)
+    m = certified_map(mesh)
+    cutoffs = [2, 4, 8] if small else [8, 16, 32, 64, 128]
+    start = time.perf_counter()
+    c = sp.harmonics.fit(m, max(cutoffs), oversample=2)
+    seconds = time.perf_counter() - start
+    fig = plt.figure(figsize=(3.2 * (len(cutoffs) + 1), 3.6))
+    fig.subplots_adjust(wspace=0, left=0, right=1)
+    view = (75, -90)
+    draw(fig.add_subplot(1, len(cutoffs) + 1, 1, projection="3d"), m.mesh.vertices, m.mesh.faces,
+         f"input ({m.mesh.n_vertices} vertices)", view=view)
+    for i, l in enumerate(cutoffs):
+        rebuilt = c.lowpass(l).to_mesh(m)
+        draw(fig.add_subplot(1, len(cutoffs) + 1, i + 2, projection="3d"), rebuilt.vertices,
+             rebuilt.faces, f"degrees up to {l}", view=view)
+    target = out / "harmonics_lowpass.png"
+    fig.savefig(target, dpi=80, bbox_inches="tight")
+    plt.close(fig)
+    return [f"wrote {target} (fit to degree {max(cutoffs)} in {seconds:.2f} s)"]
+
+
+PICTURES: Dict[str, Callable[[Path, bool], List[str]]] = {
+    "harmonics": harmonics_picture,
+}
+
+
+def main(argv=None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--out", default=str(Path(__file__).resolve().parents[1] / "docs"))
+    parser.add_argument("--small", action="store_true", help="small generated shapes only")
+    parser.add_argument("--only", nargs="*", choices=list(PICTURES), default=list(PICTURES))
+    args = parser.parse_args(argv)
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    for name in args.only:
+        for line in PICTURES[name](out, args.small):
+            print(line)
+
+
+if __name__ == "__main__":
+    main()

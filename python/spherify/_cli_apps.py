@@ -1,0 +1,108 @@
+"""The application subcommands of the ``spherify`` command line (thesis ch. 8).
+
+    spherify harmonics MESH -o OUT --lmax L [--lowpass L2] [--gaussian S] [--sharpen A]
+                                   spherical-harmonic fit of the surface through
+                                   its map; writes the rebuilt (filtered) surface
+                                   and OUT's .npz (coefficients, spectrum)
+
+Each maps the mesh first (``--method``, default theta-phi) and refuses, with
+exit status 1, a map that is not a certified bijection.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+import warnings
+from pathlib import Path
+from typing import Any, Callable
+
+import numpy as np
+
+from . import harmonics
+from ._embed import embed, methods
+from ._errors import SpherifyError, SpherifyWarning
+from ._mesh import Mesh, save
+from ._spheremap import SphereMap, ThetaPhiMap
+
+
+def certified(m: SphereMap) -> bool:
+    """h^-1 is defined: ``tp_valid`` for theta-phi, ``valid`` otherwise."""
+    return m.tp_valid if isinstance(m, ThetaPhiMap) else m.valid
+
+
+def mapped(mesh: Mesh, method: str) -> SphereMap:
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", SpherifyWarning)  # the verdict is printed instead
+        m = embed(mesh, method)
+    print(f"map: {m.method}, {'certified' if certified(m) else 'NOT certified'} "
+          f"({m.flipped} faces flipped); {sum(m.seconds.values()):.3f} s")
+    return m
+
+
+def output_path(args: argparse.Namespace) -> Path:
+    out = Path(args.output)
+    if not out.parent.is_dir():
+        raise SpherifyError(f"the output folder {out.parent} does not exist")
+    return out
+
+
+def _cmd_harmonics(args: argparse.Namespace, load: Callable[[argparse.Namespace], Mesh],
+                   save_npz: Callable[..., None]) -> int:
+    out = output_path(args)
+    mesh = load(args)
+    m = mapped(mesh, args.method)
+    if not certified(m):
+        print("refusing: the map is not a certified bijection")
+        return 1
+    start = time.perf_counter()
+    c = harmonics.fit(m, args.lmax, oversample=args.oversample)
+    fitted = time.perf_counter()
+    filtered = c
+    if args.lowpass is not None:
+        filtered = filtered.lowpass(args.lowpass)
+    if args.gaussian is not None:
+        filtered = filtered.gaussian(args.gaussian)
+    if args.sharpen is not None:
+        filtered = filtered.sharpen(args.sharpen, args.sharpen_sigma)
+    rebuilt = filtered.to_mesh(m)
+    done = time.perf_counter()
+    spectrum = c.spectrum()
+    size = float(np.linalg.norm(np.ptp(m.mesh.vertices, axis=0)))
+    error = np.linalg.norm(c.to_mesh(m).vertices - m.mesh.vertices, axis=1).max() / size
+    print(f"harmonics: lmax {c.lmax}, grid {c.info['n_theta']} x {c.info['n_phi']}; "
+          f"fit {fitted - start:.3f} s, filter and rebuild {done - fitted:.3f} s")
+    share = ", ".join(f"{x:.3g}" for x in spectrum[: min(6, len(spectrum))] / spectrum.sum())
+    print(f"energy share of degrees 0..{min(5, c.lmax)}: {share}")
+    print(f"largest vertex error of the unfiltered rebuild: {error:.3e} of the bounding-box "
+          "diagonal")
+    save(rebuilt, out)
+    npz = out.with_suffix(".npz")
+    save_npz(npz, coefficients=c.coefficients, spectrum=spectrum,
+             filtered=filtered.coefficients)
+    print(f"wrote {out} (the rebuilt surface) and {npz}")
+    return 0
+
+
+def add_commands(sub: Any, load: Callable[[argparse.Namespace], Mesh],
+                 save_npz: Callable[..., None], datasets: Any) -> None:
+    """Registers the application subcommands on ``sub``."""
+    def common(name: str, text: str) -> argparse.ArgumentParser:
+        p: argparse.ArgumentParser = sub.add_parser(name, help=text)
+        p.add_argument("mesh", nargs="?", help="mesh file (.obj .off .ply .stl)")
+        p.add_argument("--dataset", choices=datasets.names(), help="use a generated shape instead")
+        p.add_argument("--n-vertices", type=int, default=5000, help="size of the generated shape")
+        p.add_argument("--method", default="theta_phi", choices=methods())
+        p.add_argument("-o", "--output", required=True, help="output mesh file")
+        return p
+
+    p = common("harmonics", "spherical-harmonic fit, filter and rebuild (thesis 8.3)")
+    p.add_argument("--lmax", type=int, default=20, help="largest degree of the fit")
+    p.add_argument("--oversample", type=int, default=1, help="grid oversampling factor")
+    p.add_argument("--lowpass", type=int, default=None, help="keep degrees up to this")
+    p.add_argument("--gaussian", type=float, default=None,
+                   help="heat-kernel smoothing of width SIGMA radians")
+    p.add_argument("--sharpen", type=float, default=None, help="high-boost amount")
+    p.add_argument("--sharpen-sigma", type=float, default=0.1,
+                   help="width of the smoothing the high-boost subtracts")
+    p.set_defaults(func=lambda args: _cmd_harmonics(args, load, save_npz))

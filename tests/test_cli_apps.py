@@ -1,0 +1,50 @@
+"""The application subcommands of ``spherify`` (thesis ch. 8) through
+``spherify.cli.main(argv)``."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import spherify as sp
+
+cli = pytest.importorskip("spherify.cli")
+
+
+def test_harmonics_writes_the_rebuilt_surface_and_the_coefficients(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    out = tmp_path / "smooth.ply"
+    assert cli.main(["harmonics", "--dataset", "bumpy_blob", "--n-vertices", "800",
+                     "--lmax", "12", "--lowpass", "6", "-o", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "lmax 12" in text and "wrote" in text
+    rebuilt = sp.load(out)
+    mesh = sp.datasets.make("bumpy_blob", 800)
+    m = sp.embed(mesh)
+    want = sp.harmonics.fit(m, 12).lowpass(6).to_mesh(m)
+    np.testing.assert_allclose(rebuilt.vertices, want.vertices, atol=1e-12)
+    assert np.array_equal(rebuilt.faces, want.faces)
+    with np.load(out.with_suffix(".npz")) as z:
+        assert z["coefficients"].shape == (169, 3) and z["filtered"].shape == (49, 3)
+        np.testing.assert_allclose(z["spectrum"], sp.harmonics.fit(m, 12).spectrum())
+
+
+def test_harmonics_refuses_an_uncertified_map_and_bad_arguments(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    out = tmp_path / "x.ply"
+    # Relaxation folds the helix tube over: not a bijection.
+    assert cli.main(["harmonics", "--dataset", "helix_tube", "--n-vertices", "600",
+                     "--method", "relaxation", "-o", str(out)]) == 1
+    assert "NOT certified" in capsys.readouterr().out
+    assert not out.exists()
+    # Radial projection has no centre for it at all.
+    assert cli.main(["harmonics", "--dataset", "helix_tube", "--n-vertices", "600",
+                     "--method", "radial", "-o", str(out)]) == 2
+    assert "not star-shaped" in capsys.readouterr().err
+    assert cli.main(["harmonics", "--dataset", "bumpy_blob", "--n-vertices", "300",
+                     "--lmax", "-3", "-o", str(out)]) == 2
+    assert "lmax must be" in capsys.readouterr().err
+    assert cli.main(["harmonics", "--dataset", "bumpy_blob",
+                     "-o", str(tmp_path / "missing" / "x.ply")]) == 2
