@@ -46,7 +46,8 @@ def certified_map(mesh: sp.Mesh) -> sp.SphereMap:
     return m
 
 
-def draw(ax, V: np.ndarray, F: np.ndarray, title: str, colors=None, view=(20, -60)) -> None:
+def draw(ax, V: np.ndarray, F: np.ndarray, title: str, colors=None, view=(20, -60),
+         edges: bool = False) -> None:
     """A shaded mesh on a 3D axis, equal scale, no axes."""
     tri = V[F]
     normal = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
@@ -57,7 +58,8 @@ def draw(ax, V: np.ndarray, F: np.ndarray, title: str, colors=None, view=(20, -6
     else:
         face = colors.copy()
         face[:, :3] *= shade[:, None]
-    ax.add_collection3d(Poly3DCollection(tri, facecolors=face, edgecolor="none"))
+    ax.add_collection3d(Poly3DCollection(tri, facecolors=face, linewidth=0.2 if edges else 0,
+                                         edgecolor=(0.1, 0.1, 0.1, 0.6) if edges else "none"))
     lo, hi = V.min(0), V.max(0)
     c, r = (lo + hi) / 2, (hi - lo).max() / 2
     ax.set_xlim(c[0] - r, c[0] + r)
@@ -92,8 +94,44 @@ def harmonics_picture(out: Path, small: bool) -> List[str]:
     return [f"wrote {target} (fit to degree {max(cutoffs)} in {seconds:.2f} s)"]
 
 
+def remesh_picture(out: Path, small: bool) -> List[str]:
+    """A corpus mesh, its icosphere remeshes and its octahedral geometry image."""
+    mesh = corpus_or("spot", lambda: sp.datasets.bumpy_blob(600 if small else 3000), small)
+    m = certified_map(mesh)
+    levels = [2, 3] if small else [3, 4, 5]
+    fig = plt.figure(figsize=(3.4 * (len(levels) + 2), 3.6))
+    fig.subplots_adjust(wspace=0, left=0, right=1)
+    view = (15, -30)
+    panels = len(levels) + 2
+    draw(fig.add_subplot(1, panels, 1, projection="3d"), m.mesh.vertices, m.mesh.faces,
+         f"input ({m.mesh.n_vertices} vertices)", view=view, edges=True)
+    lines = []
+    for i, level in enumerate(levels):
+        start = time.perf_counter()
+        r = sp.remesh_map(m, level=level)
+        seconds = time.perf_counter() - start
+        d = sp.surface_distance(m, r, samples=20_000)
+        draw(fig.add_subplot(1, panels, i + 2, projection="3d"), r.mesh.vertices, r.mesh.faces,
+             f"icosphere level {level}: {r.mesh.n_vertices} vertices\n"
+             f"distance max {d['max']:.1e}, rms {d['rms']:.1e}", view=view, edges=True)
+        lines.append(f"remesh level {level}: {seconds:.3f} s, distance max {d['max']:.2e} "
+                     f"rms {d['rms']:.2e}")
+    g = sp.geometry_image(m, 65 if small else 257)
+    lo, hi = g.reshape(-1, 3).min(0), g.reshape(-1, 3).max(0)
+    ax = fig.add_subplot(1, panels, panels)
+    ax.imshow((g - lo) / (hi - lo), origin="lower", interpolation="nearest")
+    ax.set_axis_off()
+    ax.set_title(f"octahedral geometry image {g.shape[0]} x {g.shape[1]}\n(x, y, z as RGB)",
+                 fontsize=9)
+    target = out / "remesh.png"
+    fig.savefig(target, dpi=80, bbox_inches="tight")
+    plt.close(fig)
+    return lines + [f"wrote {target}"]
+
+
 PICTURES: Dict[str, Callable[[Path, bool], List[str]]] = {
     "harmonics": harmonics_picture,
+    "remesh": remesh_picture,
 }
 
 

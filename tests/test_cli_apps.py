@@ -48,3 +48,29 @@ def test_harmonics_refuses_an_uncertified_map_and_bad_arguments(
     assert "lmax must be" in capsys.readouterr().err
     assert cli.main(["harmonics", "--dataset", "bumpy_blob",
                      "-o", str(tmp_path / "missing" / "x.ply")]) == 2
+
+
+def test_remesh_writes_an_icosphere_mesh_on_the_surface(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    out = tmp_path / "r.ply"
+    assert cli.main(["remesh", "--dataset", "bumpy_blob", "--n-vertices", "800",
+                     "--level", "3", "--samples", "500", "-o", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "icosphere level 3: 642 vertices" in text and "distance to the input" in text
+    r = sp.load(out)
+    m = sp.embed(sp.datasets.make("bumpy_blob", 800))
+    np.testing.assert_allclose(r.vertices, sp.remesh(m, level=3).vertices, atol=1e-12)
+
+
+def test_remesh_geometry_image_writes_the_png_and_its_mesh(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    out = tmp_path / "g.obj"
+    assert cli.main(["remesh", "--dataset", "bumpy_blob", "--n-vertices", "800",
+                     "--geometry-image", "17", "--samples", "500", "-o", str(out)]) == 0
+    assert "bytes per vertex" in capsys.readouterr().out
+    image = sp.load_geometry_image(out.with_suffix(".png"))
+    assert image.shape == (17, 17, 3)
+    assert sp.check(sp.load(out)).genus == 0
+    assert cli.main(["remesh", "--dataset", "bumpy_blob", "--geometry-image", "16",
+                     "-o", str(out)]) == 2
+    assert "odd" in capsys.readouterr().err

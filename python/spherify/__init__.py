@@ -15,6 +15,9 @@ from ._spheremap import SphereMap, ThetaPhiMap
 from ._tutte import TutteInfo, boundary_loop, tutte
 from ._embed import embed, methods
 from ._quality import quality
+from ._remesh import remesh, remesh_map, surface_distance
+from ._geometry_image import (from_geometry_image, geometry_image, load_geometry_image,
+                             save_geometry_image)
 
 __all__ = [
     "ConvergenceError",
@@ -37,12 +40,19 @@ __all__ = [
     "datasets",
     "dijkstra",
     "embed",
+    "from_geometry_image",
+    "geometry_image",
     "harmonics",
     "load",
+    "load_geometry_image",
     "methods",
     "orient",
     "quality",
+    "remesh",
+    "remesh_map",
+    "save_geometry_image",
     "save",
     "shortest_path",
+    "surface_distance",
     "tutte",
 ]

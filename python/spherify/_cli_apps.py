@@ -4,6 +4,10 @@
                                    spherical-harmonic fit of the surface through
                                    its map; writes the rebuilt (filtered) surface
                                    and OUT's .npz (coefficients, spectrum)
+    spherify remesh MESH -o OUT (--level K | --geometry-image SIZE)
+                                   semi-regular icosphere remesh, or an octahedral
+                                   geometry image (OUT's .png, 16-bit) and its mesh;
+                                   prints the distance to the input
 
 Each maps the mesh first (``--method``, default theta-phi) and refuses, with
 exit status 1, a map that is not a certified bijection.
@@ -20,6 +24,9 @@ from typing import Any, Callable
 import numpy as np
 
 from . import harmonics
+from ._geometry_image import (from_geometry_image, geometry_image, octahedral_points,
+                              save_geometry_image)
+from ._remesh import remesh_map, surface_distance
 from ._embed import embed, methods
 from ._errors import SpherifyError, SpherifyWarning
 from ._mesh import Mesh, save
@@ -84,6 +91,38 @@ def _cmd_harmonics(args: argparse.Namespace, load: Callable[[argparse.Namespace]
     return 0
 
 
+def _cmd_remesh(args: argparse.Namespace, load: Callable[[argparse.Namespace], Mesh]) -> int:
+    out = output_path(args)
+    m = mapped(load(args), args.method)
+    if not certified(m):
+        print("refusing: the map is not a certified bijection")
+        return 1
+    start = time.perf_counter()
+    if args.geometry_image is not None:
+        image = geometry_image(m, args.geometry_image)
+        mesh = from_geometry_image(image)
+        own = SphereMap.from_points(mesh, from_geometry_image(
+            octahedral_points(args.geometry_image)).vertices)
+        png = out.with_suffix(".png")
+        size = save_geometry_image(image, png)
+        what = (f"geometry image {args.geometry_image} x {args.geometry_image}: "
+                f"{mesh.n_vertices} vertices, {size} bytes in {png} "
+                f"({size / mesh.n_vertices:.2f} bytes per vertex)")
+    else:
+        own = remesh_map(m, level=args.level)
+        mesh = own.mesh
+        what = f"icosphere level {args.level}: {mesh.n_vertices} vertices, {mesh.n_faces} faces"
+    made = time.perf_counter()
+    d = surface_distance(m, own, samples=args.samples)
+    print(f"remesh: {what}; {made - start:.3f} s")
+    print(f"distance to the input (through the maps, relative to the bounding-box diagonal "
+          f"{d['diagonal']:.4g}): max {d['max']:.3e}, rms {d['rms']:.3e} "
+          f"({int(d['samples'])} point pairs)")
+    save(mesh, out)
+    print(f"wrote {out}")
+    return 0
+
+
 def add_commands(sub: Any, load: Callable[[argparse.Namespace], Mesh],
                  save_npz: Callable[..., None], datasets: Any) -> None:
     """Registers the application subcommands on ``sub``."""
@@ -106,3 +145,12 @@ def add_commands(sub: Any, load: Callable[[argparse.Namespace], Mesh],
     p.add_argument("--sharpen-sigma", type=float, default=0.1,
                    help="width of the smoothing the high-boost subtracts")
     p.set_defaults(func=lambda args: _cmd_harmonics(args, load, save_npz))
+
+    p = common("remesh", "semi-regular remesh or geometry image (thesis 8.1, 8.2)")
+    kind = p.add_mutually_exclusive_group()
+    kind.add_argument("--level", type=int, default=4, help="icosphere subdivision level")
+    kind.add_argument("--geometry-image", type=int, default=None, metavar="SIZE",
+                      help="octahedral geometry image of odd SIZE instead")
+    p.add_argument("--samples", type=int, default=100_000,
+                   help="random sphere points for the distance")
+    p.set_defaults(func=lambda args: _cmd_remesh(args, load))
