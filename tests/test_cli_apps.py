@@ -74,3 +74,31 @@ def test_remesh_geometry_image_writes_the_png_and_its_mesh(
     assert cli.main(["remesh", "--dataset", "bumpy_blob", "--geometry-image", "16",
                      "-o", str(out)]) == 2
     assert "odd" in capsys.readouterr().err
+
+
+def test_morph_writes_the_frames_from_a_to_b(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    out = tmp_path / "frame.ply"
+    assert cli.main(["morph", "--dataset", "bumpy_blob", "--n-vertices", "600",
+                     "--target-dataset", "ellipsoid", "--frames", "3", "-o", str(out)]) == 0
+    assert "residual" in capsys.readouterr().out
+    frames = sorted(tmp_path.glob("frame_*.ply"))
+    assert [f.name for f in frames] == ["frame_000.ply", "frame_001.ply", "frame_002.ply"]
+    a = sp.datasets.make("bumpy_blob", 600)
+    np.testing.assert_allclose(sp.load(frames[0]).vertices, a.vertices, atol=1e-12)
+    m_a = sp.embed(a)
+    m_b = sp.embed(sp.datasets.make("ellipsoid", 600))
+    np.testing.assert_allclose(sp.load(frames[2]).vertices, sp.morph(m_a, m_b).at(1).vertices,
+                               atol=1e-12)
+
+
+def test_morph_with_landmarks_and_bad_landmarks(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    out = tmp_path / "f.obj"
+    assert cli.main(["morph", "--dataset", "bumpy_blob", "--n-vertices", "300",
+                     "--target-dataset", "bumpy_blob", "--align", "landmarks",
+                     "--landmarks", "0:0", "5:5", "9:9", "--frames", "2", "-o", str(out)]) == 0
+    assert "landmark rms angle" in capsys.readouterr().out
+    assert cli.main(["morph", "--dataset", "bumpy_blob", "--target-dataset", "ellipsoid",
+                     "--landmarks", "0-0", "-o", str(out)]) == 2
+    assert "I:J" in capsys.readouterr().err

@@ -15,6 +15,7 @@ from ._spheremap import SphereMap, ThetaPhiMap
 from ._tutte import TutteInfo, boundary_loop, tutte
 from ._embed import embed, methods
 from ._quality import quality
+from ._morph import Morph, morph
 from ._remesh import remesh, remesh_map, surface_distance
 from ._geometry_image import (from_geometry_image, geometry_image, load_geometry_image,
                              save_geometry_image)
@@ -26,6 +27,7 @@ __all__ = [
     "Mesh",
     "MeshError",
     "MeshReport",
+    "Morph",
     "SphereMap",
     "SphereReport",
     "SpherifyError",
@@ -46,6 +48,7 @@ __all__ = [
     "load",
     "load_geometry_image",
     "methods",
+    "morph",
     "orient",
     "quality",
     "remesh",

@@ -8,6 +8,9 @@
                                    semi-regular icosphere remesh, or an octahedral
                                    geometry image (OUT's .png, 16-bit) and its mesh;
                                    prints the distance to the input
+    spherify morph A B -o OUT [--frames K] [--align rotation] [--landmarks I:J ...]
+                                   morph A into B (A's connectivity); writes K
+                                   frames OUT_000 .. OUT_{K-1} with OUT's suffix
 
 Each maps the mesh first (``--method``, default theta-phi) and refuses, with
 exit status 1, a map that is not a certified bijection.
@@ -24,6 +27,7 @@ from typing import Any, Callable
 import numpy as np
 
 from . import harmonics
+from ._morph import morph
 from ._geometry_image import (from_geometry_image, geometry_image, octahedral_points,
                               save_geometry_image)
 from ._remesh import remesh_map, surface_distance
@@ -123,6 +127,47 @@ def _cmd_remesh(args: argparse.Namespace, load: Callable[[argparse.Namespace], M
     return 0
 
 
+def _cmd_morph(args: argparse.Namespace, load: Callable[[argparse.Namespace], Mesh],
+               datasets: Any) -> int:
+    out = output_path(args)
+    if args.frames < 2:
+        raise SpherifyError(f"--frames must be at least 2, got {args.frames}")
+    a = load(args)
+    if args.target_dataset:
+        b = datasets.make(args.target_dataset, args.n_vertices)
+    elif args.target:
+        b = load(argparse.Namespace(dataset=None, mesh=args.target, n_vertices=0))
+    else:
+        raise SpherifyError("give the target mesh file or --target-dataset NAME")
+    m_a, m_b = mapped(a, args.method), mapped(b, args.method)
+    if not certified(m_b):
+        print("refusing: the target's map is not a certified bijection")
+        return 1
+    landmarks = None
+    if args.landmarks:
+        try:
+            split = [pair.split(":") for pair in args.landmarks]
+            landmarks = [(int(i), int(j)) for i, j in split]
+        except ValueError:
+            raise SpherifyError(f"landmarks must be I:J vertex pairs, got {args.landmarks}") \
+                from None
+    start = time.perf_counter()
+    mo = morph(m_a, m_b, align=args.align, landmarks=landmarks)
+    aligned = time.perf_counter()
+    al = mo.alignment
+    extra = (f", landmark rms angle {al['landmark_residual']:.3g} rad"
+             if "landmark_residual" in al else "")
+    print(f"morph: align {args.align} from {al['start']} in {al['iterations']} steps, "
+          f"residual {al['residual']:.3g} (unit rms radius){extra}; {aligned - start:.3f} s")
+    width = max(3, len(str(args.frames - 1)))
+    for k in range(args.frames):
+        path = out.with_name(f"{out.stem}_{k:0{width}d}{out.suffix}")
+        save(mo.at(k / (args.frames - 1)), path)
+    print(f"wrote {args.frames} frames {out.stem}_{0:0{width}d}{out.suffix} .. "
+          f"{out.stem}_{args.frames - 1:0{width}d}{out.suffix} in {out.parent}")
+    return 0
+
+
 def add_commands(sub: Any, load: Callable[[argparse.Namespace], Mesh],
                  save_npz: Callable[..., None], datasets: Any) -> None:
     """Registers the application subcommands on ``sub``."""
@@ -154,3 +199,13 @@ def add_commands(sub: Any, load: Callable[[argparse.Namespace], Mesh],
     p.add_argument("--samples", type=int, default=100_000,
                    help="random sphere points for the distance")
     p.set_defaults(func=lambda args: _cmd_remesh(args, load))
+
+    p = common("morph", "morph one mesh into another through their maps (thesis 8.4)")
+    p.add_argument("target", nargs="?", help="the mesh to morph into")
+    p.add_argument("--target-dataset", choices=datasets.names(),
+                   help="use a generated shape as the target")
+    p.add_argument("--frames", type=int, default=5, help="frames from A (first) to B (last)")
+    p.add_argument("--align", default="rotation", choices=["rotation", "landmarks", "none"])
+    p.add_argument("--landmarks", nargs="*", metavar="I:J",
+                   help="vertex I of A corresponds to vertex J of B")
+    p.set_defaults(func=lambda args: _cmd_morph(args, load, datasets))
