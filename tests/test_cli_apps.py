@@ -102,3 +102,14 @@ def test_morph_with_landmarks_and_bad_landmarks(
     assert cli.main(["morph", "--dataset", "bumpy_blob", "--target-dataset", "ellipsoid",
                      "--landmarks", "0-0", "-o", str(out)]) == 2
     assert "I:J" in capsys.readouterr().err
+
+
+def test_texture_writes_obj_mtl_and_png(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    out = tmp_path / "t.obj"
+    assert cli.main(["texture", "--dataset", "bumpy_blob", "--n-vertices", "500",
+                     "--projection", "equirectangular", "--pattern", "grid", "--size", "64",
+                     "-o", str(out)]) == 0
+    assert "0 UV triangles not positive" in capsys.readouterr().out
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["t.mtl", "t.obj", "t.png"]
+    assert cli.main(["texture", "--dataset", "bumpy_blob", "-o", str(tmp_path / "t.ply")]) == 2
+    assert "OBJ" in capsys.readouterr().err

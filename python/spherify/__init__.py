@@ -5,7 +5,7 @@ The Rust core does the work; this package is its Python face. See README.md.
 
 from __future__ import annotations
 
-from . import datasets, harmonics
+from . import datasets, harmonics, texture
 from ._core import __version__
 from ._errors import (ConvergenceError, FormatError, MapError, MeshError, SpherifyError,
                       SpherifyWarning, TopologyError)
@@ -57,5 +57,6 @@ __all__ = [
     "save",
     "shortest_path",
     "surface_distance",
+    "texture",
     "tutte",
 ]

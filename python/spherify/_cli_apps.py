@@ -8,6 +8,9 @@
                                    semi-regular icosphere remesh, or an octahedral
                                    geometry image (OUT's .png, 16-bit) and its mesh;
                                    prints the distance to the input
+    spherify texture MESH -o OUT.obj [--projection cube] [--pattern checkerboard]
+                                   per-corner UVs, a baked procedural texture; writes
+                                   OUT.obj, OUT.mtl and OUT.png
     spherify morph A B -o OUT [--frames K] [--align rotation] [--landmarks I:J ...]
                                    morph A into B (A's connectivity); writes K
                                    frames OUT_000 .. OUT_{K-1} with OUT's suffix
@@ -26,7 +29,8 @@ from typing import Any, Callable
 
 import numpy as np
 
-from . import harmonics
+from . import datasets as _datasets
+from . import harmonics, texture
 from ._morph import morph
 from ._geometry_image import (from_geometry_image, geometry_image, octahedral_points,
                               save_geometry_image)
@@ -168,6 +172,30 @@ def _cmd_morph(args: argparse.Namespace, load: Callable[[argparse.Namespace], Me
     return 0
 
 
+def _cmd_texture(args: argparse.Namespace, load: Callable[[argparse.Namespace], Mesh]) -> int:
+    out = output_path(args)
+    if out.suffix.lower() != ".obj":
+        raise SpherifyError(f"texture writes OBJ (with MTL and PNG): give OUT.obj, got {out}")
+    if args.size < 2:
+        raise SpherifyError(f"--size must be at least 2, got {args.size}")
+    m = mapped(load(args), args.method)
+    start = time.perf_counter()
+    t = texture.uv(m, args.projection)
+    pattern = (_datasets.checkerboard if args.pattern == "checkerboard"
+               else _datasets.lat_long_grid)
+    image = t.bake(pattern, args.size)
+    made = time.perf_counter()
+    e1, e2 = t.uv[:, 1] - t.uv[:, 0], t.uv[:, 2] - t.uv[:, 0]
+    flipped = int(np.sum(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0] <= 0))
+    q = t.quality(m.mesh)
+    print(f"texture: {args.projection}, atlas {image.shape[1]} x {image.shape[0]}; "
+          f"{flipped} UV triangles not positive; texture stretch L2 {q['stretch_l2']:.3g} "
+          f"(Linf {q['stretch_linf']:.3g}); {made - start:.3f} s")
+    texture.save_obj(m.mesh, out, t, image)
+    print(f"wrote {out}, {out.with_suffix('.mtl')} and {out.with_suffix('.png')}")
+    return 0 if flipped == 0 and certified(m) else 1
+
+
 def add_commands(sub: Any, load: Callable[[argparse.Namespace], Mesh],
                  save_npz: Callable[..., None], datasets: Any) -> None:
     """Registers the application subcommands on ``sub``."""
@@ -199,6 +227,12 @@ def add_commands(sub: Any, load: Callable[[argparse.Namespace], Mesh],
     p.add_argument("--samples", type=int, default=100_000,
                    help="random sphere points for the distance")
     p.set_defaults(func=lambda args: _cmd_remesh(args, load))
+
+    p = common("texture", "per-corner UVs and a baked texture, as OBJ + MTL (thesis 8.5)")
+    p.add_argument("--projection", default="cube", choices=list(texture.PROJECTIONS))
+    p.add_argument("--pattern", default="checkerboard", choices=["checkerboard", "grid"])
+    p.add_argument("--size", type=int, default=1024, help="atlas height in pixels")
+    p.set_defaults(func=lambda args: _cmd_texture(args, load))
 
     p = common("morph", "morph one mesh into another through their maps (thesis 8.4)")
     p.add_argument("target", nargs="?", help="the mesh to morph into")
