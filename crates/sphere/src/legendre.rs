@@ -116,6 +116,15 @@ impl Legendre {
         Sectoral { mantissa, exponent }
     }
 
+    /// The recurrence coefficients `(a, b)` of column `m`, for l = m..=lmax
+    /// (index l - m; entry 0 unused): for callers that run several columns
+    /// in lockstep.
+    pub fn recurrence(&self, m: usize) -> (&[f64], &[f64]) {
+        let n = self.lmax + 1 - m;
+        let o = self.offsets[m];
+        (&self.a[o..o + n], &self.b[o..o + n])
+    }
+
     /// Column `m` at `x = cos t` from its sectoral value: `out[l - m] = P(l, m)(x)`
     /// for l = m..=lmax. `out` must hold `lmax + 1 - m` values.
     pub fn column(&self, m: usize, x: f64, start: Sectoral, out: &mut [f64]) {
