@@ -22,12 +22,10 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
-from mpl_toolkits.mplot3d.art3d import Poly3DCollection  # noqa: E402
 
 import spherify as sp  # noqa: E402
 
 SHARED = Path(__file__).resolve().parents[2] / "shared" / "meshes"
-LIGHT = np.array([0.3, 0.4, 0.85]) / np.linalg.norm([0.3, 0.4, 0.85])
 
 
 def corpus_or(name: str, fallback: Callable[[], sp.Mesh], small: bool) -> sp.Mesh:
@@ -48,27 +46,8 @@ def certified_map(mesh: sp.Mesh) -> sp.SphereMap:
 
 def draw(ax, V: np.ndarray, F: np.ndarray, title: str, colors=None, view=(20, -60),
          edges: bool = False) -> None:
-    """A shaded mesh on a 3D axis, equal scale, no axes."""
-    tri = V[F]
-    normal = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
-    normal /= np.linalg.norm(normal, axis=1)[:, None] + 1e-300
-    shade = 0.35 + 0.65 * np.clip(normal @ LIGHT, 0, 1)
-    if colors is None:
-        face = plt.cm.Greys(0.25 + 0.6 * shade)
-    else:
-        face = colors.copy()
-        face[:, :3] *= shade[:, None]
-    ax.add_collection3d(Poly3DCollection(tri, facecolors=face, linewidth=0.2 if edges else 0,
-                                         edgecolor=(0.1, 0.1, 0.1, 0.6) if edges else "none"))
-    lo, hi = V.min(0), V.max(0)
-    c, r = (lo + hi) / 2, (hi - lo).max() / 2
-    ax.set_xlim(c[0] - r, c[0] + r)
-    ax.set_ylim(c[1] - r, c[1] + r)
-    ax.set_zlim(c[2] - r, c[2] + r)
-    ax.view_init(*view)
-    ax.set_box_aspect((1, 1, 1), zoom=1.5)
-    ax.set_axis_off()
-    ax.set_title(title, fontsize=9)
+    """A shaded mesh on a 3D axis, through sp.plot.mesh."""
+    sp.plot.mesh(sp.Mesh(V, F), ax=ax, title=title, colors=colors, view=view, edges=edges)
 
 
 def harmonics_picture(out: Path, small: bool) -> List[str]:
@@ -212,9 +191,8 @@ def texture_picture(out: Path, small: bool) -> List[str]:
         colors = np.concatenate(tri_c)
         flat_v = verts.reshape(-1, 3)
         flat_f = np.arange(len(flat_v)).reshape(-1, 3)
-        rgba = np.c_[colors, np.ones(len(colors))]
         draw(fig.add_subplot(1, 4, 2 * k + 1, projection="3d"), flat_v, flat_f,
-             f"{projection}: {pattern.__name__}", colors=rgba, view=(15, -30))
+             f"{projection}: {pattern.__name__}", colors=colors, view=(15, -30))
         ax = fig.add_subplot(1, 4, 2 * k + 2)
         ax.imshow(image, interpolation="nearest")
         ax.set_axis_off()
@@ -226,11 +204,24 @@ def texture_picture(out: Path, small: bool) -> List[str]:
     return lines + [f"wrote {target}"]
 
 
+def plots_picture(out: Path, small: bool) -> List[str]:
+    """sp.plot.sphere: where the map stretches, on the surface and the sphere."""
+    mesh = corpus_or("spot", lambda: sp.datasets.bumpy_blob(500 if small else 3000), small)
+    m = certified_map(mesh)
+    lines = []
+    for color in ("area", "conformal"):
+        target = out / f"plot_sphere_{color}.png"
+        sp.plot.sphere(m, color=color, view=(15, -30), path=target)
+        lines.append(f"wrote {target}")
+    return lines
+
+
 PICTURES: Dict[str, Callable[[Path, bool], List[str]]] = {
     "harmonics": harmonics_picture,
     "remesh": remesh_picture,
     "morph": morph_picture,
     "texture": texture_picture,
+    "plots": plots_picture,
 }
 
 

@@ -5,7 +5,7 @@ The Rust core does the work; this package is its Python face. See README.md.
 
 from __future__ import annotations
 
-from . import datasets, harmonics, texture
+from . import datasets, harmonics, plot, texture
 from ._core import __version__
 from ._errors import (ConvergenceError, FormatError, MapError, MeshError, SpherifyError,
                       SpherifyWarning, TopologyError)
@@ -14,7 +14,7 @@ from ._report import MeshReport, SphereReport
 from ._spheremap import SphereMap, ThetaPhiMap
 from ._tutte import TutteInfo, boundary_loop, tutte
 from ._embed import embed, methods
-from ._quality import quality
+from ._quality import face_quality, quality
 from ._morph import Morph, morph
 from ._remesh import remesh, remesh_map, surface_distance
 from ._geometry_image import (from_geometry_image, geometry_image, load_geometry_image,
@@ -42,6 +42,7 @@ __all__ = [
     "datasets",
     "dijkstra",
     "embed",
+    "face_quality",
     "from_geometry_image",
     "geometry_image",
     "harmonics",
@@ -50,6 +51,7 @@ __all__ = [
     "methods",
     "morph",
     "orient",
+    "plot",
     "quality",
     "remesh",
     "remesh_map",

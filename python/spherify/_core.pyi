@@ -7,7 +7,7 @@ import numpy.typing as npt
 
 from ._report import MeshReport, SphereReport
 
-__all__ = ["CoreMesh", "CoreSphereMap", "__version__", "boundary_loop", "check", "check_raw", "check_sphere", "choices", "dijkstra", "embed", "from_points", "harmonics_evaluate", "harmonics_fit", "load", "methods", "orient", "quality", "save", "shortest_path", "tutte"]
+__all__ = ["CoreMesh", "CoreSphereMap", "__version__", "boundary_loop", "check", "check_raw", "check_sphere", "choices", "dijkstra", "embed", "face_quality", "from_points", "harmonics_evaluate", "harmonics_fit", "load", "methods", "orient", "quality", "save", "shortest_path", "tutte"]
 
 __version__: str
 
@@ -103,4 +103,5 @@ def harmonics_fit(
 def harmonics_evaluate(
     coefficients: npt.NDArray[np.float64], points: npt.NDArray[np.float64]
 ) -> npt.NDArray[np.float64]: ...
+def face_quality(mesh: CoreMesh, points: npt.NDArray[np.float64]) -> Dict[str, npt.NDArray[np.float64]]: ...
 def quality(mesh: CoreMesh, points: npt.NDArray[np.float64]) -> Dict[str, Any]: ...

@@ -46,6 +46,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(harmonics::harmonics_fit, m)?)?;
     m.add_function(wrap_pyfunction!(harmonics::harmonics_evaluate, m)?)?;
     m.add_function(wrap_pyfunction!(metrics::quality, m)?)?;
+    m.add_function(wrap_pyfunction!(metrics::face_quality, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }
