@@ -83,7 +83,7 @@ def test_reconstruction_error_falls_as_lmax_grows() -> None:
 @pytest.mark.corpus
 @pytest.mark.parametrize("name", ["spot", "hand"])
 def test_reconstruction_error_falls_as_lmax_grows_on_the_corpus(shared_meshes, name: str) -> None:
-    mesh = sp.load(shared_meshes / f"{name}.{'obj'}")
+    mesh = sp.load(shared_meshes / f"{name}.obj")
     m = sp.embed(mesh, "theta_phi")
     errors = [relative_error(sp.harmonics.fit(m, l).to_mesh(m).vertices, m.mesh.vertices, m.mesh)
               for l in (4, 12, 32)]
