@@ -4,7 +4,7 @@
 
 For a few meshes: the mesh with its poles and cut path, and the cut mesh's
 embedding in the theta-phi rectangle, with any triangle that is not certified
-drawn in red. Needs matplotlib (``pip install ".[bench]" matplotlib``).
+drawn in red, through ``spherify.plot``. Needs matplotlib (``pip install ".[bench,plot]"``).
 """
 
 from __future__ import annotations
@@ -17,49 +17,20 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-from mpl_toolkits.mplot3d.art3d import Poly3DCollection  # noqa: E402
 
 import spherify as sp  # noqa: E402
 
 SHARED = Path(__file__).resolve().parents[2] / "shared" / "meshes"
 
 
-def draw_mesh(ax, mesh: sp.Mesh, m: sp.SphereMap, title: str) -> None:
-    V, F = mesh.vertices, mesh.faces
-    tri = V[F]
-    normal = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
-    normal /= np.linalg.norm(normal, axis=1)[:, None] + 1e-300
-    shade = 0.35 + 0.65 * np.clip(normal @ np.array([0.3, 0.4, 0.85]), 0, 1)
-    ax.add_collection3d(Poly3DCollection(tri, facecolors=plt.cm.Greys(0.3 + 0.5 * shade),
-                                         edgecolor="none", alpha=0.9))
+def draw_mesh(ax, mesh: sp.Mesh, m: sp.ThetaPhiMap, title: str) -> None:
+    """The surface (sp.plot.mesh) with the poles and the cut path on it."""
+    sp.plot.mesh(mesh, ax=ax, title=title)
+    V = mesh.vertices
     path = V[m.cut_path]
     ax.plot(path[:, 0], path[:, 1], path[:, 2], color="tab:red", linewidth=2)
     for pole, colour in zip(m.poles, ["tab:blue", "tab:green"]):
         ax.scatter(*V[pole], color=colour, s=40)
-    lo, hi = V.min(0), V.max(0)
-    c, r = (lo + hi) / 2, (hi - lo).max() / 2
-    ax.set_xlim(c[0] - r, c[0] + r)
-    ax.set_ylim(c[1] - r, c[1] + r)
-    ax.set_zlim(c[2] - r, c[2] + r)
-    ax.set_axis_off()
-    ax.set_title(title)
-
-
-def draw_rectangle(ax, m: sp.SphereMap) -> None:
-    tp = m.theta_phi
-    faces = m.cut_mesh.faces
-    ax.triplot(tp[:, 0], tp[:, 1], faces, linewidth=0.15, color="k")
-    bad = np.concatenate([m.details["tp_flipped_faces"], m.details["tp_degenerate_faces"]])
-    if len(bad):
-        ax.triplot(tp[:, 0], tp[:, 1], faces[bad], linewidth=0.4, color="tab:red")
-    ax.set_xlim(0, np.pi)
-    ax.set_ylim(0, 2 * np.pi)
-    ax.set_xlabel("theta")
-    ax.set_ylabel("phi")
-    ax.set_aspect("equal")
-    verdict = "certified flip-free" if m.tp_valid else f"{len(bad)} triangles not certified"
-    ax.set_title(f"theta-phi rectangle: {verdict}")
 
 
 def main() -> None:
@@ -78,7 +49,7 @@ def main() -> None:
         fig = plt.figure(figsize=(12, 6))
         draw_mesh(fig.add_subplot(1, 2, 1, projection="3d"), m.mesh, m,
                   f"{name}: poles and cut path ({len(m.cut_path)} vertices)")
-        draw_rectangle(fig.add_subplot(1, 2, 2), m)
+        sp.plot.rectangle(m, ax=fig.add_subplot(1, 2, 2))
         target = Path(args.out) / f"theta_phi_{name}.png"
         fig.savefig(target, dpi=90, bbox_inches="tight")
         plt.close(fig)

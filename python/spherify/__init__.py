@@ -5,7 +5,7 @@ The Rust core does the work; this package is its Python face. See README.md.
 
 from __future__ import annotations
 
-from . import datasets
+from . import datasets, harmonics, plot, texture
 from ._core import __version__
 from ._errors import (ConvergenceError, FormatError, MapError, MeshError, SpherifyError,
                       SpherifyWarning, TopologyError)
@@ -14,7 +14,11 @@ from ._report import MeshReport, SphereReport
 from ._spheremap import SphereMap, ThetaPhiMap
 from ._tutte import TutteInfo, boundary_loop, tutte
 from ._embed import embed, improve, methods
-from ._quality import quality
+from ._quality import face_quality, quality
+from ._morph import Morph, morph
+from ._remesh import remesh, remesh_map, surface_distance
+from ._geometry_image import (from_geometry_image, geometry_image, load_geometry_image,
+                             save_geometry_image)
 
 __all__ = [
     "ConvergenceError",
@@ -23,6 +27,7 @@ __all__ = [
     "Mesh",
     "MeshError",
     "MeshReport",
+    "Morph",
     "SphereMap",
     "SphereReport",
     "SpherifyError",
@@ -38,11 +43,23 @@ __all__ = [
     "dijkstra",
     "embed",
     "improve",
+    "face_quality",
+    "from_geometry_image",
+    "geometry_image",
+    "harmonics",
     "load",
+    "load_geometry_image",
     "methods",
+    "morph",
     "orient",
+    "plot",
     "quality",
+    "remesh",
+    "remesh_map",
+    "save_geometry_image",
     "save",
     "shortest_path",
+    "surface_distance",
+    "texture",
     "tutte",
 ]

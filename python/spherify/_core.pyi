@@ -7,7 +7,7 @@ import numpy.typing as npt
 
 from ._report import MeshReport, SphereReport
 
-__all__ = ["CoreMesh", "CoreSphereMap", "__version__", "boundary_loop", "check", "check_raw", "check_sphere", "choices", "dijkstra", "embed", "improve", "load", "methods", "orient", "quality", "save", "shortest_path", "tutte"]
+__all__ = ["CoreMesh", "CoreSphereMap", "__version__", "boundary_loop", "check", "check_raw", "check_sphere", "choices", "dijkstra", "embed", "face_quality", "from_points", "harmonics_evaluate", "harmonics_fit", "improve", "load", "methods", "orient", "quality", "save", "shortest_path", "tutte"]
 
 __version__: str
 
@@ -101,4 +101,12 @@ def improve(
     options: Optional[Dict[str, Any]] = None,
     progress: Optional[Callable[[int, int], object]] = None,
 ) -> CoreSphereMap: ...
+def from_points(mesh: CoreMesh, points: npt.NDArray[np.float64]) -> CoreSphereMap: ...
+def harmonics_fit(
+    map: CoreSphereMap, lmax: int, oversample: int = 1
+) -> Tuple[npt.NDArray[np.float64], Dict[str, Any]]: ...
+def harmonics_evaluate(
+    coefficients: npt.NDArray[np.float64], points: npt.NDArray[np.float64]
+) -> npt.NDArray[np.float64]: ...
+def face_quality(mesh: CoreMesh, points: npt.NDArray[np.float64]) -> Dict[str, npt.NDArray[np.float64]]: ...
 def quality(mesh: CoreMesh, points: npt.NDArray[np.float64]) -> Dict[str, Any]: ...

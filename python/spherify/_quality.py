@@ -89,3 +89,26 @@ def quality(mesh: MeshLike, points: Any) -> Dict[str, Union[float, int]]:
     mesh = as_mesh(mesh)
     result: Dict[str, Union[float, int]] = _core.quality(mesh._core, _as_vertices(points, "points"))
     return result
+
+
+def face_quality(mesh: MeshLike, points: Any) -> Dict[str, Any]:
+    """The measures of :func:`quality` face by face, to see where a map
+    distorts (``sp.plot.sphere`` colours by them).
+
+    Returns
+    -------
+    dict of str to (m,) float64
+        ``angle_max_deg`` (the face's largest corner-angle change, degrees),
+        ``conformal`` (sigma1 / sigma2), ``area_log`` (log of the face's
+        share of the sphere's area over its share of the mesh's) and
+        ``stretch`` (sqrt((Gamma^2 + gamma^2) / 2); its area-weighted rms is
+        ``stretch_l2``). NaN for degenerate faces. O(m), in parallel.
+
+    Raises
+    ------
+    MeshError
+        As :func:`quality`.
+    """
+    mesh = as_mesh(mesh)
+    result: Dict[str, Any] = _core.face_quality(mesh._core, _as_vertices(points, "points"))
+    return result

@@ -7,6 +7,8 @@
                                    (or with --progress)
     spherify check MESH            load, validate, orient and print the report
     spherify orient MESH -o OUT    write a consistently, outward-oriented copy
+    spherify harmonics ...         the applications of thesis ch. 8: see
+                                   ``spherify <command> --help`` and _cli_apps.py
 
 Every command takes ``--dataset NAME [--n-vertices N]`` instead of MESH to
 use a generated shape. Exit status: 0 for success (a valid mesh; a certified
@@ -26,7 +28,7 @@ from typing import Any, List, Optional
 
 import numpy as np
 
-from . import _core, datasets
+from . import _cli_apps, _core, datasets
 from ._embed import embed, methods
 from ._errors import SpherifyError, SpherifyWarning, TopologyError
 from ._mesh import Mesh, check, load, orient, save
@@ -178,6 +180,7 @@ def main(argv: Optional[List[str]] = None) -> int:
             p.add_argument("--weights", default="uniform",
                            choices=names["theta_phi_weights"])
         p.set_defaults(func=func)
+    _cli_apps.add_commands(sub, _load, _save_npz, datasets)
     args = parser.parse_args(argv)
     try:
         return int(args.func(args))

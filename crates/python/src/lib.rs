@@ -9,6 +9,7 @@ mod embed;
 mod errors;
 mod gotsman;
 mod graph;
+mod harmonics;
 mod io;
 mod mesh;
 mod metrics;
@@ -43,7 +44,11 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(embed::methods, m)?)?;
     m.add_function(wrap_pyfunction!(embed::choices, m)?)?;
     m.add_function(wrap_pyfunction!(embed::improve, m)?)?;
+    m.add_function(wrap_pyfunction!(embed::from_points, m)?)?;
+    m.add_function(wrap_pyfunction!(harmonics::harmonics_fit, m)?)?;
+    m.add_function(wrap_pyfunction!(harmonics::harmonics_evaluate, m)?)?;
     m.add_function(wrap_pyfunction!(metrics::quality, m)?)?;
+    m.add_function(wrap_pyfunction!(metrics::face_quality, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

@@ -1,6 +1,6 @@
 //! `quality`: the distortion measures of `spherify_sphere::metrics` as a dict.
 
-use numpy::PyReadonlyArrayDyn;
+use numpy::{IntoPyArray, PyReadonlyArrayDyn};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use spherify_sphere::metrics;
@@ -27,5 +27,26 @@ pub fn quality<'py>(
     }
     d.set_item("degenerate_faces", q.degenerate_faces)?;
     d.set_item("n_faces", q.n_faces)?;
+    Ok(d)
+}
+
+/// face_quality(mesh, points (n, 3) float64) -> dict of (m,) float64 arrays:
+/// `angle_max_deg`, `conformal`, `area_log`, `stretch` per face (NaN where
+/// degenerate); MeshError as `quality`.
+#[pyfunction]
+pub fn face_quality<'py>(
+    py: Python<'py>,
+    mesh: &CoreMesh,
+    points: PyReadonlyArrayDyn<'_, f64>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let points = rows::<f64, 3>(py, &points, "points")?;
+    let f = py
+        .detach(|| metrics::face_measures(&mesh.mesh, &points))
+        .map_err(|e| mesh_error(py, e.to_string()))?;
+    let d = PyDict::new(py);
+    d.set_item("angle_max_deg", f.angle_max_deg.into_pyarray(py))?;
+    d.set_item("conformal", f.conformal.into_pyarray(py))?;
+    d.set_item("area_log", f.area_log.into_pyarray(py))?;
+    d.set_item("stretch", f.stretch.into_pyarray(py))?;
     Ok(d)
 }

@@ -51,7 +51,7 @@ impl CoreSphereMap {
     /// Built with the GIL released, outside the `OnceLock`: a thread that
     /// waits on the lock may hold the GIL, which the builder would need back
     /// inside the lock. Two threads racing both build; one result is kept.
-    fn point_map(&self, py: Python<'_>) -> &PointMap {
+    pub(crate) fn point_map(&self, py: Python<'_>) -> &PointMap {
         if let Some(map) = self.point_map.get() {
             return map;
         }

@@ -30,6 +30,12 @@ pub enum SphereError {
     /// A map that was to be improved is not a valid GC-embedding.
     #[error("the map to improve is not a valid GC-embedding ({flipped} faces not positive, covering degree {degree}): improve only starts from a valid map")]
     InvalidStart { flipped: usize, degree: i64 },
+    /// Points given for a map ([`crate::from_points`]) do not match the mesh.
+    #[error("points has {points} rows, but the mesh has {vertices} vertices")]
+    PointCount { points: usize, vertices: usize },
+    /// A given point with no direction: not finite, or the zero vector.
+    #[error("points row {row}: {point:?} has no direction (not finite, or zero)")]
+    BadPoint { row: usize, point: [f64; 3] },
     /// A progress callback asked a long stage to stop.
     #[error("{stage} stopped by the progress callback after {done} of {total} steps")]
     Cancelled { stage: &'static str, done: usize, total: usize },

@@ -4,6 +4,7 @@
 //! * [`genus_zero`]: [`GenusZeroMesh`], the validated mesh every method takes (STYLE 5).
 //! * [`embed`]: one entry point, [`embed()`], for every method and its parameters.
 //! * [`embedding`]: [`SphereEmbedding`], the points and account every method returns.
+//! * [`from_points`]: a map made elsewhere, given as points, certified like the rest.
 //! * [`error`]: [`SphereError`], how a method fails.
 //!
 //! The methods:
@@ -35,6 +36,11 @@
 //! * [`h_map`]: the theta-phi map h and its inverse (6.6).
 //! * [`point_map`]: many points at once between surface and sphere (3.3, 6.6).
 //! * [`bvh`]: the box tree that locates points for them.
+//!
+//! Applications (ch. 8):
+//! * [`harmonics`]: the real spherical-harmonic transform of a surface through its map (8.3).
+//! * [`legendre`]: the normalised associated Legendre functions it runs on.
+//! * [`gauss_legendre`]: its quadrature nodes in cos(theta).
 
 pub mod alexa;
 pub mod bvh;
@@ -45,13 +51,17 @@ pub mod embed;
 pub mod embedding;
 pub mod error;
 pub mod flip_free;
+pub mod from_points;
+pub mod gauss_legendre;
 pub mod gc_map;
 pub mod genus_zero;
 pub mod gotsman;
 pub mod h_map;
 pub mod improve;
+pub mod harmonics;
 pub mod initial;
 pub mod kernel;
+pub mod legendre;
 pub mod lp;
 pub mod metrics;
 pub mod point_map;

@@ -187,6 +187,62 @@ pub fn quality(mesh: &Mesh, points: &[[f64; 3]]) -> Result<Quality, QualityError
     })
 }
 
+/// The measures of [`quality`] face by face, for pictures that show where a
+/// map distorts: NaN for a degenerate face.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FaceMeasures {
+    /// Largest |angle on the mesh - angle on the sphere triangle| of the face, degrees.
+    pub angle_max_deg: Vec<f64>,
+    /// sigma1 / sigma2.
+    pub conformal: Vec<f64>,
+    /// log((area_P / sum area_P) / (area_Q / sum area_Q)), the sums over
+    /// the non-degenerate faces as in [`quality`].
+    pub area_log: Vec<f64>,
+    /// sqrt((sigma1^2 + sigma2^2) / 2) after the scaling of [`quality`]'s
+    /// stretch (total areas equal): its area-weighted root mean square is
+    /// `stretch_l2`.
+    pub stretch: Vec<f64>,
+}
+
+/// [`FaceMeasures`] of `points` against the mesh. O(F), in parallel.
+///
+/// Errors: as [`quality`].
+pub fn face_measures(mesh: &Mesh, points: &[[f64; 3]]) -> Result<FaceMeasures, QualityError> {
+    let n = mesh.n_vertices();
+    if points.len() != n {
+        return Err(QualityError::LengthMismatch { got: points.len(), expected: n });
+    }
+    if let Some((index, value)) =
+        points.iter().enumerate().find(|(_, p)| !p.iter().all(|x| x.is_finite()))
+    {
+        return Err(QualityError::NonFinite { index, value: *value });
+    }
+    let positions = mesh.positions();
+    let stats: Vec<Option<FaceStats>> = mesh
+        .faces()
+        .par_iter()
+        .map(|&[a, b, c]| {
+            let tri = |p: &[[f64; 3]]| [p[a as usize], p[b as usize], p[c as usize]];
+            face_stats(tri(points), tri(positions))
+        })
+        .collect();
+    let good = stats.iter().flatten();
+    let (total_p, total_q) = good.fold((0.0, 0.0), |(p, q), s| (p + s.area_p, q + s.area_q));
+    if total_p == 0.0 {
+        return Err(QualityError::AllDegenerate { faces: stats.len() });
+    }
+    let scale = (total_p / total_q).sqrt();
+    let per = |f: &dyn Fn(&FaceStats) -> f64| -> Vec<f64> {
+        stats.iter().map(|s| s.as_ref().map_or(f64::NAN, f)).collect()
+    };
+    Ok(FaceMeasures {
+        angle_max_deg: per(&|s| s.angle_diff.iter().fold(0.0, |m: f64, &d| m.max(d))),
+        conformal: per(&|s| s.sigma1 / s.sigma2),
+        area_log: per(&|s| (s.area_p / total_p).ln() - (s.area_q / total_q).ln()),
+        stretch: per(&|s| scale * (0.5 * (s.sigma1 * s.sigma1 + s.sigma2 * s.sigma2)).sqrt()),
+    })
+}
+
 /// Angles, areas and singular values of one face; `None` when degenerate.
 /// `p` is the triangle on the sphere (chords), `q` the one on the mesh.
 fn face_stats(p: [[f64; 3]; 3], q: [[f64; 3]; 3]) -> Option<FaceStats> {
@@ -312,6 +368,31 @@ mod tests {
         let mean = (40.0 + 16.0 * 2f64.sqrt()) / 56.0;
         let var = (40.0 * (1.0 - mean).powi(2) + 16.0 * (2f64.sqrt() - mean).powi(2)) / 56.0;
         assert!(close(q.edge_length_cv, var.sqrt() / mean));
+    }
+
+    #[test]
+    fn per_face_measures_add_up_to_the_aggregates() {
+        let mesh = spherify_mesh::solids::octasphere(2);
+        let points: Vec<[f64; 3]> =
+            mesh.positions().iter().map(|p| [2.0 * p[0] + 0.3 * p[1], p[1], 0.5 * p[2]]).collect();
+        let q = quality(&mesh, &points).unwrap();
+        let f = face_measures(&mesh, &points).unwrap();
+        let n = f.conformal.len() as f64;
+        assert!(close(f.conformal.iter().sum::<f64>() / n, q.conformal_mean));
+        assert!(close(f.angle_max_deg.iter().fold(0.0, |m: f64, &d| m.max(d)), q.angle_max_deg));
+        assert!(close(f.area_log.iter().sum::<f64>() / n, q.area_log_mean));
+        // stretch_l2^2 is the mean of the squares weighted by the mesh areas.
+        let areas: Vec<f64> = mesh
+            .faces()
+            .iter()
+            .map(|&[a, b, c]| {
+                let p = mesh.positions();
+                norm(cross(sub(p[b as usize], p[a as usize]), sub(p[c as usize], p[a as usize])))
+            })
+            .collect();
+        let total: f64 = areas.iter().sum();
+        let l2 = (f.stretch.iter().zip(&areas).map(|(s, a)| s * s * a).sum::<f64>() / total).sqrt();
+        assert!(close(l2, q.stretch_l2), "{l2} vs {}", q.stretch_l2);
     }
 
     #[test]

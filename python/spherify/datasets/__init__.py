@@ -22,10 +22,11 @@ from ._helix import helix_tube
 from ._spheres import bumpy_blob, ellipsoid, icosphere
 from ._spheres import sphere as _sphere
 from ._tentacles import tentacles
+from ._textures import checkerboard, lat_long_grid
 from ._urchin import urchin
 
-__all__ = ["bumpy_blob", "ellipsoid", "helix_tube", "icosphere", "make", "names",
-           "tentacles", "urchin"]
+__all__ = ["bumpy_blob", "checkerboard", "ellipsoid", "helix_tube", "icosphere", "lat_long_grid",
+           "make", "names", "tentacles", "urchin"]
 
 # make's shapes, simplest first; "icosphere" takes a vertex count here
 _SHAPES: Dict[str, Callable[..., Mesh]] = {

@@ -1,0 +1,54 @@
+//! `harmonics_fit` and `harmonics_evaluate`: the spherical-harmonic transform
+//! of `spherify_sphere::harmonics` (thesis 8.3) for `spherify.harmonics`.
+
+use numpy::{PyArray2, PyReadonlyArrayDyn};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use spherify_sphere::harmonics::{evaluate, fit, HarmonicsError};
+
+use crate::convert::{rows, to_numpy};
+use crate::errors::{mesh_error, point_map_error};
+use crate::sphere_map::CoreSphereMap;
+
+fn harmonics_error(py: Python<'_>, err: HarmonicsError) -> PyErr {
+    match err {
+        HarmonicsError::Map(e) => point_map_error(py, e),
+        other => mesh_error(py, other.to_string()),
+    }
+}
+
+/// harmonics_fit(map, lmax, oversample=1) -> (coefficients ((lmax+1)^2, 3) float64, info dict).
+///
+/// MapError when the map is not a certified bijection; MeshError for bad
+/// parameters. The GIL is released for the sampling and the transform.
+#[pyfunction]
+#[pyo3(signature = (map, lmax, oversample=1))]
+pub fn harmonics_fit<'py>(
+    py: Python<'py>,
+    map: &CoreSphereMap,
+    lmax: usize,
+    oversample: usize,
+) -> PyResult<(Bound<'py, PyArray2<f64>>, Bound<'py, PyDict>)> {
+    let point_map = map.point_map(py);
+    let (coefficients, info) =
+        py.detach(|| fit(point_map, lmax, oversample)).map_err(|e| harmonics_error(py, e))?;
+    let d = PyDict::new(py);
+    d.set_item("n_theta", info.n_theta)?;
+    d.set_item("n_phi", info.n_phi)?;
+    d.set_item("seconds", info.seconds)?;
+    Ok((to_numpy(py, &coefficients), d))
+}
+
+/// harmonics_evaluate(coefficients (K, 3) float64, points (k, 3) float64) -> (k, 3) float64.
+#[pyfunction]
+pub fn harmonics_evaluate<'py>(
+    py: Python<'py>,
+    coefficients: PyReadonlyArrayDyn<'_, f64>,
+    points: PyReadonlyArrayDyn<'_, f64>,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    let coefficients = rows::<f64, 3>(py, &coefficients, "coefficients")?;
+    let points = rows::<f64, 3>(py, &points, "points")?;
+    let values =
+        py.detach(|| evaluate(&coefficients, &points)).map_err(|e| harmonics_error(py, e))?;
+    Ok(to_numpy(py, &values))
+}

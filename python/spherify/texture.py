@@ -1,0 +1,326 @@
+"""Texture coordinates from a sphere map (thesis 8.5): per-corner UVs, an
+atlas to bake any spherical texture into, and OBJ + MTL export.
+
+    t = sp.texture.uv(m, projection="cube")     # UVLayout: t.uv (F, 3, 2)
+    image = t.bake(sp.datasets.checkerboard, 512)
+    sp.texture.save_obj(m.mesh, "out.obj", t, image)
+
+Projections (the image a UV points into is the layout's atlas, made by
+:meth:`UVLayout.bake` from a function of the direction on the sphere):
+
+* ``"cube"`` (default): each face goes to the cube face its centroid points
+  at and its corners are projected onto that cube face's plane (gnomonic
+  projection). Six square tiles, three by two; each tile reaches a margin
+  beyond its cube face so that the faces that straddle a cube edge keep
+  their whole triangle in their own tile (no smearing across a seam). The
+  gnomonic projection maps great circles to lines, so a positively oriented
+  spherical triangle (certified by the map) has a positively oriented UV
+  triangle: exactly, not by a tolerance.
+* ``"equirectangular"``: u from phi, v from theta. The projection's poles are
+  put at two vertices first (a rotation takes the vertex nearest the north
+  pole there, then a Moebius transformation - a translation of the
+  stereographic plane - takes the vertex nearest the opposite point to the
+  south pole; for theta-phi maps, whose poles are vertices at +-z, both are
+  the identity), so no face holds a pole inside; a pole corner takes the mean
+  u of its face's other corners. Faces across the date line keep their own
+  unwrapped u; the atlas covers a little more than 2 pi in phi
+  (``u_span``), so every u stays in [0, 1].
+"""
+
+from __future__ import annotations
+
+import os
+import struct
+import zlib
+from pathlib import Path
+from typing import Any, Callable, Dict, Optional, Union
+
+import numpy as np
+import numpy.typing as npt
+
+from ._errors import MeshError
+from ._geometry_image import _chunk
+from ._mesh import Mesh
+from ._quality import quality
+from ._spheremap import SphereMap
+
+__all__ = ["PROJECTIONS", "UVLayout", "save_obj", "uv", "write_png"]
+
+PROJECTIONS = ("cube", "equirectangular")
+PathLike = Union[str, "os.PathLike[str]"]
+
+# Cube tiles: normal, s axis, t axis (s x t = normal, so CCW stays CCW), atlas column, row.
+_TILES = [
+    ((1, 0, 0), (0, 1, 0), (0, 0, 1), 0, 1),
+    ((-1, 0, 0), (0, -1, 0), (0, 0, 1), 1, 1),
+    ((0, 1, 0), (-1, 0, 0), (0, 0, 1), 2, 1),
+    ((0, -1, 0), (1, 0, 0), (0, 0, 1), 0, 0),
+    ((0, 0, 1), (1, 0, 0), (0, 1, 0), 1, 0),
+    ((0, 0, -1), (1, 0, 0), (0, -1, 0), 2, 0),
+]
+_NORMALS = np.array([t[0] for t in _TILES], dtype=np.float64)
+_S = np.array([t[1] for t in _TILES], dtype=np.float64)
+_T = np.array([t[2] for t in _TILES], dtype=np.float64)
+_COLS = np.array([t[3] for t in _TILES])
+_ROWS = np.array([t[4] for t in _TILES])
+#: A corner must be within about 78 degrees of its tile's axis.
+_MIN_COS = 0.2
+
+
+def _stereo(p: np.ndarray) -> np.ndarray:
+    """Stereographic projection from the north pole, as complex numbers."""
+    w: np.ndarray = (p[..., 0] + 1j * p[..., 1]) / (1 - p[..., 2])
+    return w
+
+
+def _istereo(w: np.ndarray) -> np.ndarray:
+    r2 = np.abs(w) ** 2
+    p: np.ndarray = np.stack([2 * w.real, 2 * w.imag, r2 - 1], axis=-1) / (r2 + 1)[..., None]
+    return p
+
+
+def _rotation_to_north(p: np.ndarray) -> np.ndarray:
+    """A rotation taking the unit vector p to (0, 0, 1)."""
+    z = np.array([0.0, 0.0, 1.0])
+    v, c = np.cross(p, z), float(p @ z)
+    if np.linalg.norm(v) < 1e-15:
+        return np.eye(3) if c > 0 else np.diag([1.0, -1.0, -1.0])
+    k = np.array([[0, -v[2], v[1]], [v[2], 0, -v[0]], [-v[1], v[0], 0]])
+    r: np.ndarray = np.eye(3) + k + k @ k / (1 + c)
+    return r
+
+
+class UVLayout:
+    """Per-corner texture coordinates of a mesh and the atlas they point into.
+
+    Attributes (read-only)
+    ----------------------
+    projection : str
+    uv : (m, 3, 2) float64
+        Corner k of face f at ``uv[f, k]``, in [0, 1]^2, v upwards (OBJ).
+    params : dict
+        ``cube``: ``tiles`` (m,) the tile of each face (+x, -x, +y, -y, +z,
+        -z) and ``extent`` L (each tile shows the gnomonic square [-L, L]^2).
+        ``equirectangular``: ``u_span`` (u = phi / (2 pi u_span)),
+        ``rotation``, ``shift`` (the Moebius translation) and ``poles`` (the
+        two vertex ids at the projection's poles).
+    """
+
+    def __init__(self, projection: str, uv: np.ndarray, params: Dict[str, Any]) -> None:
+        self._projection = projection
+        uv.flags.writeable = False
+        self._uv = uv
+        self._params = params
+
+    @property
+    def projection(self) -> str:
+        return self._projection
+
+    @property
+    def uv(self) -> np.ndarray:
+        return self._uv
+
+    @property
+    def params(self) -> Dict[str, Any]:
+        return dict(self._params)
+
+    def directions(self, height: int, width: int) -> np.ndarray:
+        """The unit vector each atlas pixel shows: (height, width, 3) float64,
+        row 0 at the top (v = 1). Bake a texture by colouring these."""
+        if height < 1 or width < 1:
+            raise MeshError(f"the atlas needs a positive size, got {height} x {width}")
+        u = (np.arange(width) + 0.5) / width
+        v = 1 - (np.arange(height) + 0.5) / height
+        uu, vv = np.meshgrid(u, v)
+        return self.direction_at(np.stack([uu, vv], axis=-1))
+
+    def direction_at(self, uv: npt.ArrayLike) -> np.ndarray:
+        """The unit vector at atlas coordinates ``uv`` (..., 2): the inverse
+        of the projection (each face corner's UV gives that vertex's point)."""
+        p = np.asarray(uv, dtype=np.float64)
+        uu, vv = p[..., 0], p[..., 1]
+        if self._projection == "cube":
+            col = np.clip(np.floor(uu * 3).astype(np.int64), 0, 2)
+            row = np.clip(np.floor(vv * 2).astype(np.int64), 0, 1)
+            tile = np.zeros_like(col)
+            for k in range(6):
+                tile[(col == _COLS[k]) & (row == _ROWS[k])] = k
+            extent = self._params["extent"]
+            s = ((uu * 3 - col) * 2 - 1) * extent
+            t = ((vv * 2 - row) * 2 - 1) * extent
+            d = _NORMALS[tile] + s[..., None] * _S[tile] + t[..., None] * _T[tile]
+        else:
+            phi = 2 * np.pi * uu * self._params["u_span"]
+            theta = np.pi * (1 - vv)
+            d = np.stack([np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi),
+                          np.cos(theta)], axis=-1)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                back = _istereo(_stereo(d) + self._params["shift"])
+            back[d[..., 2] >= 1.0] = [0.0, 0.0, 1.0]
+            d = back @ self._params["rotation"]  # R^T applied to rows
+        unit: np.ndarray = d / np.linalg.norm(d, axis=-1, keepdims=True)
+        return unit
+
+    def bake(self, texture: Callable[[np.ndarray], np.ndarray], height: int,
+             width: Optional[int] = None) -> np.ndarray:
+        """The atlas image: ``texture(directions)`` (for example
+        ``sp.datasets.checkerboard``) at every pixel. ``width`` defaults to
+        ``1.5 height`` for the cube atlas and ``2 height`` for
+        equirectangular. Returns (height, width, 3) float64."""
+        if width is None:
+            width = int(round(height * (1.5 if self._projection == "cube" else 2.0)))
+        image: np.ndarray = np.asarray(texture(self.directions(height, width)), dtype=np.float64)
+        return image
+
+    def sample(self, image: np.ndarray, face_ids: npt.ArrayLike, bary: npt.ArrayLike) -> np.ndarray:
+        """The atlas colour at surface points (nearest pixel): for renderers
+        and tests. Returns (k, channels)."""
+        f = np.asarray(face_ids, dtype=np.int64)
+        w = np.asarray(bary, dtype=np.float64)
+        p = np.einsum("kj,kjd->kd", w, self._uv[f])
+        h, wd = image.shape[:2]
+        col = np.clip((p[:, 0] * wd).astype(np.int64), 0, wd - 1)
+        row = np.clip(((1 - p[:, 1]) * h).astype(np.int64), 0, h - 1)
+        result: np.ndarray = image[row, col]
+        return result
+
+    def quality(self, mesh: Mesh) -> Dict[str, Union[float, int]]:
+        """:func:`spherify.quality` of the texture map: every face on its
+        own (the mesh exploded into separate triangles) against its UV
+        triangle, so ``stretch_l2`` is the texture stretch of Sander et al."""
+        corners = mesh.vertices[mesh.faces].reshape(-1, 3)
+        faces = np.arange(len(corners), dtype=np.int64).reshape(-1, 3)
+        flat = np.concatenate([self._uv.reshape(-1, 2), np.zeros((len(corners), 1))], axis=1)
+        return quality((corners, faces), flat)
+
+
+def _cube(points: np.ndarray, faces: np.ndarray) -> UVLayout:
+    p = points[faces]  # (m, 3, 3)
+    centre = p.sum(axis=1)
+    axis = np.abs(centre).argmax(axis=1)
+    negative = centre[np.arange(len(centre)), axis] < 0
+    tile = 2 * axis + negative  # +x, -x, +y, -y, +z, -z
+    n, es, et = _NORMALS[tile][:, None], _S[tile][:, None], _T[tile][:, None]
+    depth = (p * n).sum(-1)
+    if depth.min() < _MIN_COS:
+        f = int(np.argmin(depth.min(axis=1)))
+        raise MeshError(f"face {f} is too large for the cube projection: a corner is "
+                        f"{np.degrees(np.arccos(np.clip(depth.min(), -1, 1))):.1f} degrees from "
+                        "its tile's axis (at most 78)")
+    s, t = (p * es).sum(-1) / depth, (p * et).sum(-1) / depth
+    extent = float(max(1.0, np.abs(s).max(), np.abs(t).max())) * (1 + 1e-9)
+    u = (_COLS[tile][:, None] + (s / extent + 1) / 2) / 3
+    v = (_ROWS[tile][:, None] + (t / extent + 1) / 2) / 2
+    return UVLayout("cube", np.stack([u, v], axis=-1), {"tiles": tile, "extent": extent})
+
+
+def _equirectangular(points: np.ndarray, faces: np.ndarray) -> UVLayout:
+    north = int(np.argmax(points[:, 2]))
+    rotation = _rotation_to_north(points[north])
+    q = points @ rotation.T
+    q[north] = [0.0, 0.0, 1.0]
+    south = int(np.argmin(q[:, 2]))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        w = _stereo(q)
+    shift = complex(w[south])
+    others = np.arange(len(q)) != north
+    moved = q.copy()
+    moved[others] = _istereo(w[others] - shift)
+    moved[south] = [0.0, 0.0, -1.0]
+    theta = np.arccos(np.clip(moved[:, 2], -1.0, 1.0))
+    phi = np.mod(np.arctan2(moved[:, 1], moved[:, 0]), 2 * np.pi)
+    pole = np.zeros(len(q), dtype=bool)
+    pole[[north, south]] = True
+    f_phi, f_pole = phi[faces], pole[faces]
+    # Unwrap each face's phi about its first corner that is not a pole.
+    ref = f_phi[np.arange(len(faces)), np.argmin(f_pole, axis=1)]
+    unwrapped = ref[:, None] + np.mod(f_phi - ref[:, None] + np.pi, 2 * np.pi) - np.pi
+    if f_pole.any():
+        rows = np.nonzero(f_pole.any(axis=1))[0]
+        for r in rows:
+            k = np.nonzero(f_pole[r])[0]
+            rest = np.nonzero(~f_pole[r])[0]
+            unwrapped[r, k] = unwrapped[r, rest].mean()
+    low = unwrapped.min(axis=1)
+    unwrapped += np.where(low < 0, 2 * np.pi, 0.0)[:, None]
+    span = float(max(1.0, unwrapped.max() / (2 * np.pi))) * (1 + 1e-12)
+    u = unwrapped / (2 * np.pi * span)
+    v = 1 - theta[faces] / np.pi
+    return UVLayout("equirectangular", np.stack([u, v], axis=-1),
+                    {"u_span": span, "rotation": rotation, "shift": shift,
+                     "poles": (north, south)})
+
+
+def uv(m: SphereMap, projection: str = "cube") -> UVLayout:
+    """Per-corner texture coordinates of ``m.mesh`` from its sphere points.
+
+    Parameters
+    ----------
+    m : SphereMap
+        Best a certified one (``valid``): then every UV triangle of the cube
+        projection is positively oriented.
+    projection : str
+        ``"cube"`` or ``"equirectangular"`` (see the module doc).
+
+    Returns
+    -------
+    UVLayout
+        ``uv`` (m, 3, 2) float64 in [0, 1]^2. O(m).
+
+    Raises
+    ------
+    MeshError
+        Unknown projection; for ``"cube"``, a face so large that a corner is
+        more than 78 degrees from its tile's axis.
+    """
+    if projection not in PROJECTIONS:
+        raise MeshError(f"unknown projection {projection!r}; available: {', '.join(PROJECTIONS)}")
+    points, faces = np.asarray(m.points), m.mesh.faces
+    return _cube(points, faces) if projection == "cube" else _equirectangular(points, faces)
+
+
+def _atomic_write(path: Path, data: bytes) -> None:
+    temporary = path.with_name(f".{path.name}.tmp-{os.getpid()}")
+    try:
+        temporary.write_bytes(data)
+        os.replace(temporary, path)
+    finally:
+        if temporary.exists():
+            temporary.unlink()
+
+
+def write_png(image: npt.ArrayLike, path: PathLike) -> None:
+    """An (h, w, 3) RGB image with values in [0, 1] (NaN as black) as an
+    8-bit PNG, written atomically."""
+    a = np.nan_to_num(np.asarray(image, dtype=np.float64))
+    if a.ndim != 3 or a.shape[2] != 3:
+        raise MeshError(f"an image must have shape (h, w, 3), got {a.shape}")
+    q = np.rint(np.clip(a, 0, 1) * 255).astype(np.uint8)
+    rows = b"".join(b"\x00" + q[i].tobytes() for i in range(q.shape[0]))
+    data = (b"\x89PNG\r\n\x1a\n"
+            + _chunk(b"IHDR", struct.pack(">IIBBBBB", q.shape[1], q.shape[0], 8, 2, 0, 0, 0))
+            + _chunk(b"IDAT", zlib.compress(rows, 6)) + _chunk(b"IEND", b""))
+    _atomic_write(Path(path), data)
+
+
+def save_obj(mesh: Mesh, path: PathLike, layout: UVLayout,
+             image: Optional[npt.ArrayLike] = None) -> None:
+    """Write ``mesh`` as OBJ with one ``vt`` per face corner and, with
+    ``image``, an MTL next to it whose ``map_Kd`` is that image written as
+    PNG (``<stem>.png``). Every file is written atomically."""
+    target = Path(path)
+    if layout.uv.shape != (mesh.n_faces, 3, 2):
+        raise MeshError(f"the layout has {layout.uv.shape[0]} faces, the mesh {mesh.n_faces}")
+    lines = [f"# spherify: {layout.projection} texture coordinates, one vt per face corner"]
+    if image is not None:
+        write_png(image, target.with_suffix(".png"))
+        mtl = target.with_suffix(".mtl")
+        _atomic_write(mtl, (f"newmtl texture\nKa 1 1 1\nKd 1 1 1\n"
+                            f"map_Kd {target.with_suffix('.png').name}\n").encode())
+        lines += [f"mtllib {mtl.name}", "usemtl texture"]
+    lines += ["v %.17g %.17g %.17g" % tuple(p) for p in mesh.vertices.tolist()]
+    lines += ["vt %.17g %.17g" % tuple(p) for p in layout.uv.reshape(-1, 2).tolist()]
+    f = mesh.faces + 1
+    t = np.arange(1, 3 * mesh.n_faces + 1).reshape(-1, 3)
+    lines += [f"f {a}/{ta} {b}/{tb} {c}/{tc}" for (a, b, c), (ta, tb, tc) in zip(f, t)]
+    _atomic_write(target, ("\n".join(lines) + "\n").encode())

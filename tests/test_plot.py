@@ -1,0 +1,73 @@
+"""sp.plot: headless pictures (matplotlib, Agg), and sp.face_quality, the
+per-face measures they colour by."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import spherify as sp
+
+pytest.importorskip("matplotlib")
+
+
+@pytest.fixture(scope="module")
+def blob() -> sp.ThetaPhiMap:
+    m = sp.embed(sp.datasets.bumpy_blob(600))
+    assert isinstance(m, sp.ThetaPhiMap)
+    return m
+
+
+def is_png(path: Path) -> bool:
+    return path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and path.stat().st_size > 3000
+
+
+@pytest.mark.parametrize("color", sp.plot.COLORS)
+def test_sphere_pictures_for_every_colouring(blob: sp.ThetaPhiMap, color: str,
+                                             tmp_path: Path) -> None:
+    path = tmp_path / f"{color}.png"
+    sp.plot.sphere(blob, color=color, path=path)
+    assert is_png(path)
+
+
+def test_mesh_and_rectangle_pictures(blob: sp.ThetaPhiMap, tmp_path: Path) -> None:
+    sp.plot.mesh(blob.mesh, path=tmp_path / "a.png")
+    q = sp.face_quality(blob.mesh, blob.points)
+    sp.plot.mesh(blob.mesh, values=q["stretch"], edges=True, path=tmp_path / "b.png")
+    sp.plot.mesh(blob.mesh, colors=np.tile([0.2, 0.5, 0.9], (blob.mesh.n_faces, 1)),
+                 path=tmp_path / "c.png")
+    sp.plot.rectangle(blob, path=tmp_path / "r.png")
+    assert all(is_png(tmp_path / f"{n}.png") for n in "abcr")
+    fig = sp.plot.mesh(blob.mesh)
+    assert fig.axes
+    import matplotlib.pyplot as plt
+
+    plt.close(fig)
+
+
+def test_bad_arguments(blob: sp.ThetaPhiMap) -> None:
+    with pytest.raises(sp.MeshError, match="unknown color"):
+        sp.plot.sphere(blob, color="rainbow")
+    with pytest.raises(sp.MeshError, match="one entry per face"):
+        sp.plot.mesh(blob.mesh, values=[1.0, 2.0])
+    radial = sp.embed(sp.datasets.icosphere(1), "radial")
+    with pytest.raises(sp.MeshError, match="theta-phi"):
+        sp.plot.rectangle(radial)
+
+
+def test_face_quality_agrees_with_quality(blob: sp.ThetaPhiMap) -> None:
+    q = sp.quality(blob.mesh, blob.points)
+    f = sp.face_quality(blob.mesh, blob.points)
+    assert set(f) == {"angle_max_deg", "conformal", "area_log", "stretch"}
+    assert all(v.shape == (blob.mesh.n_faces,) for v in f.values())
+    assert np.nanmax(f["angle_max_deg"]) == pytest.approx(q["angle_max_deg"], rel=1e-12)
+    assert np.nanmean(f["conformal"]) == pytest.approx(q["conformal_mean"], rel=1e-12)
+    assert np.nanstd(f["area_log"]) == pytest.approx(q["area_log_std"], rel=1e-9)
+    V, F = blob.mesh.vertices, blob.mesh.faces
+    area = np.linalg.norm(np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]]), axis=1)
+    l2 = np.sqrt(np.nansum(f["stretch"] ** 2 * area) / area.sum())
+    assert l2 == pytest.approx(q["stretch_l2"], rel=1e-9)
+    with pytest.raises(sp.MeshError):
+        sp.face_quality(blob.mesh, blob.points[:-1])
