@@ -2,7 +2,8 @@
 
     spherify map MESH -o OUT [--method theta_phi] [--poles fast_graph]
                                    map a mesh onto the sphere, print the certificate,
-                                   write OUT (the sphere as a mesh) and OUT's .npz;
+                                   write OUT (the sphere as a mesh; a FreeSurfer name
+                                   such as lh.sphere gets radius 100) and OUT's .npz;
                                    --poles graph shows a progress bar on a terminal
                                    (or with --progress)
     spherify check MESH            load, validate, orient and print the report
@@ -26,10 +27,10 @@ from typing import Any, List, Optional
 
 import numpy as np
 
-from . import _core, datasets
+from . import _core, _formats, datasets
 from ._embed import embed, methods
 from ._errors import SpherifyError, SpherifyWarning, TopologyError
-from ._mesh import Mesh, check, load, orient, save
+from ._mesh import Mesh, check, check_sphere, load, orient, save
 from ._quality import quality
 from ._spheremap import ThetaPhiMap
 
@@ -89,6 +90,20 @@ def _save_npz(path: Path, **arrays: Any) -> None:
             temporary.unlink()
 
 
+def _save_sphere(mesh: Mesh, points: np.ndarray, out: Path) -> None:
+    """Write the sphere as a mesh. A FreeSurfer surface gets FreeSurfer's
+    radius of 100 (as ``?h.sphere``); FreeSurfer and GIfTI store float32, so
+    the rounded points are certified again and the verdict printed."""
+    radius = _formats.FREESURFER_RADIUS if _formats.is_freesurfer_name(out) else 1.0
+    save(Mesh(points * radius, mesh.faces), out)
+    if _formats.is_freesurfer_name(out) or out.name.lower().endswith(".gii"):
+        stored = (points * radius).astype(np.float32).astype(np.float64)
+        verdict = check_sphere(mesh, stored)
+        print(f"{out} stores float32 coordinates (radius {radius:g}); as stored they form "
+              f"{'a valid' if verdict.valid else 'NOT a valid'} GC-embedding "
+              f"({verdict.n_negative + verdict.n_zero} faces flipped or collapsed)")
+
+
 def _cmd_map(args: argparse.Namespace) -> int:
     out = Path(args.output)
     if not out.parent.is_dir():
@@ -141,7 +156,7 @@ def _cmd_map(args: argparse.Namespace) -> int:
           f"(Linf {q['stretch_linf']:.3g}), edge-length CV {q['edge_length_cv']:.3g}")
     stages = ", ".join(f"{k} {v:.3f}" for k, v in m.seconds.items())
     print(f"seconds: load {loaded - start:.3f}; {stages}; total {mapped - start:.3f}")
-    save(Mesh(m.points, m.mesh.faces), out)
+    _save_sphere(m.mesh, m.points, out)
     arrays = {"points": m.points, "faces": m.mesh.faces}
     if isinstance(m, ThetaPhiMap):
         arrays.update(theta_phi=m.theta_phi, poles=np.array(m.poles), cut_path=m.cut_path,
@@ -161,7 +176,8 @@ def main(argv: Optional[List[str]] = None) -> int:
                              ("check", _cmd_check, "validate a mesh, orient it, print the report"),
                              ("orient", _cmd_orient, "write a consistently outward-oriented copy")]:
         p = sub.add_parser(name, help=text)
-        p.add_argument("mesh", nargs="?", help="mesh file (.obj .off .ply .stl)")
+        p.add_argument("mesh", nargs="?", help="mesh file (.obj .off .ply .stl .npz, a "
+                       "FreeSurfer surface such as lh.pial, .gii)")
         p.add_argument("--dataset", choices=datasets.names(), help="use a generated shape instead")
         p.add_argument("--n-vertices", type=int, default=5000, help="size of the generated shape")
         if name in ("orient", "map"):
