@@ -15,8 +15,11 @@ from ._spheremap import SphereMap, ThetaPhiMap
 from ._tutte import TutteInfo, boundary_loop, tutte
 from ._embed import embed, methods
 from ._quality import quality
+from ._persist import load_map
+from .batch import BatchResult, batch
 
 __all__ = [
+    "BatchResult",
     "ConvergenceError",
     "FormatError",
     "MapError",
@@ -31,6 +34,7 @@ __all__ = [
     "TopologyError",
     "TutteInfo",
     "__version__",
+    "batch",
     "boundary_loop",
     "check",
     "check_sphere",
@@ -38,6 +42,7 @@ __all__ = [
     "dijkstra",
     "embed",
     "load",
+    "load_map",
     "methods",
     "orient",
     "quality",

@@ -8,6 +8,10 @@
                                    (or with --progress)
     spherify check MESH            load, validate, orient and print the report
     spherify orient MESH -o OUT    write a consistently, outward-oriented copy
+    spherify batch INPUT... -o OUTDIR [--method M] [--workers N] [--timeout S]
+                   [--scheduler tcp://...]
+                                   map many meshes (files, folders, lists of paths),
+                                   resumably; OUTDIR/journal.jsonl and summary.csv
 
 Every command takes ``--dataset NAME [--n-vertices N]`` instead of MESH to
 use a generated shape. Exit status: 0 for success (a valid mesh; a certified
@@ -23,7 +27,7 @@ import sys
 import time
 import warnings
 from pathlib import Path
-from typing import Any, List, Optional
+from typing import Any, Dict, List, Optional
 
 import numpy as np
 
@@ -167,6 +171,30 @@ def _cmd_map(args: argparse.Namespace) -> int:
     return 0 if certified else 1
 
 
+def _cmd_batch(args: argparse.Namespace) -> int:
+    from .batch import batch
+    options: Dict[str, Any] = {}
+    if args.method == "theta_phi":
+        options = {"poles": args.poles, "weights": args.weights}
+    try:
+        result = batch(args.inputs, args.output, method=args.method, workers=args.workers,
+                       timeout=args.timeout, scheduler=args.scheduler,
+                       progress=args.progress or sys.stderr.isatty(), **options)
+    except KeyboardInterrupt:
+        print(f"interrupted: {args.output}/journal.jsonl holds every mesh that finished; "
+              "run the same command again to resume", file=sys.stderr)
+        return 130
+    c = result.counts
+    print(f"{c['meshes']} meshes: {c['certified']} certified, {c['failed']} failed, "
+          f"{c['skipped']} already done (skipped); summary in {result.summary}")
+    for row in result.rows:
+        if row.get("status") != "done":
+            print(f"failed: {row['input']}: {row['error_type']}: {row['error']}")
+        elif not row.get("certified"):
+            print(f"not certified: {row['input']}")
+    return 0 if result.all_certified else 1
+
+
 def main(argv: Optional[List[str]] = None) -> int:
     parser = argparse.ArgumentParser(prog="spherify", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -194,6 +222,18 @@ def main(argv: Optional[List[str]] = None) -> int:
             p.add_argument("--weights", default="uniform",
                            choices=names["theta_phi_weights"])
         p.set_defaults(func=func)
+    p = sub.add_parser("batch", help="map many meshes, in parallel and resumably")
+    p.add_argument("inputs", nargs="+", help="mesh files, folders, or .txt files of paths")
+    p.add_argument("-o", "--output", required=True, help="output folder")
+    p.add_argument("--method", default="theta_phi", choices=methods())
+    p.add_argument("--poles", default="fast_graph", choices=names["poles"])
+    p.add_argument("--weights", default="uniform", choices=names["theta_phi_weights"])
+    p.add_argument("--workers", type=int, default=None, help="local processes (default: cores)")
+    p.add_argument("--timeout", type=float, default=None, help="seconds per mesh")
+    p.add_argument("--scheduler", default=None, help="Dask scheduler address, tcp://host:port")
+    p.add_argument("--progress", action="store_true",
+                   help="show the progress bar even when stderr is not a terminal")
+    p.set_defaults(func=_cmd_batch)
     args = parser.parse_args(argv)
     try:
         return int(args.func(args))

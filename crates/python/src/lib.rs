@@ -16,6 +16,7 @@ mod options;
 mod progress;
 mod radial;
 mod relaxation;
+mod restore;
 mod sphere;
 mod sphere_map;
 mod theta_phi;
@@ -42,6 +43,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(embed::methods, m)?)?;
     m.add_function(wrap_pyfunction!(embed::choices, m)?)?;
     m.add_function(wrap_pyfunction!(metrics::quality, m)?)?;
+    m.add_function(wrap_pyfunction!(restore::restore_map, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }
