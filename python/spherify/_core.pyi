@@ -7,7 +7,7 @@ import numpy.typing as npt
 
 from ._report import MeshReport, SphereReport
 
-__all__ = ["CoreMesh", "CoreSphereMap", "__version__", "boundary_loop", "check", "check_raw", "check_sphere", "choices", "dijkstra", "embed", "load", "methods", "orient", "quality", "restore_map", "save", "shortest_path", "tutte"]
+__all__ = ["CoreMesh", "CoreSphereMap", "__version__", "boundary_loop", "check", "check_raw", "check_sphere", "choices", "dijkstra", "embed", "from_points", "load", "methods", "orient", "quality", "restore_map", "save", "shortest_path", "tutte"]
 
 __version__: str
 
@@ -96,6 +96,7 @@ def embed(
     options: Optional[Dict[str, Any]] = None,
     progress: Optional[Callable[[int, int], object]] = None,
 ) -> CoreSphereMap: ...
+def from_points(mesh: CoreMesh, points: npt.NDArray[np.float64]) -> CoreSphereMap: ...
 def quality(mesh: CoreMesh, points: npt.NDArray[np.float64]) -> Dict[str, Any]: ...
 def restore_map(
     mesh: CoreMesh,

@@ -16,7 +16,7 @@ import numpy.typing as npt
 
 from . import _core
 from ._errors import MeshError
-from ._mesh import Mesh
+from ._mesh import Mesh, MeshLike, as_mesh
 from ._report import SphereReport
 
 
@@ -36,7 +36,8 @@ class SphereMap:
     points : (n, 3) float64
         One point on the unit sphere per input vertex, in the input's order.
     method : str
-        The method that made the map (one of :func:`spherify.methods`).
+        The method that made the map (one of :func:`spherify.methods`), or
+        ``"points"`` for a map given to :meth:`from_points`.
     iterations : int
         Iterations of an iterative method (refinement steps for theta-phi).
     converged : bool
@@ -110,6 +111,49 @@ class SphereMap:
     def options(self) -> Dict[str, Any]:
         """The options the method was called with (a fresh dict)."""
         return dict(self._options)
+
+    @classmethod
+    def from_points(cls, mesh: MeshLike, points: npt.ArrayLike) -> SphereMap:
+        """Wrap a map made elsewhere (a FreeSurfer ``?h.sphere``, another
+        tool's map, a saved one) as a certified :class:`SphereMap`.
+
+        The core validates and orients the mesh like :func:`spherify.embed`,
+        projects every point onto the unit sphere (divides it by its norm, so
+        a map given on a sphere of radius 100 is the same map; ``message``
+        gives the largest norm error before), and certifies the projected
+        points with the exact tests of thesis 3.4. ``valid`` is that verdict,
+        computed in the core; ``to_sphere`` and ``to_surface`` are the
+        barycentric map of 3.3 and its inverse (``to_surface`` raises
+        :class:`MapError` unless ``valid``). ``method`` is ``"points"``.
+        Cost: O(n + m), plus O(m log m) on the first ``to_surface``.
+
+        Parameters
+        ----------
+        mesh : Mesh or (V, F)
+            Closed genus-0 mesh; faces that are not consistently outward are
+            reoriented (the vertex order, and so the points' order, is kept).
+        points : (n, 3) float
+            One point per vertex of ``mesh``, in its vertex order: finite and
+            not zero. Their orientation must agree with the surface's (faces
+            counter-clockwise seen from outside on both): a mirrored map is
+            not valid.
+
+        Returns
+        -------
+        SphereMap
+
+        Raises
+        ------
+        MeshError
+            Wrong shape, not one point per vertex, or a point that is not
+            finite or is zero (the row is named).
+        TopologyError
+            The mesh is not a closed genus-0 surface.
+        """
+        mesh = as_mesh(mesh)
+        core = _core.from_points(mesh._core, _float_rows(points, "points"))
+        # SphereMap, not cls: a ThetaPhiMap needs the core's theta-phi data.
+        return SphereMap(core, mesh)
 
     @property
     def mesh(self) -> Mesh:

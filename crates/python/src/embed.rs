@@ -5,14 +5,17 @@
 use std::str::FromStr;
 use std::sync::Arc;
 
+use numpy::PyReadonlyArrayDyn;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use spherify_mesh::io::PlyEncoding;
 use spherify_sparse::weights::Weights;
 use spherify_sparse::SolverKind;
+use spherify_sphere::from_points::from_points as core_from_points;
 use spherify_sphere::theta_phi::{PoleChoice, ThetaPhiParams};
 use spherify_sphere::{embed as core_embed, GenusZeroMesh, Method, MethodName, SphereError};
 
+use crate::convert::rows;
 use crate::errors::{mesh_error, sphere_error};
 use crate::mesh::CoreMesh;
 use crate::options::Options;
@@ -39,13 +42,17 @@ pub fn choices(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
     Ok(d)
 }
 
-fn method(name: MethodName, options: &Options<'_>) -> PyResult<Method> {
+fn method(py: Python<'_>, name: MethodName, options: &Options<'_>) -> PyResult<Method> {
     match name {
         MethodName::Radial => crate::radial::method(options),
         MethodName::Relaxation => crate::relaxation::relaxation(options),
         MethodName::Alexa => crate::relaxation::alexa(options),
         MethodName::Gotsman => crate::gotsman::method(options),
         MethodName::ThetaPhi => crate::theta_phi::method(options),
+        // from_str never names it: embed does not run it.
+        MethodName::Points => {
+            Err(mesh_error(py, "points maps come from SphereMap.from_points, not from embed"))
+        }
     }
 }
 
@@ -65,7 +72,7 @@ pub fn embed(
 ) -> PyResult<CoreSphereMap> {
     let name = MethodName::from_str(method).map_err(|e| mesh_error(py, e.to_string()))?;
     let options = Options::new(py, name.as_str(), options)?;
-    let method = self::method(name, &options)?;
+    let method = self::method(py, name, &options)?;
     options.finish()?;
     let shared = Arc::clone(&mesh.mesh);
     let result = crate::progress::run(py, progress, |report| {
@@ -73,6 +80,28 @@ pub fn embed(
         let embedding = core_embed(&mesh, &method, report)?;
         Ok::<_, SphereError>((mesh, embedding))
     })?;
+    let (mesh, embedding) = result.map_err(|e| sphere_error(py, e))?;
+    Ok(CoreSphereMap::new(mesh.shared_mesh(), embedding, mesh.reoriented_faces()))
+}
+
+/// from_points(mesh, points (n, 3) float64) -> CoreSphereMap.
+///
+/// A map made elsewhere: the core validates and orients the mesh, projects
+/// the points onto the unit sphere and certifies them (3.4), with the GIL
+/// released. The certificate is the core's; nothing about it comes from Python.
+#[pyfunction]
+pub fn from_points(
+    py: Python<'_>,
+    mesh: &CoreMesh,
+    points: PyReadonlyArrayDyn<'_, f64>,
+) -> PyResult<CoreSphereMap> {
+    let points = rows::<f64, 3>(py, &points, "points")?;
+    let shared = Arc::clone(&mesh.mesh);
+    let result = py.detach(|| {
+        let mesh = GenusZeroMesh::new(shared).map_err(SphereError::from)?;
+        let embedding = core_from_points(&mesh, &points)?;
+        Ok::<_, SphereError>((mesh, embedding))
+    });
     let (mesh, embedding) = result.map_err(|e| sphere_error(py, e))?;
     Ok(CoreSphereMap::new(mesh.shared_mesh(), embedding, mesh.reoriented_faces()))
 }

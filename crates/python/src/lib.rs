@@ -42,6 +42,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(embed::embed, m)?)?;
     m.add_function(wrap_pyfunction!(embed::methods, m)?)?;
     m.add_function(wrap_pyfunction!(embed::choices, m)?)?;
+    m.add_function(wrap_pyfunction!(embed::from_points, m)?)?;
     m.add_function(wrap_pyfunction!(metrics::quality, m)?)?;
     m.add_function(wrap_pyfunction!(restore::restore_map, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;

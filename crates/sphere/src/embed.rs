@@ -41,10 +41,14 @@ pub enum MethodName {
     Alexa,
     Gotsman,
     ThetaPhi,
+    /// Not a method [`embed`] runs: points made elsewhere, certified by
+    /// [`crate::from_points::from_points`]. So it is not in [`MethodName::ALL`]
+    /// and has no parameters.
+    Points,
 }
 
 impl MethodName {
-    /// Every method, in the order the documentation lists them.
+    /// Every method [`embed`] runs, in the order the documentation lists them.
     pub const ALL: [MethodName; 5] = [
         MethodName::Radial,
         MethodName::Relaxation,
@@ -60,18 +64,21 @@ impl MethodName {
             MethodName::Alexa => "alexa",
             MethodName::Gotsman => "gotsman",
             MethodName::ThetaPhi => "theta_phi",
+            MethodName::Points => "points",
         }
     }
 
-    /// The method with its default parameters.
-    pub fn with_defaults(self) -> Method {
-        match self {
+    /// The method with its default parameters; `None` for
+    /// [`MethodName::Points`], which [`embed`] does not run.
+    pub fn with_defaults(self) -> Option<Method> {
+        Some(match self {
             MethodName::Radial => Method::Radial(Center::Kernel),
             MethodName::Relaxation => Method::Relaxation(RelaxationParams::default()),
             MethodName::Alexa => Method::Alexa(AlexaParams::default()),
             MethodName::Gotsman => Method::Gotsman(GotsmanParams::default()),
             MethodName::ThetaPhi => Method::ThetaPhi(ThetaPhiParams::default()),
-        }
+            MethodName::Points => return None,
+        })
     }
 }
 
@@ -144,7 +151,7 @@ pub struct Embedding {
 impl Embedding {
     /// Certifies a method's points for `mesh`, timing the check as the stage
     /// `"certify"`.
-    fn certified(
+    pub(crate) fn certified(
         mesh: &GenusZeroMesh,
         method: MethodName,
         mut result: SphereEmbedding,
@@ -205,8 +212,10 @@ mod tests {
     fn names_round_trip_and_unknown_names_list_the_methods() {
         for name in MethodName::ALL {
             assert_eq!(name.as_str().parse::<MethodName>(), Ok(name));
-            assert_eq!(name.with_defaults().name(), name);
+            assert_eq!(name.with_defaults().map(|m| m.name()), Some(name));
         }
+        assert!(MethodName::Points.with_defaults().is_none());
+        assert!("points".parse::<MethodName>().is_err());
         let err = "tutte".parse::<MethodName>().unwrap_err();
         assert_eq!(
             err.to_string(),
@@ -218,7 +227,7 @@ mod tests {
     fn every_method_maps_a_round_mesh_and_the_certificate_is_the_exact_test() {
         let mesh = GenusZeroMesh::new(octasphere(2)).unwrap();
         for name in MethodName::ALL {
-            let e = embed(&mesh, &name.with_defaults(), &|_, _| true).unwrap();
+            let e = embed(&mesh, &name.with_defaults().unwrap(), &|_, _| true).unwrap();
             assert_eq!(e.method, name);
             assert_eq!(e.result.points.len(), mesh.n_vertices());
             assert!(e.certificate.valid, "{name}: {}", e.result.message);

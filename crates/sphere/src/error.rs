@@ -22,6 +22,12 @@ pub enum SphereError {
     NoConvergence { last: Box<SphereEmbedding> },
     #[error(transparent)]
     Solve(#[from] SparseError),
+    /// Points given for a map ([`crate::from_points`]) do not match the mesh.
+    #[error("points has {points} rows, but the mesh has {vertices} vertices")]
+    PointCount { points: usize, vertices: usize },
+    /// A given point with no direction: not finite, or the zero vector.
+    #[error("points row {row}: {point:?} has no direction (not finite, or zero)")]
+    BadPoint { row: usize, point: [f64; 3] },
     /// A progress callback asked a long stage to stop.
     #[error("{stage} stopped by the progress callback after {done} of {total} steps")]
     Cancelled { stage: &'static str, done: usize, total: usize },

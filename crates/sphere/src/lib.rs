@@ -4,6 +4,7 @@
 //! * [`genus_zero`]: [`GenusZeroMesh`], the validated mesh every method takes (STYLE 5).
 //! * [`embed`]: one entry point, [`embed()`], for every method and its parameters.
 //! * [`embedding`]: [`SphereEmbedding`], the points and account every method returns.
+//! * [`from_points`]: a map made elsewhere, given as points, certified like the rest.
 //! * [`error`]: [`SphereError`], how a method fails.
 //!
 //! The methods:
@@ -40,6 +41,7 @@ pub mod dogleg;
 pub mod embed;
 pub mod embedding;
 pub mod error;
+pub mod from_points;
 pub mod gc_map;
 pub mod genus_zero;
 pub mod gotsman;
