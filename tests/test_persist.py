@@ -24,6 +24,8 @@ _MAPS: Dict[str, sp.SphereMap] = {}
 
 
 def made(method: str) -> sp.SphereMap:
+    if method == "points" and method not in _MAPS:
+        _MAPS[method] = sp.SphereMap.from_points(blob(), made("radial").points * 100.0)
     if method not in _MAPS:
         options: Dict[str, Any] = {"max_iter": 300} if method in ("relaxation", "alexa") else {}
         _MAPS[method] = sp.embed(blob(), method, **options)
@@ -97,7 +99,7 @@ COPIES: Dict[str, Callable[[sp.SphereMap, Path], sp.SphereMap]] = {
 
 
 @pytest.mark.parametrize("how", list(COPIES))
-@pytest.mark.parametrize("method", sp.methods())
+@pytest.mark.parametrize("method", sp.methods() + ["points"])
 def test_every_method_round_trips(method: str, how: str, tmp_path: Path) -> None:
     m = made(method)
     back = COPIES[how](m, tmp_path)

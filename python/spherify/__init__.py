@@ -16,7 +16,7 @@ from ._tutte import TutteInfo, boundary_loop, tutte
 from ._embed import embed, methods
 from ._quality import quality
 from ._persist import load_map
-from .batch import BatchResult, batch
+from ._batch import BatchResult, batch
 
 __all__ = [
     "BatchResult",

@@ -172,7 +172,7 @@ def _cmd_map(args: argparse.Namespace) -> int:
 
 
 def _cmd_batch(args: argparse.Namespace) -> int:
-    from .batch import batch
+    from ._batch import batch
     options: Dict[str, Any] = {}
     if args.method == "theta_phi":
         options = {"poles": args.poles, "weights": args.weights}

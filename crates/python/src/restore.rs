@@ -54,7 +54,12 @@ pub fn restore_map(
     refinements: usize,
     re_embedded: (bool, bool),
 ) -> PyResult<CoreSphereMap> {
-    let method = MethodName::from_str(method).map_err(|e| mesh_error(py, e.to_string()))?;
+    // "points" (a map given to from_points) is no method embed runs, so
+    // from_str does not know it; it is stored all the same.
+    let method = match method {
+        "points" => MethodName::Points,
+        name => MethodName::from_str(name).map_err(|e| mesh_error(py, e.to_string()))?,
+    };
     let status = status_from_name(status)
         .ok_or_else(|| mesh_error(py, format!("unknown status {status:?}")))?;
     let points = rows::<f64, 3>(py, &points, "points")?;

@@ -2,7 +2,11 @@
 //! every certificate computed again here: a file is data, not proof.
 //!
 //! * The GC certificate (`valid`, thesis 3.4) is the exact test of
-//!   [`check_sphere`] on the stored points, as for a fresh map.
+//!   [`crate::validity::check_sphere`] on the stored points, through the one certification of
+//!   every fresh map and of [`crate::from_points`] (`Embedding::certified`).
+//!   `from_points` itself is not called: it projects the points (changing
+//!   their last bits) and names the method "points", where a restored map
+//!   must come back as it was, bit for bit, under its own method.
 //! * For a theta-phi map (thesis ch. 6) the cut is made again from the stored
 //!   path ([`cut_open_with`], 6.3), so the cut mesh is the core's own; the
 //!   stored rectangle must put the cut's boundary exactly where eq. 6.31 puts
@@ -32,8 +36,6 @@ use crate::h_map::fold;
 use crate::pole_fans::{pole_fan, rectangle_boundary, strictly_increasing_phi};
 use crate::poles::Poles;
 use crate::theta_phi::ThetaPhi;
-use crate::validity::check_sphere;
-
 /// How far stored theta-phi points may be from the fold of their rectangle.
 pub const FOLD_TOLERANCE: f64 = 1e-9;
 
@@ -117,7 +119,6 @@ pub fn restore(mesh: &GenusZeroMesh, stored: StoredMap) -> Result<Embedding, Res
         Some(tp) => Details::ThetaPhi(Box::new(theta_phi(mesh, tp, &stored.points)?)),
         None => Details::None,
     };
-    let certificate = check_sphere(mesh.faces(), &stored.points);
     let result = SphereEmbedding {
         points: stored.points,
         iterations: stored.iterations,
@@ -125,7 +126,8 @@ pub fn restore(mesh: &GenusZeroMesh, stored: StoredMap) -> Result<Embedding, Res
         message: stored.message,
         seconds: Vec::new(),
     };
-    Ok(Embedding { method: stored.method, result, certificate, details })
+    // The certification every fresh map and `from_points` go through.
+    Ok(Embedding::certified(mesh, stored.method, result, details))
 }
 
 /// The theta-phi parts of a stored map, with the cut made and the rectangle
@@ -214,11 +216,15 @@ fn theta_phi(
 mod tests {
     use super::*;
     use crate::embed::embed;
+    use crate::from_points::from_points;
     use spherify_mesh::solids;
 
     fn made(method: MethodName) -> (GenusZeroMesh, Embedding) {
         let mesh = GenusZeroMesh::new(solids::icosphere(2)).unwrap();
-        let map = embed(&mesh, &method.with_defaults(), &|_, _| true).unwrap();
+        let map = match method.with_defaults() {
+            Some(m) => embed(&mesh, &m, &|_, _| true).unwrap(),
+            None => from_points(&mesh, mesh.mesh().positions()).unwrap(),
+        };
         (mesh, map)
     }
 
@@ -251,7 +257,7 @@ mod tests {
 
     #[test]
     fn every_method_restores_to_the_same_certificate() {
-        for method in MethodName::ALL {
+        for method in MethodName::ALL.into_iter().chain([MethodName::Points]) {
             let (mesh, map) = made(method);
             let back = restore(&mesh, stored(&map)).unwrap();
             assert_eq!(back.certificate.valid, map.certificate.valid, "{method}");
