@@ -109,5 +109,5 @@ def restore_map(
     cut_path: Optional[npt.NDArray[np.int64]] = None,
     theta_phi: Optional[npt.NDArray[np.float64]] = None,
     refinements: int = 0,
-    re_embedded: Tuple[bool, bool] = (False, False),
+    re_embedded: Tuple[bool, bool] = ...,
 ) -> CoreSphereMap: ...

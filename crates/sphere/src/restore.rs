@@ -177,9 +177,13 @@ fn theta_phi(
             v if v == south => [0.0, 0.0, -1.0],
             _ => fold(u),
         };
-        let distance = (0..3).map(|i| (p[i] - want[i]).abs()).fold(0.0, f64::max);
-        // `!(<=)` also refuses NaN.
-        if !(distance <= FOLD_TOLERANCE) {
+        // f64::max would drop a NaN, so a non-finite point is refused first.
+        let distance = if p.iter().all(|x| x.is_finite()) {
+            (0..3).map(|i| (p[i] - want[i]).abs()).fold(0.0, f64::max)
+        } else {
+            f64::INFINITY
+        };
+        if distance > FOLD_TOLERANCE {
             return Err(RestoreError::NotTheFold { vertex, distance });
         }
     }
@@ -309,6 +313,9 @@ mod tests {
         let mut edited = good.clone();
         edited.points[5][0] += 1e-6;
         assert!(matches!(restore(&mesh, edited), Err(RestoreError::NotTheFold { vertex: 5, .. })));
+        let mut nan = good.clone();
+        nan.points[7][1] = f64::NAN;
+        assert!(matches!(restore(&mesh, nan), Err(RestoreError::NotTheFold { vertex: 7, .. })));
         let mut short = good.clone();
         short.points.pop();
         assert!(matches!(restore(&mesh, short), Err(RestoreError::PointCount { .. })));
