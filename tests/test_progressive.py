@@ -146,3 +146,14 @@ def test_improve_refuses_bad_options(options: Dict[str, Any]) -> None:
 def test_every_corpus_mesh_gets_a_valid_map(valid_corpus_entry: Dict[str, Any]) -> None:
     mesh = sp.load(Path(valid_corpus_entry["file"]))
     assert_certified(sp.embed(mesh, "progressive"), mesh)
+
+
+def test_an_improved_map_survives_pickle_and_save(tmp_path: Path) -> None:
+    import pickle
+    better = sp.improve(sp.embed(sp.datasets.icosphere(3), "theta_phi"), max_iter=3)
+    back = pickle.loads(pickle.dumps(better))
+    assert back.method == "improve" and back.valid
+    assert np.array_equal(back.points, better.points)
+    better.save(tmp_path / "x.spheremap.npz")
+    again = sp.load_map(tmp_path / "x.spheremap.npz")
+    assert again.method == "improve" and again.valid

@@ -19,8 +19,11 @@ from ._morph import Morph, morph
 from ._remesh import remesh, remesh_map, surface_distance
 from ._geometry_image import (from_geometry_image, geometry_image, load_geometry_image,
                              save_geometry_image)
+from ._persist import load_map
+from ._batch import BatchResult, batch
 
 __all__ = [
+    "BatchResult",
     "ConvergenceError",
     "FormatError",
     "MapError",
@@ -36,6 +39,7 @@ __all__ = [
     "TopologyError",
     "TutteInfo",
     "__version__",
+    "batch",
     "boundary_loop",
     "check",
     "check_sphere",
@@ -49,6 +53,7 @@ __all__ = [
     "harmonics",
     "load",
     "load_geometry_image",
+    "load_map",
     "methods",
     "morph",
     "orient",

@@ -7,7 +7,7 @@ import numpy.typing as npt
 
 from ._report import MeshReport, SphereReport
 
-__all__ = ["CoreMesh", "CoreSphereMap", "__version__", "boundary_loop", "check", "check_raw", "check_sphere", "choices", "dijkstra", "embed", "face_quality", "from_points", "harmonics_evaluate", "harmonics_fit", "improve", "load", "methods", "orient", "quality", "save", "shortest_path", "tutte"]
+__all__ = ["CoreMesh", "CoreSphereMap", "__version__", "boundary_loop", "check", "check_raw", "check_sphere", "choices", "dijkstra", "embed", "face_quality", "from_points", "harmonics_evaluate", "harmonics_fit", "improve", "load", "methods", "orient", "quality", "restore_map", "save", "shortest_path", "tutte"]
 
 __version__: str
 
@@ -110,3 +110,16 @@ def harmonics_evaluate(
 ) -> npt.NDArray[np.float64]: ...
 def face_quality(mesh: CoreMesh, points: npt.NDArray[np.float64]) -> Dict[str, npt.NDArray[np.float64]]: ...
 def quality(mesh: CoreMesh, points: npt.NDArray[np.float64]) -> Dict[str, Any]: ...
+def restore_map(
+    mesh: CoreMesh,
+    method: str,
+    points: npt.NDArray[np.float64],
+    iterations: int,
+    status: str,
+    message: str,
+    poles: Optional[Tuple[int, int]] = None,
+    cut_path: Optional[npt.NDArray[np.int64]] = None,
+    theta_phi: Optional[npt.NDArray[np.float64]] = None,
+    refinements: int = 0,
+    re_embedded: Tuple[bool, bool] = ...,
+) -> CoreSphereMap: ...

@@ -128,10 +128,14 @@ def embed(mesh: MeshLike, method: str = "theta_phi", *, progress: Any = None,
     mesh = as_mesh(mesh)
     if "initial" in options and options["initial"] is not None:
         options["initial"] = np.ascontiguousarray(options["initial"], dtype=np.float64)
-    core = _core.embed(mesh._core, method, options, as_callback(progress, "graph poles" if method == "theta_phi" else method))
+    core = _core.embed(mesh._core, method, dict(options),
+                       as_callback(progress, "graph poles" if method == "theta_phi" else method))
     if core.tp_valid is None:
-        return SphereMap(core, mesh)
+        plain = SphereMap(core, mesh)
+        plain._options = dict(options)
+        return plain
     result = ThetaPhiMap(core, mesh)
+    result._options = dict(options)
     if not result.tp_valid:
         warnings.warn(f"theta-phi: {result.message}", SpherifyWarning, stacklevel=2)
     symmetry = result.details.get("symmetry")

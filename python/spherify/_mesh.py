@@ -4,12 +4,13 @@ from __future__ import annotations
 
 import dataclasses
 import os
+from pathlib import Path
 from typing import Any, Dict, List, Literal, Optional, Tuple, Union, overload
 
 import numpy as np
 
-from . import _core
-from ._errors import MeshError
+from . import _core, _formats
+from ._errors import FormatError, MeshError
 from ._report import MeshReport, SphereReport
 
 PathLike = Union[str, "os.PathLike[str]"]
@@ -41,7 +42,9 @@ class Mesh:
     Parameters
     ----------
     vertices : (n, 3) array_like of float
-        Positions; any float or integer dtype, stored as float64.
+        Positions; any float or integer dtype, stored as float64. Or, with
+        ``faces`` left out, any object with ``vertices`` and ``faces`` arrays
+        (a ``trimesh.Trimesh``, for one).
     faces : (m, 3) array_like of int
         Vertex indices of each triangle, counter-clockwise seen from outside;
         any integer dtype, stored as int64.
@@ -57,11 +60,19 @@ class Mesh:
     -----
     The arrays are never reordered or merged. ``vertices`` and ``faces`` are
     read-only copies; build a new Mesh to change them. Cost O(n + m).
+    A Mesh pickles (and deep-copies) as its arrays, notes and attributes;
+    unpickling validates the arrays in the core again.
     """
 
     __slots__ = ("_core", "_vertices", "_faces", "notes", "attributes")
 
-    def __init__(self, vertices: Any, faces: Any) -> None:
+    def __init__(self, vertices: Any, faces: Any = None) -> None:
+        if faces is None:
+            if not (hasattr(vertices, "vertices") and hasattr(vertices, "faces")):
+                raise MeshError("Mesh takes (vertices, faces), or one object with `vertices` "
+                                f"and `faces` arrays (such as a trimesh.Trimesh); got a "
+                                f"{type(vertices).__name__}")
+            vertices, faces = vertices.vertices, vertices.faces
         core = _core.CoreMesh(_as_vertices(vertices), _as_faces(faces))
         self._set(core, [], {})
 
@@ -107,23 +118,61 @@ class Mesh:
     def __repr__(self) -> str:
         return f"Mesh(n_vertices={self.n_vertices}, n_faces={self.n_faces})"
 
+    def __reduce__(self) -> Tuple[Any, Tuple[Any, ...]]:
+        # The core handle does not pickle; the arrays do, and _restore_mesh
+        # sends them through the core's validation again.
+        return (_restore_mesh, (self.vertices, self.faces, list(self.notes),
+                                dict(self.attributes)))
+
+    def to_trimesh(self) -> Any:
+        """This mesh as a ``trimesh.Trimesh`` (``process=False``: the vertices
+        are neither merged nor reordered). Needs trimesh, which spherify does
+        not depend on; raises ImportError saying so when it is missing."""
+        try:
+            import trimesh
+        except ImportError:
+            raise ImportError("Mesh.to_trimesh needs trimesh: pip install trimesh") from None
+        return trimesh.Trimesh(vertices=np.array(self.vertices), faces=np.array(self.faces),
+                               process=False)
+
+
+def _restore_mesh(vertices: np.ndarray, faces: np.ndarray, notes: List[str],
+                  attributes: Dict[str, np.ndarray]) -> Mesh:
+    """Unpickling: a Mesh from its arrays, validated in the core again."""
+    mesh = Mesh(vertices, faces)
+    mesh.notes = list(notes)
+    mesh.attributes = dict(attributes)
+    return mesh
+
 
 MeshLike = Union[Mesh, Tuple[Any, Any]]
 
 
 def as_mesh(mesh: Any) -> Mesh:
     """``mesh`` itself when it is a :class:`Mesh`; ``Mesh(V, F)`` for a
-    ``(V, F)`` pair; :class:`MeshError` for anything else."""
+    ``(V, F)`` pair or an object with ``vertices`` and ``faces`` (trimesh);
+    :class:`MeshError` for anything else."""
     if isinstance(mesh, Mesh):
         return mesh
     if isinstance(mesh, tuple) and len(mesh) == 2:
         return Mesh(*mesh)
-    raise MeshError(f"expected a spherify.Mesh or a (vertices, faces) pair, got {type(mesh).__name__}")
+    if hasattr(mesh, "vertices") and hasattr(mesh, "faces"):
+        return Mesh(mesh)
+    raise MeshError("expected a spherify.Mesh, a (vertices, faces) pair or an object with "
+                    f"`vertices` and `faces` arrays, got {type(mesh).__name__}")
 
 
-def load(path: PathLike) -> Mesh:
-    """Read a triangle mesh from ``.obj``, ``.off``, ``.ply`` (ascii or binary)
-    or ``.stl`` (ascii or binary), chosen by extension.
+def load(path: Union[PathLike, Tuple[PathLike, PathLike]]) -> Mesh:
+    """Read a triangle mesh; the format is chosen by the file's name.
+
+    * ``.obj``, ``.off``, ``.ply`` (ascii or binary), ``.stl`` (ascii or
+      binary): read by the core.
+    * ``.npz`` holding ``V`` (n, 3) and ``F`` (m, 3) (or ``vertices`` and
+      ``faces``; ``sphere`` and ``uv`` arrays become attributes), or a pair of
+      paths ``(V.npy, F.npy)``. Never unpickles.
+    * FreeSurfer binary surfaces (``lh.pial``, ``lh.white``, ``lh.sphere``:
+      any name, recognised by the file's magic number) and GIfTI ``.gii``
+      surfaces, through nibabel (``pip install "spherify[neuro]"``).
 
     Polygons are fan-triangulated and STL corners welded, each with a note in
     ``mesh.notes``. Per-vertex ``sphere_x/y/z`` and ``u v`` PLY properties and
@@ -134,33 +183,83 @@ def load(path: PathLike) -> Mesh:
     FileNotFoundError, OSError
         The file cannot be read.
     FormatError
-        The file is malformed; the message names the file and the line (text)
-        or byte offset (binary).
+        The file is malformed, holds bad indices or coordinates, or is in no
+        format spherify reads (or needs nibabel, which is missing); the message
+        names the file, and for the core's formats the line (text) or byte
+        offset (binary).
     """
+    if isinstance(path, tuple):
+        if len(path) != 2:
+            raise MeshError(f"load takes a path or a (V.npy, F.npy) pair, got {len(path)} paths")
+        v_path, f_path = Path(os.fspath(path[0])), Path(os.fspath(path[1]))
+        return _from_arrays(f_path, _formats.read_npy_pair(v_path, f_path))
+    file = Path(os.fspath(path))
+    reader = _formats.reader_for(file)
+    if reader is not None:
+        return _from_arrays(file, reader(file))
     core, notes, attributes = _core.load(os.fspath(path))
     return Mesh._from_core(core, notes, attributes)
 
 
+def _from_arrays(path: Path, loaded: _formats.Loaded) -> Mesh:
+    """A Mesh from what a Python reader found in ``path``; bad data there is
+    the file's fault, so it is a FormatError naming the file."""
+    vertices, faces, notes, attributes = loaded
+    try:
+        mesh = Mesh(vertices, faces)
+        n = mesh.n_vertices
+        for name, width in (("sphere", 3), ("uv", 2)):
+            if name in attributes and attributes[name].shape != (n, width):
+                raise MeshError(f"the {name} array has shape {attributes[name].shape}, "
+                                f"expected ({n}, {width})")
+    except MeshError as err:
+        raise FormatError(f"{path}: {err}", str(path)) from None
+    mesh.notes = list(notes)
+    mesh.attributes = dict(attributes)
+    return mesh
+
+
 def save(mesh: MeshLike, path: PathLike, *, sphere: Any = None, uv: Any = None,
-         ply_encoding: str = "binary_little_endian", stl_binary: bool = True) -> None:
-    """Write ``mesh`` to ``path`` (format by extension).
+         ply_encoding: str = "binary_little_endian", stl_binary: bool = True,
+         format: Optional[str] = None) -> None:
+    """Write ``mesh`` to ``path`` (format by the name, or ``format``).
 
     Parameters
     ----------
     sphere : (n, 3) array_like of float, optional
         Per-vertex sphere positions, stored as PLY properties
-        ``sphere_x sphere_y sphere_z`` (``.ply`` only).
+        ``sphere_x sphere_y sphere_z`` (``.ply``) or an array ``sphere`` (``.npz``).
     uv : (n, 2) array_like of float, optional
-        Per-vertex texture coordinates (``.ply`` as ``u v``, ``.obj`` as ``vt``).
+        Per-vertex texture coordinates (``.ply`` as ``u v``, ``.obj`` as
+        ``vt``, ``.npz`` as ``uv``).
     ply_encoding : {"binary_little_endian", "binary_big_endian", "ascii"}
     stl_binary : bool
+    format : {None, "npz", "freesurfer", "gifti"}
+        None: by the name: ``.obj .off .ply .stl`` (the core), ``.npz`` (``V``
+        float64, ``F`` int64), ``.gii`` (GIfTI), or a FreeSurfer surface name
+        (``lh.pial``, ``lh.white``, ``lh.sphere``, ``.inflated``, ``.orig``,
+        ...). FreeSurfer and GIfTI store float32 coordinates (the values are
+        rounded) and need nibabel.
 
     The file is written under a temporary name and renamed into place, so an
     existing file is never left half-written.
     """
     sphere_array = None if sphere is None else _as_vertices(sphere, "sphere")
     uv_array = None if uv is None else _as_vertices(uv, "uv")
-    _core.save(as_mesh(mesh)._core, os.fspath(path), sphere_array, uv_array, ply_encoding, stl_binary)
+    mesh = as_mesh(mesh)
+    file = Path(os.fspath(path))
+    writer = _formats.writer_for(file, format)
+    if writer is None:
+        _core.save(mesh._core, os.fspath(path), sphere_array, uv_array, ply_encoding, stl_binary)
+        return
+    attributes = {name: array for name, array in (("sphere", sphere_array), ("uv", uv_array))
+                  if array is not None}
+    for name, array in attributes.items():
+        width = 3 if name == "sphere" else 2
+        if array.shape != (mesh.n_vertices, width):
+            raise MeshError(f"{name} must have shape ({mesh.n_vertices}, {width}), "
+                            f"got {array.shape}")
+    writer(file, mesh.vertices, mesh.faces, attributes)
 
 
 def check(mesh: MeshLike) -> MeshReport:
@@ -186,8 +285,11 @@ def check(mesh: MeshLike) -> MeshReport:
     elif isinstance(mesh, tuple) and len(mesh) == 2:
         report = _core.check_raw(_as_vertices(mesh[0]), _as_faces(mesh[1]))
         notes = []
+    elif hasattr(mesh, "vertices") and hasattr(mesh, "faces"):
+        return check(Mesh(mesh))
     else:
-        raise MeshError(f"check expects a Mesh or a (vertices, faces) pair, got {type(mesh).__name__}")
+        raise MeshError(f"check expects a Mesh, a (vertices, faces) pair or an object with "
+                        f"`vertices` and `faces`, got {type(mesh).__name__}")
     if notes:
         report = dataclasses.replace(report, notes=list(notes) + list(report.notes))
     return report

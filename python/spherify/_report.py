@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from typing import List, Optional, Tuple
 
 import numpy as np
@@ -161,6 +161,16 @@ class SphereReport:
     bad_points: List[int] = field(default_factory=list)
     min_det: float = float("nan")
     min_area_ratio: float = float("nan")
+
+    def __eq__(self, other: object) -> bool:
+        # The generated __eq__ would compare flipped_faces with ==, an array.
+        if not isinstance(other, SphereReport):
+            return NotImplemented
+        return all(np.array_equal(getattr(self, f.name), getattr(other, f.name))
+                   if f.name == "flipped_faces" else getattr(self, f.name) == getattr(other, f.name)
+                   for f in fields(self))
+
+    __hash__ = None  # type: ignore[assignment]  # equal reports hold equal arrays, not hashable
 
     def __str__(self) -> str:
         verdict = "valid GC-embedding" if self.valid else "NOT a valid embedding"

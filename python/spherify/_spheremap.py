@@ -8,7 +8,8 @@ never takes a verdict back from Python.
 
 from __future__ import annotations
 
-from typing import Any, Dict, List, Optional, Tuple
+import os
+from typing import Any, Dict, List, Optional, Tuple, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -73,6 +74,43 @@ class SphereMap:
         self._details: Optional[Dict[str, Any]] = None
         self._notes = ([f"reoriented {core.reoriented_faces} faces to face outward"]
                        if core.reoriented_faces else [])
+        self._options: Dict[str, Any] = {}
+        # What a restored map carries over as information (seconds of the run
+        # that made it, details the core does not recompute); None when made here.
+        self._stored_seconds: Optional[List[Tuple[str, float]]] = None
+        self._stored_details: Dict[str, Any] = {}
+
+    @classmethod
+    def _restored(cls, core: _core.CoreSphereMap, mesh: Mesh, *, seconds: List[Tuple[str, float]],
+                  notes: List[str], options: Dict[str, Any],
+                  details: Dict[str, Any]) -> "SphereMap":
+        """A map rebuilt by :mod:`spherify._persist`: the core certified it
+        again; the rest is what was stored."""
+        m = cls(core, mesh)
+        m._notes = list(notes) + m._notes
+        m._options = dict(options)
+        m._stored_seconds = list(seconds)
+        m._stored_details = dict(details)
+        return m
+
+    def __reduce__(self) -> Tuple[Any, Tuple[Any, ...]]:
+        # Pickled as its record; unpickling certifies it again in the core.
+        from . import _persist
+        return (_persist.rebuild, (_persist.record(self), "pickled SphereMap"))
+
+    def save(self, path: Union[str, "os.PathLike[str]"]) -> None:
+        """Write the map to ``path`` (by convention ``*.spheremap.npz``):
+        the mesh, points, method, options, account and details, and for
+        theta-phi the poles, cut path and rectangle, with a format version.
+        Written under a temporary name and renamed into place.
+        :func:`spherify.load_map` reads it back and certifies it again."""
+        from . import _persist
+        _persist.save_map(self, path)
+
+    @property
+    def options(self) -> Dict[str, Any]:
+        """The options the method was called with (a fresh dict)."""
+        return dict(self._options)
 
     @classmethod
     def from_points(cls, mesh: MeshLike, points: npt.ArrayLike) -> SphereMap:
@@ -147,6 +185,10 @@ class SphereMap:
 
     @property
     def seconds(self) -> Dict[str, float]:
+        """Time per stage of the run that made the map (for a loaded map, as
+        stored)."""
+        if self._stored_seconds is not None:
+            return dict(self._stored_seconds)
         return dict(self._core.seconds)
 
     @property
@@ -161,8 +203,10 @@ class SphereMap:
     def details(self) -> Dict[str, Any]:
         """A fresh dict on every access; its arrays are read-only."""
         if self._details is None:
+            # The core's details (recomputed for a loaded map) win over stored ones.
+            merged = {**self._stored_details, **self._core.details()}
             self._details = {key: _read_only(value) if isinstance(value, np.ndarray) else value
-                             for key, value in self._core.details().items()}
+                             for key, value in merged.items()}
         return dict(self._details)
 
     @property

@@ -2,13 +2,18 @@
 
     spherify map MESH -o OUT [--method theta_phi] [--poles fast_graph]
                                    map a mesh onto the sphere, print the certificate,
-                                   write OUT (the sphere as a mesh) and OUT's .npz;
+                                   write OUT (the sphere as a mesh; a FreeSurfer name
+                                   such as lh.sphere gets radius 100) and OUT's .npz;
                                    --poles graph shows a progress bar on a terminal
                                    (or with --progress)
     spherify check MESH            load, validate, orient and print the report
     spherify orient MESH -o OUT    write a consistently, outward-oriented copy
     spherify harmonics ...         the applications of thesis ch. 8: see
                                    ``spherify <command> --help`` and _cli_apps.py
+    spherify batch INPUT... -o OUTDIR [--method M] [--workers N] [--timeout S]
+                   [--scheduler tcp://...]
+                                   map many meshes (files, folders, lists of paths),
+                                   resumably; OUTDIR/journal.jsonl and summary.csv
 
 Every command takes ``--dataset NAME [--n-vertices N]`` instead of MESH to
 use a generated shape. Exit status: 0 for success (a valid mesh; a certified
@@ -24,14 +29,14 @@ import sys
 import time
 import warnings
 from pathlib import Path
-from typing import Any, List, Optional
+from typing import Any, Dict, List, Optional
 
 import numpy as np
 
-from . import _cli_apps, _core, datasets
+from . import _cli_apps, _core, _formats, datasets
 from ._embed import embed, methods
 from ._errors import SpherifyError, SpherifyWarning, TopologyError
-from ._mesh import Mesh, check, load, orient, save
+from ._mesh import Mesh, check, check_sphere, load, orient, save
 from ._quality import quality
 from ._spheremap import ThetaPhiMap
 
@@ -91,6 +96,20 @@ def _save_npz(path: Path, **arrays: Any) -> None:
             temporary.unlink()
 
 
+def _save_sphere(mesh: Mesh, points: np.ndarray, out: Path) -> None:
+    """Write the sphere as a mesh. A FreeSurfer surface gets FreeSurfer's
+    radius of 100 (as ``?h.sphere``); FreeSurfer and GIfTI store float32, so
+    the rounded points are certified again and the verdict printed."""
+    radius = _formats.FREESURFER_RADIUS if _formats.is_freesurfer_name(out) else 1.0
+    save(Mesh(points * radius, mesh.faces), out)
+    if _formats.is_freesurfer_name(out) or out.name.lower().endswith(".gii"):
+        stored = (points * radius).astype(np.float32).astype(np.float64)
+        verdict = check_sphere(mesh, stored)
+        print(f"{out} stores float32 coordinates (radius {radius:g}); as stored they form "
+              f"{'a valid' if verdict.valid else 'NOT a valid'} GC-embedding "
+              f"({verdict.n_negative + verdict.n_zero} faces flipped or collapsed)")
+
+
 def _cmd_map(args: argparse.Namespace) -> int:
     out = Path(args.output)
     if not out.parent.is_dir():
@@ -143,7 +162,7 @@ def _cmd_map(args: argparse.Namespace) -> int:
           f"(Linf {q['stretch_linf']:.3g}), edge-length CV {q['edge_length_cv']:.3g}")
     stages = ", ".join(f"{k} {v:.3f}" for k, v in m.seconds.items())
     print(f"seconds: load {loaded - start:.3f}; {stages}; total {mapped - start:.3f}")
-    save(Mesh(m.points, m.mesh.faces), out)
+    _save_sphere(m.mesh, m.points, out)
     arrays = {"points": m.points, "faces": m.mesh.faces}
     if isinstance(m, ThetaPhiMap):
         arrays.update(theta_phi=m.theta_phi, poles=np.array(m.poles), cut_path=m.cut_path,
@@ -152,6 +171,30 @@ def _cmd_map(args: argparse.Namespace) -> int:
     _save_npz(npz, **arrays)
     print(f"wrote {out} (the sphere as a mesh) and {npz}")
     return 0 if certified else 1
+
+
+def _cmd_batch(args: argparse.Namespace) -> int:
+    from ._batch import batch
+    options: Dict[str, Any] = {}
+    if args.method == "theta_phi":
+        options = {"poles": args.poles, "weights": args.weights}
+    try:
+        result = batch(args.inputs, args.output, method=args.method, workers=args.workers,
+                       timeout=args.timeout, scheduler=args.scheduler,
+                       progress=args.progress or sys.stderr.isatty(), **options)
+    except KeyboardInterrupt:
+        print(f"interrupted: {args.output}/journal.jsonl holds every mesh that finished; "
+              "run the same command again to resume", file=sys.stderr)
+        return 130
+    c = result.counts
+    print(f"{c['meshes']} meshes: {c['certified']} certified, {c['failed']} failed, "
+          f"{c['skipped']} already done (skipped); summary in {result.summary}")
+    for row in result.rows:
+        if row.get("status") != "done":
+            print(f"failed: {row['input']}: {row['error_type']}: {row['error']}")
+        elif not row.get("certified"):
+            print(f"not certified: {row['input']}")
+    return 0 if result.all_certified else 1
 
 
 def main(argv: Optional[List[str]] = None) -> int:
@@ -163,7 +206,8 @@ def main(argv: Optional[List[str]] = None) -> int:
                              ("check", _cmd_check, "validate a mesh, orient it, print the report"),
                              ("orient", _cmd_orient, "write a consistently outward-oriented copy")]:
         p = sub.add_parser(name, help=text)
-        p.add_argument("mesh", nargs="?", help="mesh file (.obj .off .ply .stl)")
+        p.add_argument("mesh", nargs="?", help="mesh file (.obj .off .ply .stl .npz, a "
+                       "FreeSurfer surface such as lh.pial, .gii)")
         p.add_argument("--dataset", choices=datasets.names(), help="use a generated shape instead")
         p.add_argument("--n-vertices", type=int, default=5000, help="size of the generated shape")
         if name in ("orient", "map"):
@@ -180,6 +224,18 @@ def main(argv: Optional[List[str]] = None) -> int:
             p.add_argument("--weights", default="uniform",
                            choices=names["theta_phi_weights"])
         p.set_defaults(func=func)
+    p = sub.add_parser("batch", help="map many meshes, in parallel and resumably")
+    p.add_argument("inputs", nargs="+", help="mesh files, folders, or .txt files of paths")
+    p.add_argument("-o", "--output", required=True, help="output folder")
+    p.add_argument("--method", default="theta_phi", choices=methods())
+    p.add_argument("--poles", default="fast_graph", choices=names["poles"])
+    p.add_argument("--weights", default="uniform", choices=names["theta_phi_weights"])
+    p.add_argument("--workers", type=int, default=None, help="local processes (default: cores)")
+    p.add_argument("--timeout", type=float, default=None, help="seconds per mesh")
+    p.add_argument("--scheduler", default=None, help="Dask scheduler address, tcp://host:port")
+    p.add_argument("--progress", action="store_true",
+                   help="show the progress bar even when stderr is not a terminal")
+    p.set_defaults(func=_cmd_batch)
     _cli_apps.add_commands(sub, _load, _save_npz, datasets)
     args = parser.parse_args(argv)
     try:

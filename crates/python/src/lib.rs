@@ -18,6 +18,7 @@ mod progress;
 mod progressive;
 mod radial;
 mod relaxation;
+mod restore;
 mod sphere;
 mod sphere_map;
 mod theta_phi;
@@ -49,6 +50,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(harmonics::harmonics_evaluate, m)?)?;
     m.add_function(wrap_pyfunction!(metrics::quality, m)?)?;
     m.add_function(wrap_pyfunction!(metrics::face_quality, m)?)?;
+    m.add_function(wrap_pyfunction!(restore::restore_map, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

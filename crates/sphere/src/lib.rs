@@ -35,6 +35,7 @@
 //! * [`gc_map`]: the surface-sphere map of a valid GC-embedding (3.3, Prop. 3.3).
 //! * [`h_map`]: the theta-phi map h and its inverse (6.6).
 //! * [`point_map`]: many points at once between surface and sphere (3.3, 6.6).
+//! * [`restore`]: a stored map rebuilt, its certificates computed again.
 //! * [`bvh`]: the box tree that locates points for them.
 //!
 //! Applications (ch. 8):
@@ -71,6 +72,7 @@ pub mod progressive;
 pub mod radial;
 pub mod relaxation;
 pub mod relaxation_loop;
+pub mod restore;
 pub mod symmetric_eigen;
 pub mod symmetry;
 pub mod theta_phi;

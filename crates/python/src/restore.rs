@@ -1,0 +1,95 @@
+//! `restore_map`: a `CoreSphereMap` rebuilt from stored parts (a
+//! `.spheremap.npz`, a pickle) by `spherify_sphere::restore`, which computes
+//! every certificate again. Nothing here decides validity.
+
+use std::str::FromStr;
+use std::sync::Arc;
+
+use numpy::PyReadonlyArrayDyn;
+use pyo3::prelude::*;
+use spherify_sphere::restore::{restore, status_from_name, RestoreError, StoredMap, StoredThetaPhi};
+use spherify_sphere::{GenusZeroMesh, MethodName, SphereError};
+
+use crate::convert::rows;
+use crate::errors::{mesh_error, sphere_error};
+use crate::mesh::CoreMesh;
+use crate::sphere_map::CoreSphereMap;
+
+/// The mesh is not genus 0, or the parts do not fit it.
+enum Failed {
+    Mesh(SphereError),
+    Parts(RestoreError),
+}
+
+fn vertex_ids(py: Python<'_>, array: &PyReadonlyArrayDyn<'_, i64>, what: &str) -> PyResult<Vec<u32>> {
+    let view = array.as_array();
+    if view.ndim() != 1 {
+        return Err(mesh_error(py, format!("{what} must have shape (k,), got {:?}", view.shape())));
+    }
+    view.iter()
+        .map(|&v| u32::try_from(v).map_err(|_| mesh_error(py, format!("{what} holds {v}, not a vertex id"))))
+        .collect()
+}
+
+/// restore_map(mesh, method, points, iterations, status, message, poles=None,
+/// cut_path=None, theta_phi=None, refinements=0, re_embedded=(False, False))
+/// -> CoreSphereMap. The theta-phi parts are given exactly for a theta-phi
+/// map. TopologyError when the mesh is not genus 0; MeshError when the parts
+/// do not fit the mesh or each other.
+#[pyfunction]
+#[pyo3(signature = (mesh, method, points, iterations, status, message, poles=None, cut_path=None,
+                    theta_phi=None, refinements=0, re_embedded=(false, false)))]
+#[allow(clippy::too_many_arguments)]
+pub fn restore_map(
+    py: Python<'_>,
+    mesh: &CoreMesh,
+    method: &str,
+    points: PyReadonlyArrayDyn<'_, f64>,
+    iterations: usize,
+    status: &str,
+    message: String,
+    poles: Option<(i64, i64)>,
+    cut_path: Option<PyReadonlyArrayDyn<'_, i64>>,
+    theta_phi: Option<PyReadonlyArrayDyn<'_, f64>>,
+    refinements: usize,
+    re_embedded: (bool, bool),
+) -> PyResult<CoreSphereMap> {
+    // "points" (a map given to from_points) is no method embed runs, so
+    // from_str does not know it; it is stored all the same.
+    let method = match method {
+        "points" => MethodName::Points,
+        "improve" => MethodName::Improve,
+        name => MethodName::from_str(name).map_err(|e| mesh_error(py, e.to_string()))?,
+    };
+    let status = status_from_name(status)
+        .ok_or_else(|| mesh_error(py, format!("unknown status {status:?}")))?;
+    let points = rows::<f64, 3>(py, &points, "points")?;
+    let theta_phi = match (poles, cut_path, theta_phi) {
+        (None, None, None) => None,
+        (Some((north, south)), Some(path), Some(uv)) => {
+            let pole = |v: i64| {
+                u32::try_from(v).map_err(|_| mesh_error(py, format!("pole {v} is not a vertex id")))
+            };
+            Some(StoredThetaPhi {
+                poles: [pole(north)?, pole(south)?],
+                cut_path: vertex_ids(py, &path, "cut_path")?,
+                theta_phi: rows::<f64, 2>(py, &uv, "theta_phi")?,
+                refinements,
+                re_embedded: [re_embedded.0, re_embedded.1],
+            })
+        }
+        _ => return Err(mesh_error(py, "poles, cut_path and theta_phi come together or not at all")),
+    };
+    let stored = StoredMap { method, points, iterations, status, message, theta_phi };
+    let shared = Arc::clone(&mesh.mesh);
+    let restored = py.detach(|| {
+        let mesh = GenusZeroMesh::new(shared).map_err(|e| Failed::Mesh(e.into()))?;
+        let embedding = restore(&mesh, stored).map_err(Failed::Parts)?;
+        Ok((mesh, embedding))
+    });
+    let (mesh, embedding) = restored.map_err(|e| match e {
+        Failed::Mesh(err) => sphere_error(py, err),
+        Failed::Parts(err) => mesh_error(py, err.to_string()),
+    })?;
+    Ok(CoreSphereMap::new(mesh.shared_mesh(), embedding, mesh.reoriented_faces()))
+}

@@ -1,0 +1,200 @@
+"""Maps that persist and travel: ``SphereMap.save`` / :func:`load_map` (a
+``.spheremap.npz``) and pickling, which share one record.
+
+The record holds everything a map holds: the (oriented) mesh with its notes
+and attributes, the points, the method, its options, iterations, status,
+message, seconds, notes and details, and for theta-phi the poles, the cut
+path and the rectangle. It holds no verdict that is believed: rebuilding a
+map sends the mesh through the core's validation and the parts through
+``_core.restore_map``, which certifies the points (``valid``, thesis 3.4) and
+for theta-phi makes the cut again and checks the rectangle (``tp_valid``)
+with exact predicates. A file edited by hand gets the certificate of what it
+holds, or a FormatError when its parts do not fit together.
+
+The ``.npz`` is plain arrays (loaded with ``allow_pickle=False``): ``meta``
+is one JSON string; arrays inside the options and details are stored beside
+it as ``array_<k>`` and referenced from the JSON.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import zipfile
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, Dict, List, Tuple, Union
+
+import numpy as np
+
+from . import _core
+from ._atomic import write_atomically
+from ._errors import FormatError, MeshError
+
+if TYPE_CHECKING:
+    from ._spheremap import SphereMap
+
+PathLike = Union[str, "os.PathLike[str]"]
+
+#: Bumped when the layout changes; a reader refuses files newer than itself.
+FORMAT_VERSION = 1
+VERSION_KEY = "spherify_map_format"
+
+Record = Dict[str, np.ndarray]
+
+
+def _encode(value: Any, arrays: Record) -> Any:
+    """``value`` as JSON, its arrays moved into ``arrays`` and referenced."""
+    if isinstance(value, np.ndarray):
+        key = f"array_{len(arrays)}"
+        arrays[key] = value
+        return {"__array__": key}
+    if isinstance(value, dict):
+        return {str(k): _encode(v, arrays) for k, v in value.items()}
+    if isinstance(value, tuple):
+        return {"__tuple__": [_encode(v, arrays) for v in value]}
+    if isinstance(value, list):
+        return [_encode(v, arrays) for v in value]
+    if isinstance(value, (np.integer, np.floating, np.bool_)):
+        return value.item()
+    if value is None or isinstance(value, (bool, int, float, str)):
+        return value
+    raise MeshError(f"cannot store a {type(value).__name__} in a sphere map record")
+
+
+def _decode(value: Any, arrays: Any) -> Any:
+    if isinstance(value, dict):
+        if set(value) == {"__array__"}:
+            return np.asarray(arrays[value["__array__"]])
+        if set(value) == {"__tuple__"}:
+            return tuple(_decode(v, arrays) for v in value["__tuple__"])
+        return {k: _decode(v, arrays) for k, v in value.items()}
+    if isinstance(value, list):
+        return [_decode(v, arrays) for v in value]
+    return value
+
+
+def record(m: "SphereMap") -> Record:
+    """Everything ``m`` holds, as named arrays (see the module docstring)."""
+    from ._spheremap import ThetaPhiMap
+
+    arrays: Record = {}
+    meta: Dict[str, Any] = {
+        "spherify_version": _core.__version__,
+        "method": m.method,
+        "iterations": m.iterations,
+        "status": m.status,
+        "message": m.message,
+        "seconds": [[k, v] for k, v in m.seconds.items()],
+        "notes": m.notes,
+        "options": _encode(m.options, arrays),
+        "details": _encode(m.details, arrays),
+        "mesh_notes": list(m.mesh.notes),
+        "mesh_attributes": _encode(dict(m.mesh.attributes), arrays),
+    }
+    arrays.update({
+        VERSION_KEY: np.array(FORMAT_VERSION),
+        "vertices": m.mesh.vertices,
+        "faces": m.mesh.faces,
+        "points": m.points,
+    })
+    if isinstance(m, ThetaPhiMap):
+        arrays.update(poles=np.array(m.poles, dtype=np.int64), cut_path=m.cut_path,
+                      theta_phi=m.theta_phi)
+        details = m.details
+        meta["refinements"] = int(details["refinements"])
+        meta["re_embedded"] = [bool(x) for x in details["re_embedded"]]
+    arrays["meta"] = np.array(json.dumps(meta))
+    return arrays
+
+
+def rebuild(arrays: Any, source: str) -> "SphereMap":
+    """A map from its record (a dict or an open ``.npz``), certified again
+    in the core. ``source`` names where the record came from, for errors."""
+    from ._mesh import Mesh
+    from ._spheremap import SphereMap, ThetaPhiMap
+
+    def fail(why: str) -> FormatError:
+        return FormatError(f"{source}: {why}", source)
+
+    names = set(arrays.keys()) if isinstance(arrays, dict) else set(arrays.files)
+    if VERSION_KEY not in names:
+        raise fail(f"not a sphere map (no {VERSION_KEY!r} entry; save one with SphereMap.save)")
+    version = int(np.asarray(arrays[VERSION_KEY]))
+    if version > FORMAT_VERSION or version < 1:
+        raise fail(f"sphere map format {version}; this spherify reads format 1 to {FORMAT_VERSION}")
+    missing = {"vertices", "faces", "points", "meta"} - names
+    if missing:
+        raise fail(f"missing {', '.join(sorted(missing))}")
+    try:
+        meta = json.loads(str(np.asarray(arrays["meta"])))
+        method, iterations = str(meta["method"]), int(meta["iterations"])
+        status, message = str(meta["status"]), str(meta["message"])
+        seconds: List[Tuple[str, float]] = [(str(k), float(v)) for k, v in meta["seconds"]]
+        notes = [str(n) for n in meta["notes"]]
+        options = _decode(meta["options"], arrays)
+        details = _decode(meta["details"], arrays)
+        mesh_notes = [str(n) for n in meta["mesh_notes"]]
+        attributes = _decode(meta["mesh_attributes"], arrays)
+        theta_phi: Dict[str, Any] = {}
+        if "poles" in names:
+            north, south = (int(p) for p in np.asarray(arrays["poles"]))
+            theta_phi = dict(poles=(north, south),
+                             cut_path=np.ascontiguousarray(arrays["cut_path"], dtype=np.int64),
+                             theta_phi=np.ascontiguousarray(arrays["theta_phi"], dtype=np.float64),
+                             refinements=int(meta["refinements"]),
+                             re_embedded=tuple(bool(x) for x in meta["re_embedded"]))
+    except (KeyError, ValueError, TypeError) as err:
+        raise fail(f"malformed record ({type(err).__name__}: {err})") from None
+    try:
+        mesh = Mesh(arrays["vertices"], arrays["faces"])
+        points = np.ascontiguousarray(arrays["points"], dtype=np.float64)
+        core = _core.restore_map(mesh._core, method, points, iterations, status, message,
+                                 **theta_phi)
+    except MeshError as err:
+        # TopologyError included: the stored mesh is not genus 0.
+        raise fail(str(err)) from None
+    mesh.notes = mesh_notes
+    mesh.attributes = dict(attributes)
+    cls = SphereMap if core.tp_valid is None else ThetaPhiMap
+    return cls._restored(core, mesh, seconds=seconds, notes=notes, options=options,
+                         details=details)
+
+
+def save_map(m: "SphereMap", path: PathLike) -> None:
+    """Write ``m`` to ``path`` atomically (temporary file, then rename)."""
+    arrays: Dict[str, Any] = record(m)
+
+    def fill(temporary: Path) -> None:
+        with open(temporary, "wb") as handle:
+            np.savez(handle, **arrays)
+    write_atomically(path, fill)
+
+
+def load_map(path: PathLike) -> "SphereMap":
+    """Read a map written by :meth:`SphereMap.save` and certify it again.
+
+    The certificate (``valid``, ``report``; for theta-phi ``tp_valid``) is
+    computed in the core from the stored points and rectangle, never read
+    from the file; the cut of a theta-phi map is made again from its path.
+
+    Raises
+    ------
+    FileNotFoundError, OSError
+        The file cannot be read.
+    FormatError
+        Not a sphere map, a newer format, or parts that do not fit the mesh or
+        each other (points off the fold of the rectangle, a rectangle boundary
+        not where eq. 6.31 puts it, a path that is not a cut); names the file.
+    """
+    file = Path(os.fspath(path))
+    with open(file, "rb"):
+        pass  # FileNotFoundError / PermissionError first
+    if not zipfile.is_zipfile(file):
+        raise FormatError(f"{file}: not a sphere map (.spheremap.npz is a zip archive)", str(file))
+    try:
+        with np.load(file, allow_pickle=False) as arrays:
+            return rebuild(arrays, str(file))
+    except (ValueError, zipfile.BadZipFile, EOFError) as err:
+        if isinstance(err, FormatError):
+            raise
+        raise FormatError(f"{file}: unreadable sphere map ({err})", str(file)) from None
