@@ -21,7 +21,7 @@ pub fn energy(options: &Options<'_>, default: Energy) -> PyResult<Energy> {
     })
 }
 
-/// `energy` ("isometric"), `max_iter` (final sweeps, 30), `tol` (1e-4: stop
+/// `energy` ("isometric"), `max_iter` (final sweeps, 10), `tol` (1e-3: stop
 /// when a sweep lowers the energy by less than this fraction).
 pub fn method(options: &Options<'_>) -> PyResult<Method> {
     let defaults = ProgressiveParams::default();

@@ -23,7 +23,7 @@ pub struct ImproveParams {
 
 impl Default for ImproveParams {
     fn default() -> Self {
-        ImproveParams { energy: Energy::Isometric, max_iter: 30, tolerance: 1e-4 }
+        ImproveParams { energy: Energy::Isometric, max_iter: 30, tolerance: 1e-3 }
     }
 }
 

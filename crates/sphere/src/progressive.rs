@@ -64,7 +64,7 @@ pub struct ProgressiveParams {
 
 impl Default for ProgressiveParams {
     fn default() -> Self {
-        ProgressiveParams { energy: Energy::Isometric, max_iter: 30, tolerance: 1e-4 }
+        ProgressiveParams { energy: Energy::Isometric, max_iter: 10, tolerance: 1e-3 }
     }
 }
 
