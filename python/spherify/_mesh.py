@@ -8,7 +8,7 @@ from typing import Any, Dict, List, Literal, Optional, Tuple, Union, overload
 
 import numpy as np
 
-from . import _core
+from . import _args, _core
 from ._errors import MeshError
 from ._report import MeshReport, SphereReport
 
@@ -16,6 +16,7 @@ PathLike = Union[str, "os.PathLike[str]"]
 
 
 def _as_vertices(vertices: Any, what: str = "vertices") -> np.ndarray:
+    _args.refuse_lossy(vertices, what)
     try:
         array = np.asarray(vertices)
         if array.dtype.kind not in "fiub":
@@ -26,6 +27,7 @@ def _as_vertices(vertices: Any, what: str = "vertices") -> np.ndarray:
 
 
 def _as_faces(faces: Any) -> np.ndarray:
+    _args.refuse_lossy(faces, "faces")
     array = np.asarray(faces)
     if array.dtype.kind not in "iu":
         raise MeshError(
@@ -137,7 +139,7 @@ def load(path: PathLike) -> Mesh:
         The file is malformed; the message names the file and the line (text)
         or byte offset (binary).
     """
-    core, notes, attributes = _core.load(os.fspath(path))
+    core, notes, attributes = _core.load(_args.path(path))
     return Mesh._from_core(core, notes, attributes)
 
 
@@ -160,7 +162,7 @@ def save(mesh: MeshLike, path: PathLike, *, sphere: Any = None, uv: Any = None,
     """
     sphere_array = None if sphere is None else _as_vertices(sphere, "sphere")
     uv_array = None if uv is None else _as_vertices(uv, "uv")
-    _core.save(as_mesh(mesh)._core, os.fspath(path), sphere_array, uv_array, ply_encoding, stl_binary)
+    _core.save(as_mesh(mesh)._core, _args.path(path), sphere_array, uv_array, ply_encoding, stl_binary)
 
 
 def check(mesh: MeshLike) -> MeshReport:
@@ -244,14 +246,15 @@ def dijkstra(mesh: MeshLike, source: int, *, weights: str = "length") -> Tuple[n
 
     Binary-heap Dijkstra, O((n + e) log n), deterministic tie-breaking.
     """
-    return _core.dijkstra(as_mesh(mesh)._core, int(source), weights)
+    return _core.dijkstra(as_mesh(mesh)._core, _args.vertex_id(source, "source"), weights)
 
 
 def shortest_path(mesh: MeshLike, source: int, target: int, *, weights: str = "length") -> Tuple[float, np.ndarray]:
     """Length and vertex sequence ``(k,) int64`` of a shortest path from
     ``source`` to ``target``; stops as soon as ``target`` is settled.
     Raises :class:`MeshError` when no path exists."""
-    return _core.shortest_path(as_mesh(mesh)._core, int(source), int(target), weights)
+    return _core.shortest_path(as_mesh(mesh)._core, _args.vertex_id(source, "source"),
+                               _args.vertex_id(target, "target"), weights)
 
 
 def check_sphere(mesh: MeshLike, points: Any) -> SphereReport:
