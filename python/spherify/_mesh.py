@@ -9,7 +9,7 @@ from typing import Any, Dict, List, Literal, Optional, Tuple, Union, overload
 
 import numpy as np
 
-from . import _core, _formats
+from . import _args, _core, _formats
 from ._errors import FormatError, MeshError
 from ._report import MeshReport, SphereReport
 
@@ -17,6 +17,7 @@ PathLike = Union[str, "os.PathLike[str]"]
 
 
 def _as_vertices(vertices: Any, what: str = "vertices") -> np.ndarray:
+    _args.refuse_lossy(vertices, what)
     try:
         array = np.asarray(vertices)
         if array.dtype.kind not in "fiub":
@@ -27,6 +28,7 @@ def _as_vertices(vertices: Any, what: str = "vertices") -> np.ndarray:
 
 
 def _as_faces(faces: Any) -> np.ndarray:
+    _args.refuse_lossy(faces, "faces")
     array = np.asarray(faces)
     if array.dtype.kind not in "iu":
         raise MeshError(
@@ -191,13 +193,13 @@ def load(path: Union[PathLike, Tuple[PathLike, PathLike]]) -> Mesh:
     if isinstance(path, tuple):
         if len(path) != 2:
             raise MeshError(f"load takes a path or a (V.npy, F.npy) pair, got {len(path)} paths")
-        v_path, f_path = Path(os.fspath(path[0])), Path(os.fspath(path[1]))
+        v_path, f_path = Path(_args.path(path[0])), Path(_args.path(path[1]))
         return _from_arrays(f_path, _formats.read_npy_pair(v_path, f_path))
-    file = Path(os.fspath(path))
+    file = Path(_args.path(path))
     reader = _formats.reader_for(file)
     if reader is not None:
         return _from_arrays(file, reader(file))
-    core, notes, attributes = _core.load(os.fspath(path))
+    core, notes, attributes = _core.load(_args.path(path))
     return Mesh._from_core(core, notes, attributes)
 
 
@@ -247,10 +249,10 @@ def save(mesh: MeshLike, path: PathLike, *, sphere: Any = None, uv: Any = None,
     sphere_array = None if sphere is None else _as_vertices(sphere, "sphere")
     uv_array = None if uv is None else _as_vertices(uv, "uv")
     mesh = as_mesh(mesh)
-    file = Path(os.fspath(path))
+    file = Path(_args.path(path))
     writer = _formats.writer_for(file, format)
     if writer is None:
-        _core.save(mesh._core, os.fspath(path), sphere_array, uv_array, ply_encoding, stl_binary)
+        _core.save(mesh._core, _args.path(path), sphere_array, uv_array, ply_encoding, stl_binary)
         return
     attributes = {name: array for name, array in (("sphere", sphere_array), ("uv", uv_array))
                   if array is not None}
@@ -346,14 +348,15 @@ def dijkstra(mesh: MeshLike, source: int, *, weights: str = "length") -> Tuple[n
 
     Binary-heap Dijkstra, O((n + e) log n), deterministic tie-breaking.
     """
-    return _core.dijkstra(as_mesh(mesh)._core, int(source), weights)
+    return _core.dijkstra(as_mesh(mesh)._core, _args.vertex_id(source, "source"), weights)
 
 
 def shortest_path(mesh: MeshLike, source: int, target: int, *, weights: str = "length") -> Tuple[float, np.ndarray]:
     """Length and vertex sequence ``(k,) int64`` of a shortest path from
     ``source`` to ``target``; stops as soon as ``target`` is settled.
     Raises :class:`MeshError` when no path exists."""
-    return _core.shortest_path(as_mesh(mesh)._core, int(source), int(target), weights)
+    return _core.shortest_path(as_mesh(mesh)._core, _args.vertex_id(source, "source"),
+                               _args.vertex_id(target, "target"), weights)
 
 
 def check_sphere(mesh: MeshLike, points: Any) -> SphereReport:

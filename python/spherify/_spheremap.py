@@ -14,7 +14,7 @@ from typing import Any, Dict, List, Optional, Tuple, Union
 import numpy as np
 import numpy.typing as npt
 
-from . import _core
+from . import _args, _core
 from ._errors import MeshError
 from ._mesh import Mesh, MeshLike, as_mesh
 from ._report import SphereReport
@@ -253,6 +253,7 @@ class SphereMap:
         MeshError
             Wrong shapes, a face id out of range or bad weights (the row is named).
         """
+        _args.refuse_lossy(face_ids, "face_ids")
         ids = np.asarray(face_ids)
         if ids.dtype.kind not in "iu":
             raise MeshError(f"face_ids must be integers, got dtype {ids.dtype}")
@@ -387,6 +388,7 @@ class ThetaPhiMap(SphereMap):
 
 
 def _float_rows(data: npt.ArrayLike, what: str) -> np.ndarray:
+    _args.refuse_lossy(data, what)
     try:
         array = np.asarray(data, dtype=np.float64)
     except (TypeError, ValueError) as err:

@@ -8,7 +8,7 @@ from typing import Any, Union
 
 import numpy as np
 
-from . import _core
+from . import _args, _core
 from ._errors import SpherifyWarning
 from ._mesh import MeshLike, _as_vertices, as_mesh
 
@@ -119,13 +119,15 @@ def tutte(mesh: MeshLike, *, weights: str = "uniform", rho: float = 1.0,
     without the GIL. Cost: about O(n^1.5) for the direct solver on meshes.
     """
     mesh = as_mesh(mesh)
+    rho, tol = _args.real(rho, "rho"), _args.real(tol, "tol")
+    max_iter = _args.integer(max_iter, "max_iter")
     if isinstance(boundary, str):
-        uv, raw = _core.tutte(mesh._core, weights, float(rho), boundary, None, solver,
-                              float(tol), int(max_iter))
+        uv, raw = _core.tutte(mesh._core, weights, rho, boundary, None, solver, tol,
+                              max_iter)
     else:
         polygon = _as_vertices(boundary, "boundary polygon")
-        uv, raw = _core.tutte(mesh._core, weights, float(rho), "polygon", polygon, solver,
-                              float(tol), int(max_iter))
+        uv, raw = _core.tutte(mesh._core, weights, rho, "polygon", polygon, solver, tol,
+                              max_iter)
     info = TutteInfo(**raw)
     if info.negative_weights:
         warnings.warn(

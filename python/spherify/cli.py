@@ -24,29 +24,98 @@ unreadable input or bad arguments.
 from __future__ import annotations
 
 import argparse
+import hashlib
+import io
 import os
 import sys
 import time
 import warnings
 from pathlib import Path
-from typing import Any, Dict, List, Optional
+from typing import Any, Dict, List, Optional, Union
 
 import numpy as np
 
-from . import _cli_apps, _core, _formats, datasets
+from . import _args, _cli_apps, _core, _formats, datasets
 from ._embed import embed, methods
-from ._errors import SpherifyError, SpherifyWarning, TopologyError
+from ._errors import MeshError, SpherifyError, SpherifyWarning, TopologyError
 from ._mesh import Mesh, check, check_sphere, load, orient, save
 from ._quality import quality
 from ._spheremap import ThetaPhiMap
 
 
+#: Sizes of generated shapes the command line accepts (a 10^7-vertex shape
+#: takes some 10 GB to map).
+N_VERTICES = (4, 10_000_000)
+
+#: Extensions of the mesh files spherify writes.
+MESH_EXTENSIONS = (".obj", ".off", ".ply", ".stl")
+
+
+class UsageError(SpherifyError):
+    """Bad arguments, found before any work is done (exit status 2)."""
+
+
+def _n_vertices(text: str) -> int:
+    try:
+        n = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
+    low, high = N_VERTICES
+    if not low <= n <= high:
+        raise argparse.ArgumentTypeError(f"{n} is outside the supported range {low} to {high:,}")
+    return n
+
+
+def _check_output(path: str) -> None:
+    """Refuses an output the command could not write, before the work."""
+    out = Path(path)
+    try:
+        _formats.writer_for(out, None)
+    except SpherifyError:
+        raise UsageError(f"-o {path}: unknown extension {out.suffix or '(none)'!r}; "
+                         f"use one of {', '.join(MESH_EXTENSIONS)}, .npz, .gii or a FreeSurfer "
+                         "surface name (lh.sphere, rh.pial, ...)") from None
+    folder = out.parent
+    if not folder.is_dir():
+        raise UsageError(f"-o {path}: the output folder {folder} does not exist")
+    if not os.access(folder, os.W_OK | os.X_OK):
+        raise UsageError(f"-o {path}: the output folder {folder} is not writable")
+
+
 def _load(args: argparse.Namespace) -> Mesh:
+    if args.dataset and args.mesh:
+        raise UsageError(f"give a mesh file or --dataset, not both (got {args.mesh!r} and "
+                         f"--dataset {args.dataset})")
     if args.dataset:
         return datasets.make(args.dataset, args.n_vertices)
     if not args.mesh:
-        raise SpherifyError("give a mesh file or --dataset NAME")
+        raise UsageError("give a mesh file or --dataset NAME")
     return load(args.mesh)
+
+
+def _sha256(path: Path) -> str:
+    digest = hashlib.sha256()
+    with open(path, "rb") as handle:
+        for block in iter(lambda: handle.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()
+
+
+def pair_is_consistent(out: Union[str, bytes, "os.PathLike[Any]"]) -> bool:
+    """Whether ``OUT`` and ``OUT.npz`` written by ``spherify map`` belong
+    together: the .npz records the SHA-256 of the mesh file it was written
+    with (``mesh_sha256``). The mesh is written first and the .npz second,
+    each atomically, so a run cut short between them leaves a pair this
+    function tells apart."""
+    mesh_path = Path(_args.path(out))
+    npz = mesh_path.with_suffix(".npz")
+    if not (mesh_path.is_file() and npz.is_file()):
+        return False
+    with np.load(npz) as data:
+        if "mesh_sha256" not in data.files:
+            return False
+        recorded = str(data["mesh_sha256"])
+    return recorded == _sha256(mesh_path)
 
 
 def _cmd_check(args: argparse.Namespace) -> int:
@@ -77,6 +146,7 @@ def _cmd_check(args: argparse.Namespace) -> int:
 
 
 def _cmd_orient(args: argparse.Namespace) -> int:
+    _check_output(args.output)
     mesh = _load(args)
     fixed, info = orient(mesh, return_info=True)
     save(fixed, args.output)
@@ -85,15 +155,11 @@ def _cmd_orient(args: argparse.Namespace) -> int:
 
 
 def _save_npz(path: Path, **arrays: Any) -> None:
-    """Write an .npz under a temporary name, then rename it into place."""
-    temporary = path.with_name(f".{path.name}.tmp-{os.getpid()}")
-    try:
-        with open(temporary, "wb") as handle:
-            np.savez(handle, **arrays)
-        os.replace(temporary, path)
-    finally:
-        if temporary.exists():
-            temporary.unlink()
+    """Write an .npz through the core's atomic writer (the one meshes use:
+    unique temporary, fsync, rename, mode and symbolic links kept)."""
+    buffer = io.BytesIO()
+    np.savez(buffer, **arrays)
+    _core.write_atomic(str(path), buffer.getvalue())
 
 
 def _save_sphere(mesh: Mesh, points: np.ndarray, out: Path) -> None:
@@ -111,9 +177,8 @@ def _save_sphere(mesh: Mesh, points: np.ndarray, out: Path) -> None:
 
 
 def _cmd_map(args: argparse.Namespace) -> int:
+    _check_output(args.output)
     out = Path(args.output)
-    if not out.parent.is_dir():
-        raise SpherifyError(f"the output folder {out.parent} does not exist")
     start = time.perf_counter()
     mesh = _load(args)
     loaded = time.perf_counter()
@@ -133,7 +198,15 @@ def _cmd_map(args: argparse.Namespace) -> int:
             options["progress"] = True
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", SpherifyWarning)  # reported below instead
-        m = embed(mesh, args.method, **options)
+        try:
+            m = embed(mesh, args.method, **options)
+        except TopologyError:
+            raise
+        except MeshError as err:
+            # The method refused this mesh (radial on a mesh that is not
+            # star-shaped): a property of the input, like an invalid mesh.
+            print(f"refusing to map: {err}")
+            return 1
     mapped = time.perf_counter()
     for note in m.notes:
         print(f"note: {note}")
@@ -162,8 +235,11 @@ def _cmd_map(args: argparse.Namespace) -> int:
           f"(Linf {q['stretch_linf']:.3g}), edge-length CV {q['edge_length_cv']:.3g}")
     stages = ", ".join(f"{k} {v:.3f}" for k, v in m.seconds.items())
     print(f"seconds: load {loaded - start:.3f}; {stages}; total {mapped - start:.3f}")
+    # The mesh first, then the .npz recording the mesh file's hash: a run
+    # cut short in between leaves a pair that pair_is_consistent refuses.
     _save_sphere(m.mesh, m.points, out)
-    arrays = {"points": m.points, "faces": m.mesh.faces}
+    arrays = {"points": m.points, "faces": m.mesh.faces,
+              "mesh_sha256": np.array(_sha256(out))}
     if isinstance(m, ThetaPhiMap):
         arrays.update(theta_phi=m.theta_phi, poles=np.array(m.poles), cut_path=m.cut_path,
                       cut_faces=m.cut_mesh.faces, cut_original=m.cut_original)
@@ -209,7 +285,8 @@ def main(argv: Optional[List[str]] = None) -> int:
         p.add_argument("mesh", nargs="?", help="mesh file (.obj .off .ply .stl .npz, a "
                        "FreeSurfer surface such as lh.pial, .gii)")
         p.add_argument("--dataset", choices=datasets.names(), help="use a generated shape instead")
-        p.add_argument("--n-vertices", type=int, default=5000, help="size of the generated shape")
+        p.add_argument("--n-vertices", type=_n_vertices, default=5000,
+                       help=f"size of the generated shape ({N_VERTICES[0]} to {N_VERTICES[1]:,})")
         if name in ("orient", "map"):
             p.add_argument("-o", "--output", required=True, help="output mesh file")
         if name == "map":

@@ -161,6 +161,8 @@ pub enum MeshError {
     IndexOutOfRange { face: usize, index: i64, n_vertices: usize },
     #[error("{what} has length {got}, but the mesh has {expected} vertices")]
     AttributeLength { what: &'static str, got: usize, expected: usize },
+    #[error("{path}: vertex {vertex} has the coordinate {value:e}, which {format}'s 32-bit floats cannot hold (it would become infinity or zero); save as .ply, .obj or .off, which keep float64, or rescale the mesh")]
+    NotRepresentable { path: String, vertex: usize, value: f64, format: &'static str },
     #[error(transparent)]
     Format(#[from] FormatError),
     #[error("{path}: {source}")]

@@ -132,11 +132,11 @@ pub fn from_points(
 ) -> PyResult<CoreSphereMap> {
     let points = rows::<f64, 3>(py, &points, "points")?;
     let shared = Arc::clone(&mesh.mesh);
-    let result = py.detach(|| {
+    let result = crate::pool::detach(py, || {
         let mesh = GenusZeroMesh::new(shared).map_err(SphereError::from)?;
         let embedding = core_from_points(&mesh, &points)?;
         Ok::<_, SphereError>((mesh, embedding))
-    });
+    })?;
     let (mesh, embedding) = result.map_err(|e| sphere_error(py, e))?;
     Ok(CoreSphereMap::new(mesh.shared_mesh(), embedding, mesh.reoriented_faces()))
 }

@@ -43,10 +43,10 @@ pub fn dijkstra<'py>(
 ) -> PyResult<Paths<'py>> {
     let source = check_vertex(py, mesh, source, "source")?;
     let w = self::weights(py, mesh, weights)?;
-    let paths = py.detach(|| {
+    let paths = crate::pool::detach(py, || {
         let graph = Adjacency::from_faces(mesh.mesh.n_vertices(), mesh.mesh.faces());
         paths::dijkstra(&graph, source, w)
-    });
+    })?;
     // The source was checked above, so the search always runs.
     let paths = paths.ok_or_else(|| mesh_error(py, "source vertex out of range"))?;
     let pred: Vec<i64> = paths
@@ -71,10 +71,10 @@ pub fn shortest_path<'py>(
     let source = check_vertex(py, mesh, source, "source")?;
     let target = check_vertex(py, mesh, target, "target")?;
     let w = self::weights(py, mesh, weights)?;
-    let found = py.detach(|| {
+    let found = crate::pool::detach(py, || {
         let graph = Adjacency::from_faces(mesh.mesh.n_vertices(), mesh.mesh.faces());
         paths::dijkstra_to(&graph, source, target, w)
-    });
+    })?;
     match found {
         Some((length, path)) => {
             let path: Vec<i64> = path.into_iter().map(i64::from).collect();

@@ -29,9 +29,9 @@ pub fn harmonics_fit<'py>(
     lmax: usize,
     oversample: usize,
 ) -> PyResult<(Bound<'py, PyArray2<f64>>, Bound<'py, PyDict>)> {
-    let point_map = map.point_map(py);
-    let (coefficients, info) =
-        py.detach(|| fit(point_map, lmax, oversample)).map_err(|e| harmonics_error(py, e))?;
+    let point_map = map.point_map(py)?;
+    let (coefficients, info) = crate::pool::detach(py, || fit(point_map, lmax, oversample))?
+        .map_err(|e| harmonics_error(py, e))?;
     let d = PyDict::new(py);
     d.set_item("n_theta", info.n_theta)?;
     d.set_item("n_phi", info.n_phi)?;
@@ -48,7 +48,7 @@ pub fn harmonics_evaluate<'py>(
 ) -> PyResult<Bound<'py, PyArray2<f64>>> {
     let coefficients = rows::<f64, 3>(py, &coefficients, "coefficients")?;
     let points = rows::<f64, 3>(py, &points, "points")?;
-    let values =
-        py.detach(|| evaluate(&coefficients, &points)).map_err(|e| harmonics_error(py, e))?;
+    let values = crate::pool::detach(py, || evaluate(&coefficients, &points))?
+        .map_err(|e| harmonics_error(py, e))?;
     Ok(to_numpy(py, &values))
 }

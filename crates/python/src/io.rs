@@ -15,7 +15,7 @@ pub fn load<'py>(
     py: Python<'py>,
     path: std::path::PathBuf,
 ) -> PyResult<(CoreMesh, Vec<String>, Bound<'py, PyDict>)> {
-    let loaded = py.detach(|| io::read(&path)).map_err(|e| to_py(py, e))?;
+    let loaded = crate::pool::detach(py, || io::read(&path))?.map_err(|e| to_py(py, e))?;
     let attributes = PyDict::new(py);
     if let Some(sphere) = &loaded.attributes.sphere {
         attributes.set_item("sphere", to_numpy(py, sphere))?;
@@ -47,5 +47,14 @@ pub fn save(
         uv: uv.map(|a| rows::<f64, 2>(py, &a, "uv")).transpose()?,
     };
     let options = WriteOptions { ply_encoding, stl_binary };
-    py.detach(|| io::write(&path, &mesh.mesh, &attributes, &options)).map_err(|e| to_py(py, e))
+    crate::pool::detach(py, || io::write(&path, &mesh.mesh, &attributes, &options))?
+        .map_err(|e| to_py(py, e))
+}
+
+/// write_atomic(path, data: bytes): writes `data` with the mesh writer's
+/// atomic scheme (temporary beside the target, sync, rename; symbolic links
+/// followed, the replaced file's mode kept, stale temporaries removed).
+#[pyfunction]
+pub fn write_atomic(py: Python<'_>, path: std::path::PathBuf, data: &[u8]) -> PyResult<()> {
+    crate::pool::detach(py, || io::write_atomic(&path, data))?.map_err(|e| to_py(py, e))
 }

@@ -14,6 +14,7 @@ mod io;
 mod mesh;
 mod metrics;
 mod options;
+mod pool;
 mod progress;
 mod progressive;
 mod radial;
@@ -27,10 +28,17 @@ mod validate;
 
 #[pymodule]
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    // Load numpy's C API now, while no signal can be pending in a core call:
+    // rust-numpy loads it on first use and panics if that import fails, and a
+    // pending KeyboardInterrupt makes it fail (issue 13, item 1). Failing here
+    // raises the KeyboardInterrupt from the import of spherify instead.
+    m.py().import("numpy")?;
+    let _ = numpy::PyArray1::<f64>::zeros(m.py(), [0], false);
     m.add_class::<mesh::CoreMesh>()?;
     m.add_class::<sphere_map::CoreSphereMap>()?;
     m.add_function(wrap_pyfunction!(io::load, m)?)?;
     m.add_function(wrap_pyfunction!(io::save, m)?)?;
+    m.add_function(wrap_pyfunction!(io::write_atomic, m)?)?;
     m.add_function(wrap_pyfunction!(validate::check, m)?)?;
     m.add_function(wrap_pyfunction!(validate::check_raw, m)?)?;
     m.add_function(wrap_pyfunction!(validate::orient, m)?)?;

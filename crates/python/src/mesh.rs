@@ -27,7 +27,8 @@ impl CoreMesh {
     ) -> PyResult<Self> {
         let positions = rows::<f64, 3>(py, &vertices, "vertices")?;
         let faces = rows::<i64, 3>(py, &faces, "faces")?;
-        let mesh = py.detach(|| Mesh::from_signed(positions, &faces)).map_err(|e| to_py(py, e))?;
+        let mesh = crate::pool::detach(py, || Mesh::from_signed(positions, &faces))?
+            .map_err(|e| to_py(py, e))?;
         Ok(CoreMesh { mesh: Arc::new(mesh) })
     }
 

@@ -18,8 +18,7 @@ pub fn quality<'py>(
     points: PyReadonlyArrayDyn<'_, f64>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let points = rows::<f64, 3>(py, &points, "points")?;
-    let q = py
-        .detach(|| metrics::quality(&mesh.mesh, &points))
+    let q = crate::pool::detach(py, || metrics::quality(&mesh.mesh, &points))?
         .map_err(|e| mesh_error(py, e.to_string()))?;
     let d = PyDict::new(py);
     for (name, value) in q.fields() {
@@ -40,8 +39,7 @@ pub fn face_quality<'py>(
     points: PyReadonlyArrayDyn<'_, f64>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let points = rows::<f64, 3>(py, &points, "points")?;
-    let f = py
-        .detach(|| metrics::face_measures(&mesh.mesh, &points))
+    let f = crate::pool::detach(py, || metrics::face_measures(&mesh.mesh, &points))?
         .map_err(|e| mesh_error(py, e.to_string()))?;
     let d = PyDict::new(py);
     d.set_item("angle_max_deg", f.angle_max_deg.into_pyarray(py))?;

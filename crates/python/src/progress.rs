@@ -11,7 +11,12 @@
 //!   on, and [`run`] raises that exception once the core call has returned;
 //! * the work runs on its own thread while the calling thread waits with the
 //!   GIL released, waking every 100 ms to let Python handle signals: Ctrl-C
-//!   stops the work the same way (worker threads never see signals).
+//!   stops the work the same way (worker threads never see signals);
+//! * the core polls the closure from its long loops at a bounded interval;
+//!   `progress(0, 0)` is such a poll: it reports nothing (the callable is not
+//!   called) and only answers whether to go on;
+//! * the work runs on this process's pool ([`crate::pool`]: safe after
+//!   `fork`), and a core call from inside the callable is refused.
 
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Condvar, Mutex, MutexGuard};
@@ -62,7 +67,9 @@ impl State {
             return true;
         }
         *last = done;
-        let called = Python::attach(|py| callback.call1(py, (done, total)).map(drop));
+        let called = crate::pool::as_callback(|| {
+            Python::attach(|py| callback.call1(py, (done, total)).map(drop))
+        });
         drop(last);
         if let Err(err) = called {
             self.fail(err);
@@ -92,6 +99,7 @@ pub fn run<R: Send>(
             ));
         }
     }
+    let pool = crate::pool::get(py)?;
     let state = State {
         callback: callback.map(|c| c.clone().unbind()),
         last: Mutex::new(0),
@@ -100,9 +108,9 @@ pub fn run<R: Send>(
     };
     let finished: (Mutex<Option<R>>, Condvar) = (Mutex::new(None), Condvar::new());
     let result = std::thread::scope(|scope| {
-        let (state, finished) = (&state, &finished);
+        let (state, finished, pool) = (&state, &finished, &pool);
         let worker = scope.spawn(move || {
-            let result = work(&|done, total| state.report(done, total));
+            let result = pool.install(|| work(&|done, total| state.report(done, total)));
             *lock(&finished.0) = Some(result);
             finished.1.notify_all();
         });

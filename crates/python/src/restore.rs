@@ -7,7 +7,9 @@ use std::sync::Arc;
 
 use numpy::PyReadonlyArrayDyn;
 use pyo3::prelude::*;
-use spherify_sphere::restore::{restore, status_from_name, RestoreError, StoredMap, StoredThetaPhi};
+use spherify_sphere::restore::{
+    restore, status_from_name, RestoreError, StoredMap, StoredThetaPhi,
+};
 use spherify_sphere::{GenusZeroMesh, MethodName, SphereError};
 
 use crate::convert::rows;
@@ -21,13 +23,20 @@ enum Failed {
     Parts(RestoreError),
 }
 
-fn vertex_ids(py: Python<'_>, array: &PyReadonlyArrayDyn<'_, i64>, what: &str) -> PyResult<Vec<u32>> {
+fn vertex_ids(
+    py: Python<'_>,
+    array: &PyReadonlyArrayDyn<'_, i64>,
+    what: &str,
+) -> PyResult<Vec<u32>> {
     let view = array.as_array();
     if view.ndim() != 1 {
         return Err(mesh_error(py, format!("{what} must have shape (k,), got {:?}", view.shape())));
     }
     view.iter()
-        .map(|&v| u32::try_from(v).map_err(|_| mesh_error(py, format!("{what} holds {v}, not a vertex id"))))
+        .map(|&v| {
+            u32::try_from(v)
+                .map_err(|_| mesh_error(py, format!("{what} holds {v}, not a vertex id")))
+        })
         .collect()
 }
 
@@ -78,15 +87,17 @@ pub fn restore_map(
                 re_embedded: [re_embedded.0, re_embedded.1],
             })
         }
-        _ => return Err(mesh_error(py, "poles, cut_path and theta_phi come together or not at all")),
+        _ => {
+            return Err(mesh_error(py, "poles, cut_path and theta_phi come together or not at all"))
+        }
     };
     let stored = StoredMap { method, points, iterations, status, message, theta_phi };
     let shared = Arc::clone(&mesh.mesh);
-    let restored = py.detach(|| {
+    let restored = crate::pool::detach(py, || {
         let mesh = GenusZeroMesh::new(shared).map_err(|e| Failed::Mesh(e.into()))?;
         let embedding = restore(&mesh, stored).map_err(Failed::Parts)?;
         Ok((mesh, embedding))
-    });
+    })?;
     let (mesh, embedding) = restored.map_err(|e| match e {
         Failed::Mesh(err) => sphere_error(py, err),
         Failed::Parts(err) => mesh_error(py, err.to_string()),

@@ -27,7 +27,7 @@ pub fn check_sphere<'py>(
             ),
         ));
     }
-    let r = py.detach(|| check(mesh.mesh.faces(), &points));
+    let r = crate::pool::detach(py, || check(mesh.mesh.faces(), &points))?;
     report_to_py(py, &r)
 }
 

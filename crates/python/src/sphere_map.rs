@@ -51,12 +51,13 @@ impl CoreSphereMap {
     /// Built with the GIL released, outside the `OnceLock`: a thread that
     /// waits on the lock may hold the GIL, which the builder would need back
     /// inside the lock. Two threads racing both build; one result is kept.
-    pub(crate) fn point_map(&self, py: Python<'_>) -> &PointMap {
+    pub(crate) fn point_map(&self, py: Python<'_>) -> PyResult<&PointMap> {
         if let Some(map) = self.point_map.get() {
-            return map;
+            return Ok(map);
         }
-        let built = py.detach(|| PointMap::new(Arc::clone(&self.mesh), &self.embedding));
-        self.point_map.get_or_init(|| built)
+        let built =
+            crate::pool::detach(py, || PointMap::new(Arc::clone(&self.mesh), &self.embedding))?;
+        Ok(self.point_map.get_or_init(|| built))
     }
 }
 
@@ -174,8 +175,8 @@ impl CoreSphereMap {
 
     /// Why h^-1 is not defined for this map, or None.
     #[getter]
-    fn not_bijective(&self, py: Python<'_>) -> Option<String> {
-        self.point_map(py).not_bijective().map(str::to_string)
+    fn not_bijective(&self, py: Python<'_>) -> PyResult<Option<String>> {
+        Ok(self.point_map(py)?.not_bijective().map(str::to_string))
     }
 
     /// to_sphere(face_ids (k,) int64, bary (k, 3) float64) -> (k, 3) float64.
@@ -194,9 +195,11 @@ impl CoreSphereMap {
         }
         let ids: Vec<i64> = ids.iter().copied().collect();
         let bary = rows::<f64, 3>(py, &bary, "bary")?;
-        let map = self.point_map(py);
+        let map = self.point_map(py)?;
+        // Through progress::run so that Ctrl-C stops a long batch.
         let points =
-            py.detach(|| map.to_sphere(&ids, &bary)).map_err(|e| point_map_error(py, e))?;
+            crate::progress::run(py, None, |go_on| map.to_sphere_with(&ids, &bary, go_on))?
+                .map_err(|e| point_map_error(py, e))?;
         Ok(to_numpy(py, &points))
     }
 
@@ -209,9 +212,10 @@ impl CoreSphereMap {
     ) -> PyResult<(Bound<'py, PyArray1<i64>>, Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<f64>>)>
     {
         let points = rows::<f64, 3>(py, &points, "points")?;
-        let map = self.point_map(py);
+        let map = self.point_map(py)?;
         let (faces, bary, xyz) =
-            py.detach(|| map.to_surface(&points)).map_err(|e| point_map_error(py, e))?;
+            crate::progress::run(py, None, |go_on| map.to_surface_with(&points, go_on))?
+                .map_err(|e| point_map_error(py, e))?;
         let faces: Vec<i64> = faces.into_iter().map(i64::from).collect();
         Ok((faces.into_pyarray(py), to_numpy(py, &bary), to_numpy(py, &xyz)))
     }

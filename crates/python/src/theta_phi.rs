@@ -26,11 +26,19 @@ fn pole_choice(
         return PoleChoice::from_name(&name, symmetry)
             .map_err(|_| mesh_error(py, format!("{}, got {name:?}", poles_expected())));
     }
-    match poles.extract::<(i64, i64)>() {
+    // A bool is an int to Python; as a vertex id it is a mistake.
+    let pair = poles.extract::<(Bound<'_, PyAny>, Bound<'_, PyAny>)>().ok().filter(|(n, s)| {
+        !n.is_instance_of::<pyo3::types::PyBool>() && !s.is_instance_of::<pyo3::types::PyBool>()
+    });
+    let ids = pair.and_then(|(n, s)| Some((n.extract::<i64>().ok()?, s.extract::<i64>().ok()?)));
+    match ids.ok_or(()) {
         Ok((n, s)) if n >= 0 && s >= 0 && n <= u32::MAX as i64 && s <= u32::MAX as i64 => {
             Ok(PoleChoice::Explicit(n as u32, s as u32))
         }
-        _ => Err(mesh_error(py, poles_expected())),
+        _ => {
+            let got = poles.repr().map(|r| r.to_string()).unwrap_or_default();
+            Err(mesh_error(py, format!("{}, got {got}", poles_expected())))
+        }
     }
 }
 

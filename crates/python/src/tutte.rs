@@ -14,10 +14,10 @@ use crate::mesh::CoreMesh;
 /// boundary_loop(mesh) -> (k,) int64, counter-clockwise; TopologyError unless a disk.
 #[pyfunction]
 pub fn boundary_loop<'py>(py: Python<'py>, mesh: &CoreMesh) -> PyResult<Bound<'py, PyArray1<i64>>> {
-    let result = py.detach(|| {
+    let result = crate::pool::detach(py, || {
         let he = HalfEdgeMesh::new(&mesh.mesh)?;
         core_tutte::boundary_loop(&mesh.mesh, &he)
-    });
+    })?;
     let cycle = result.map_err(|e| to_py(py, e.into()))?;
     Ok(cycle.into_iter().map(i64::from).collect::<Vec<_>>().into_pyarray(py))
 }
@@ -56,8 +56,8 @@ pub fn tutte<'py>(
             .map_err(|e: spherify_mesh::UnknownName| mesh_error(py, e.to_string()))?,
         solve: SolveParams { tol, max_iter, x0: None },
     };
-    let embedding =
-        py.detach(|| core_tutte::tutte(&mesh.mesh, &params)).map_err(|e| tutte_error(py, e))?;
+    let embedding = crate::pool::detach(py, || core_tutte::tutte(&mesh.mesh, &params))?
+        .map_err(|e| tutte_error(py, e))?;
     let info = PyDict::new(py);
     info.set_item("solver", embedding.info.solver.as_str())?;
     info.set_item("iterations", embedding.info.iterations)?;

@@ -12,7 +12,7 @@ use crate::mesh::CoreMesh;
 /// check(mesh) -> MeshReport.
 #[pyfunction]
 pub fn check<'py>(py: Python<'py>, mesh: &CoreMesh) -> PyResult<Bound<'py, PyAny>> {
-    let report = py.detach(|| validate::check(&mesh.mesh));
+    let report = crate::pool::detach(py, || validate::check(&mesh.mesh))?;
     report_to_py(py, &report)
 }
 
@@ -26,15 +26,15 @@ pub fn check_raw<'py>(
 ) -> PyResult<Bound<'py, PyAny>> {
     let positions = rows::<f64, 3>(py, &vertices, "vertices")?;
     let faces = rows::<i64, 3>(py, &faces, "faces")?;
-    let report = py.detach(|| validate::check_raw(&positions, &faces));
+    let report = crate::pool::detach(py, || validate::check_raw(&positions, &faces))?;
     report_to_py(py, &report)
 }
 
 /// orient(mesh) -> (CoreMesh, info dict); raises TopologyError.
 #[pyfunction]
 pub fn orient<'py>(py: Python<'py>, mesh: &CoreMesh) -> PyResult<(CoreMesh, Bound<'py, PyDict>)> {
-    let (oriented, info) =
-        py.detach(|| orient_mod::orient(&mesh.mesh)).map_err(|e| to_py(py, e.into()))?;
+    let (oriented, info) = crate::pool::detach(py, || orient_mod::orient(&mesh.mesh))?
+        .map_err(|e| to_py(py, e.into()))?;
     let dict = PyDict::new(py);
     dict.set_item("flipped_faces", info.flipped_faces)?;
     dict.set_item("components", info.components)?;

@@ -82,6 +82,16 @@ impl Default for AlexaParams {
 /// are certain never to spread over the sphere again, `MaxIterations` otherwise.
 /// O(E) per iteration, in parallel; O(F) per validity test.
 pub fn alexa(mesh: &GenusZeroMesh, params: &AlexaParams) -> Result<SphereEmbedding, SphereError> {
+    alexa_with_progress(mesh, params, &|_, _| true)
+}
+
+/// [`alexa`], polling `progress(0, 0)` once per iteration: `false` stops it
+/// with [`SphereError::Cancelled`] (Ctrl-C in Python).
+pub fn alexa_with_progress(
+    mesh: &GenusZeroMesh,
+    params: &AlexaParams,
+    progress: &(dyn Fn(usize, usize) -> bool + Sync),
+) -> Result<SphereEmbedding, SphereError> {
     let start = Instant::now();
     let cap = match params.step {
         AlexaStep::InverseLongestEdge => CapLimit::Hemisphere,
@@ -105,27 +115,37 @@ pub fn alexa(mesh: &GenusZeroMesh, params: &AlexaParams) -> Result<SphereEmbeddi
     let points = initial_points(mesh, &params.initial)?;
     let setup = start.elapsed().as_secs_f64();
     let step = params.step;
-    iterate(mesh.faces(), points, &controls, cap, setup, "alexa", |old: &[[f64; 3]], i: usize| {
-        let vi = old[i];
-        let neighbours = graph.neighbors(i as u32);
-        let mut q = [0.0; 3];
-        let mut longest = 0.0f64;
-        for &j in neighbours {
-            let vj = old[j as usize];
-            let e = [vi[0] - vj[0], vi[1] - vj[1], vi[2] - vj[2]];
-            let len = (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]).sqrt();
-            q = [q[0] + e[0] * len, q[1] + e[1] * len, q[2] + e[2] * len];
-            longest = longest.max(len);
-        }
-        let c = match step {
-            // All neighbours on top of v_i: q = 0 and nothing moves.
-            AlexaStep::InverseLongestEdge if longest > 0.0 => 1.0 / longest,
-            AlexaStep::InverseLongestEdge => 0.0,
-            AlexaStep::Constant(c) => c,
-        };
-        let scale = c / neighbours.len().max(1) as f64;
-        normalize([vi[0] - scale * q[0], vi[1] - scale * q[1], vi[2] - scale * q[2]]).unwrap_or(vi)
-    })
+    iterate(
+        mesh.faces(),
+        points,
+        &controls,
+        cap,
+        setup,
+        "alexa",
+        progress,
+        |old: &[[f64; 3]], i: usize| {
+            let vi = old[i];
+            let neighbours = graph.neighbors(i as u32);
+            let mut q = [0.0; 3];
+            let mut longest = 0.0f64;
+            for &j in neighbours {
+                let vj = old[j as usize];
+                let e = [vi[0] - vj[0], vi[1] - vj[1], vi[2] - vj[2]];
+                let len = (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]).sqrt();
+                q = [q[0] + e[0] * len, q[1] + e[1] * len, q[2] + e[2] * len];
+                longest = longest.max(len);
+            }
+            let c = match step {
+                // All neighbours on top of v_i: q = 0 and nothing moves.
+                AlexaStep::InverseLongestEdge if longest > 0.0 => 1.0 / longest,
+                AlexaStep::InverseLongestEdge => 0.0,
+                AlexaStep::Constant(c) => c,
+            };
+            let scale = c / neighbours.len().max(1) as f64;
+            normalize([vi[0] - scale * q[0], vi[1] - scale * q[1], vi[2] - scale * q[2]])
+                .unwrap_or(vi)
+        },
+    )
 }
 
 #[cfg(test)]

@@ -8,15 +8,15 @@ use std::fmt;
 use std::str::FromStr;
 use std::time::Instant;
 
-use crate::alexa::{alexa, AlexaParams};
+use crate::alexa::{alexa_with_progress, AlexaParams};
 use crate::embedding::SphereEmbedding;
 use crate::error::SphereError;
 use crate::genus_zero::GenusZeroMesh;
-use crate::gotsman::{gotsman, GotsmanParams};
+use crate::gotsman::{gotsman_with_progress, GotsmanParams};
 use crate::improve::{improve, ImproveParams};
 use crate::progressive::{progressive, ProgressiveParams};
 use crate::radial::{radial_map, Center, KernelPoint};
-use crate::relaxation::{relaxation, RelaxationParams};
+use crate::relaxation::{relaxation_with_progress, RelaxationParams};
 use crate::theta_phi::{theta_phi_with_progress, ThetaPhi, ThetaPhiParams};
 use crate::validity::{check_sphere, SphereReport};
 
@@ -189,7 +189,10 @@ impl Embedding {
 ///
 /// `progress(done, total)` hears from the long stages that report (the exact
 /// graph poles of theta-phi); returning `false` stops them with
-/// [`SphereError::Cancelled`].
+/// [`SphereError::Cancelled`]. Every method also polls `progress(0, 0)` from
+/// its loops, at most a fraction of a second apart on large meshes except
+/// inside one sparse factorisation: a poll reports nothing (`done` 0 is never
+/// progress) and only asks whether to go on.
 ///
 /// # Errors
 /// Whatever the method reports: bad parameters, a radial centre outside the
@@ -204,9 +207,11 @@ pub fn embed(
             let r = radial_map(mesh, *center)?;
             (r.embedding, Details::Radial { center: r.center, kernel: r.kernel })
         }
-        Method::Relaxation(params) => (relaxation(mesh, params)?, Details::None),
-        Method::Alexa(params) => (alexa(mesh, params)?, Details::None),
-        Method::Gotsman(params) => (gotsman(mesh, params)?, Details::None),
+        Method::Relaxation(params) => {
+            (relaxation_with_progress(mesh, params, progress)?, Details::None)
+        }
+        Method::Alexa(params) => (alexa_with_progress(mesh, params, progress)?, Details::None),
+        Method::Gotsman(params) => (gotsman_with_progress(mesh, params, progress)?, Details::None),
         Method::ThetaPhi(params) => {
             let (points, tp) = theta_phi_with_progress(mesh, params, progress)?;
             (points, Details::ThetaPhi(Box::new(tp)))
@@ -272,6 +277,27 @@ mod tests {
             assert_eq!(e.certificate, check_sphere(mesh.faces(), &e.result.points));
             assert!(e.bijective());
             assert_eq!(e.result.seconds.last().map(|s| s.0), Some("certify"));
+        }
+    }
+
+    #[test]
+    fn every_method_but_radial_stops_when_a_poll_says_so() {
+        use std::sync::atomic::{AtomicUsize, Ordering};
+        let mesh = GenusZeroMesh::new(octasphere(2)).unwrap();
+        for name in MethodName::ALL {
+            if name == MethodName::Radial {
+                continue; // one pass, nothing to poll
+            }
+            // Stop at the first poll: the method ends there with Cancelled,
+            // not at its end.
+            let polls = AtomicUsize::new(0);
+            let stop_after = 0;
+            let progress = |done: usize, _total: usize| {
+                done != 0 || polls.fetch_add(1, Ordering::SeqCst) < stop_after
+            };
+            let err = embed(&mesh, &name.with_defaults().unwrap(), &progress).unwrap_err();
+            assert!(matches!(err, SphereError::Cancelled { .. }), "{name}: {err}");
+            assert_eq!(polls.load(Ordering::SeqCst), stop_after + 1, "{name}");
         }
     }
 

@@ -30,6 +30,9 @@ pub struct Problem<'a> {
     pub area_floor: f64,
 }
 
+/// A move shorter than this fraction of the vertex's shortest edge does not
+/// wake its neighbours for the next sweep of [`Problem::optimise`].
+pub const NOTICEABLE: f64 = 1e-3;
 /// Backtracking halvings before a move is given up.
 const MAX_HALVINGS: usize = 12;
 /// Fraction of the largest flip-free step a move may take.
@@ -50,41 +53,18 @@ impl Problem<'_> {
         ring: &[u32],
         points: &[[f64; 3]],
     ) -> f64 {
-        let m = ring.len();
-        (0..m)
-            .map(|j| {
-                let (a, b) = (ring[j], ring[(j + 1) % m]);
-                face_energy(
-                    self.energy,
-                    &self.reference(i, a, b),
-                    k,
-                    p,
-                    points[a as usize],
-                    points[b as usize],
-                )
-            })
-            .sum()
+        self.star(i, ring, points).energy(self.energy, k, p)
     }
 
-    fn star_gradient(
-        &self,
-        k: f64,
-        i: u32,
-        p: [f64; 3],
-        ring: &[u32],
-        points: &[[f64; 3]],
-    ) -> (f64, [f64; 3]) {
+    /// The faces around `i`, gathered once for the several evaluations of a move.
+    fn star(&self, i: u32, ring: &[u32], points: &[[f64; 3]]) -> Star {
         let m = ring.len();
-        let mut total = (0.0, [0.0; 3]);
+        let mut star = Star { faces: Vec::with_capacity(m) };
         for j in 0..m {
             let (a, b) = (ring[j], ring[(j + 1) % m]);
-            let r = self.reference(i, a, b);
-            let (e, g) =
-                face_energy_gradient(self.energy, &r, k, p, points[a as usize], points[b as usize]);
-            total.0 += e;
-            total.1 = add(total.1, g);
+            star.faces.push((self.reference(i, a, b), points[a as usize], points[b as usize]));
         }
-        total
+        star
     }
 
     /// Sum of image areas (det / 2, see [`crate::distortion_energy`]) over
@@ -136,7 +116,8 @@ impl Problem<'_> {
         points: &[[f64; 3]],
     ) -> Option<[f64; 3]> {
         let p = points[i as usize];
-        let (e0, g) = self.star_gradient(k, i, p, ring, points);
+        let star = self.star(i, ring, points);
+        let (e0, g) = star.gradient(self.energy, k, p);
         if !e0.is_finite() {
             return None;
         }
@@ -152,7 +133,7 @@ impl Problem<'_> {
         let h = 1e-6 * reach;
         let column = |e: [f64; 3]| -> Option<[f64; 2]> {
             let q = normalize(add(p, scale(e, h)))?;
-            let (eq, gq) = self.star_gradient(k, i, q, ring, points);
+            let (eq, gq) = star.gradient(self.energy, k, q);
             eq.is_finite().then(|| [(dot(gq, e1) - gt[0]) / h, (dot(gq, e2) - gt[1]) / h])
         };
         let mut dir = None;
@@ -175,10 +156,8 @@ impl Problem<'_> {
         }
         let step = add(scale(e1, d[0]), scale(e2, d[1]));
         // det[p + t step, a, b] = det[p, a, b] + t det[step, a, b].
-        let m = ring.len();
         let mut t_safe = f64::INFINITY;
-        for j in 0..m {
-            let (a, b) = (points[ring[j] as usize], points[ring[(j + 1) % m] as usize]);
+        for &(_, a, b) in &star.faces {
             let rate = det3(step, a, b);
             if rate < 0.0 {
                 t_safe = t_safe.min(-det3(p, a, b) / rate);
@@ -187,7 +166,7 @@ impl Problem<'_> {
         let mut t = (SAFE_FRACTION * t_safe).min(1.0);
         for _ in 0..MAX_HALVINGS {
             if let Some(q) = normalize(add(p, scale(step, t))) {
-                let e = self.star_energy(k, i, q, ring, points);
+                let e = star.energy(self.energy, k, q);
                 if e <= e0 + 1e-4 * t * slope && positive_star(q, ring, points) {
                     return Some(q);
                 }
@@ -198,35 +177,74 @@ impl Problem<'_> {
     }
 
     /// One pass over `classes` (vertex sets of which no two share a face),
-    /// class after class, the vertices of a class in parallel. Returns how
-    /// many vertices moved; `stop()` is asked between classes.
+    /// class after class, the vertices of a class in parallel, skipping those
+    /// not `active` (all, when `None`). Returns the vertices that moved by
+    /// more than [`NOTICEABLE`] of their shortest edge; `stop()` is asked
+    /// between classes.
     pub fn sweep(
         &self,
         k: f64,
         classes: &[Vec<u32>],
         rings: &[Vec<u32>],
         points: &mut [[f64; 3]],
+        active: Option<&[bool]>,
         stop: &(dyn Fn() -> bool + Sync),
-    ) -> Result<usize, Stopped> {
-        let mut moved = 0;
+    ) -> Result<Vec<u32>, Stopped> {
+        let mut moved = Vec::new();
         for class in classes {
             if stop() {
                 return Err(Stopped);
             }
             let shared: &[[f64; 3]] = points;
-            let moves: Vec<Option<[f64; 3]>> = class
+            let moves: Vec<Option<([f64; 3], bool)>> = class
                 .par_iter()
                 .with_min_len(64)
-                .map(|&i| self.move_vertex(k, i, &rings[i as usize], shared))
+                .map(|&i| {
+                    if active.is_some_and(|a| !a[i as usize]) {
+                        return None;
+                    }
+                    let ring = &rings[i as usize];
+                    let q = self.move_vertex(k, i, ring, shared)?;
+                    let p = shared[i as usize];
+                    let shortest = ring
+                        .iter()
+                        .map(|&r| norm(sub(shared[r as usize], p)))
+                        .fold(f64::INFINITY, f64::min);
+                    Some((q, norm(sub(q, p)) > NOTICEABLE * shortest))
+                })
                 .collect();
             for (&i, q) in class.iter().zip(moves) {
-                if let Some(q) = q {
+                if let Some((q, noticeable)) = q {
                     points[i as usize] = q;
-                    moved += 1;
+                    if noticeable {
+                        moved.push(i);
+                    }
                 }
             }
         }
         Ok(moved)
+    }
+}
+
+/// The faces around one vertex: each face's surface reference and the
+/// positions of its other two corners.
+struct Star {
+    faces: Vec<(Reference, [f64; 3], [f64; 3])>,
+}
+
+impl Star {
+    fn energy(&self, energy: Energy, k: f64, p: [f64; 3]) -> f64 {
+        self.faces.iter().map(|(r, a, b)| face_energy(energy, r, k, p, *a, *b)).sum()
+    }
+
+    fn gradient(&self, energy: Energy, k: f64, p: [f64; 3]) -> (f64, [f64; 3]) {
+        let mut total = (0.0, [0.0; 3]);
+        for (r, a, b) in &self.faces {
+            let (e, g) = face_energy_gradient(energy, r, k, p, *a, *b);
+            total.0 += e;
+            total.1 = add(total.1, g);
+        }
+        total
     }
 }
 
@@ -310,19 +328,28 @@ impl Problem<'_> {
         stop: &(dyn Fn(usize) -> bool + Sync),
     ) -> Result<Optimised, Stopped> {
         let classes = colour_classes(rings);
+        let mut active = vec![true; rings.len()];
         let mut k = self.area_scale(rings, points);
         let mut energy = self.total_energy(k, rings, points);
         let mut result =
             Optimised { sweeps: 0, energy, last_change: f64::INFINITY, converged: false };
         while result.sweeps < max_sweeps {
             let sweeps = result.sweeps;
-            let moved = self.sweep(k, &classes, rings, points, &|| stop(sweeps))?;
+            let moved = self.sweep(k, &classes, rings, points, Some(&active), &|| stop(sweeps))?;
             result.sweeps += 1;
+            // Only what moved, and its neighbours, can still go down much.
+            active.iter_mut().for_each(|a| *a = false);
+            for &v in &moved {
+                active[v as usize] = true;
+                for &r in &rings[v as usize] {
+                    active[r as usize] = true;
+                }
+            }
             k = self.area_scale(rings, points);
             let next = self.total_energy(k, rings, points);
             result.last_change = (energy - next).abs() / energy.abs().max(f64::MIN_POSITIVE);
             energy = next;
-            if moved == 0 || result.last_change < tolerance {
+            if moved.is_empty() || result.last_change < tolerance {
                 result.converged = true;
                 break;
             }

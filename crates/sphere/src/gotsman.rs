@@ -171,6 +171,18 @@ pub fn gotsman(
     mesh: &GenusZeroMesh,
     params: &GotsmanParams,
 ) -> Result<SphereEmbedding, SphereError> {
+    gotsman_with_progress(mesh, params, &|_, _| true)
+}
+
+/// [`gotsman`], polling `progress(0, 0)` before every Newton step and every
+/// trust-region trial: `false` stops it with [`SphereError::Cancelled`]
+/// (Ctrl-C in Python). The sparse factorisation inside one step is not
+/// interrupted.
+pub fn gotsman_with_progress(
+    mesh: &GenusZeroMesh,
+    params: &GotsmanParams,
+    progress: &(dyn Fn(usize, usize) -> bool + Sync),
+) -> Result<SphereEmbedding, SphereError> {
     let start = Instant::now();
     if !(params.tol >= 0.0 && params.tol.is_finite()) {
         return Err(SphereError::InvalidParameter {
@@ -208,7 +220,7 @@ pub fn gotsman(
         x[4 * i + 3] = dot3(xyz(&x[4 * i..]), xyz(&u[3 * i..]));
     }
 
-    let run = newton(&w, x, params)?;
+    let run = newton(&w, x, params, progress)?;
     seconds.push(("solve", run.solve_seconds));
     seconds.push(("iterate", run.iterate_seconds));
     let embedding = SphereEmbedding { seconds, ..finish(run, &points, params) };
@@ -397,7 +409,17 @@ struct Run {
 }
 
 /// The dogleg trust-region Newton iteration (module documentation).
-fn newton(w: &CsrMatrix, mut x: Vec<f64>, params: &GotsmanParams) -> Result<Run, SphereError> {
+fn newton(
+    w: &CsrMatrix,
+    mut x: Vec<f64>,
+    params: &GotsmanParams,
+    progress: &(dyn Fn(usize, usize) -> bool + Sync),
+) -> Result<Run, SphereError> {
+    let cancelled = |iterations| SphereError::Cancelled {
+        stage: "gotsman",
+        done: iterations,
+        total: params.max_iter,
+    };
     let start = Instant::now();
     let mut solve_seconds = 0.0;
     let mut f = residual(w, &x);
@@ -414,6 +436,9 @@ fn newton(w: &CsrMatrix, mut x: Vec<f64>, params: &GotsmanParams) -> Result<Run,
         if iterations >= params.max_iter || stalled {
             break Status::MaxIterations;
         }
+        if !progress(0, 0) {
+            return Err(cancelled(iterations));
+        }
         iterations += 1;
         let jac = jacobian(w, &x)?;
         let t = Instant::now();
@@ -426,6 +451,9 @@ fn newton(w: &CsrMatrix, mut x: Vec<f64>, params: &GotsmanParams) -> Result<Run,
         solve_seconds += t.elapsed().as_secs_f64();
         let dog = Dogleg::new(&jac, &f, newton_step)?;
         loop {
+            if !progress(0, 0) {
+                return Err(cancelled(iterations));
+            }
             let Some((p, jp)) = dog.step(radius) else {
                 // The gradient J^T F vanished with F != 0: a critical point of
                 // |F|^2 that is not a root.

@@ -69,7 +69,7 @@ pub fn improve(
     let total = params.max_iter.max(1);
     let end = problem
         .optimise(&rings, &mut points, params.max_iter, params.tolerance, &|sweep| {
-            !progress(sweep, total)
+            !(progress(0, 0) && progress(sweep, total))
         })
         .map_err(|_| SphereError::Cancelled { stage: "improve", done: 0, total })?;
     progress(total, total);

@@ -34,6 +34,31 @@ pub enum PointMapError {
     LengthMismatch { faces: usize, weights: usize },
     #[error("this map is not a bijection, so h^-1 is not defined: {0}")]
     NotBijective(String),
+    /// The progress closure asked to stop (Ctrl-C in Python).
+    #[error("stopped after {done} of {total} points")]
+    Cancelled { done: usize, total: usize },
+}
+
+/// Points per batch between two polls of the progress closure: a few
+/// milliseconds of work, so that a request to stop is answered quickly, and
+/// large enough that the pause between batches does not show.
+const BATCH: usize = 1 << 16;
+
+/// Runs `f` on consecutive batches of `0..n` (each in parallel), polling
+/// `progress(0, 0)` before each one (see `crate::embed`'s progress contract).
+fn batched<T: Send>(
+    n: usize,
+    progress: &(dyn Fn(usize, usize) -> bool + Sync),
+    f: impl Fn(std::ops::Range<usize>) -> Result<Vec<T>, PointMapError>,
+) -> Result<Vec<T>, PointMapError> {
+    let mut out = Vec::with_capacity(n);
+    for start in (0..n).step_by(BATCH) {
+        if !progress(0, 0) {
+            return Err(PointMapError::Cancelled { done: start, total: n });
+        }
+        out.extend(f(start..n.min(start + BATCH))?);
+    }
+    Ok(out)
 }
 
 /// Tolerances on user input: weights may be this far below 0 or their sum
@@ -118,6 +143,17 @@ impl PointMap {
         face_ids: &[i64],
         bary: &[[f64; 3]],
     ) -> Result<Vec<[f64; 3]>, PointMapError> {
+        self.to_sphere_with(face_ids, bary, &|_, _| true)
+    }
+
+    /// [`PointMap::to_sphere`], stopping with [`PointMapError::Cancelled`]
+    /// when `progress(0, 0)`, polled between batches of points, says so.
+    pub fn to_sphere_with(
+        &self,
+        face_ids: &[i64],
+        bary: &[[f64; 3]],
+        progress: &(dyn Fn(usize, usize) -> bool + Sync),
+    ) -> Result<Vec<[f64; 3]>, PointMapError> {
         if face_ids.len() != bary.len() {
             return Err(PointMapError::LengthMismatch {
                 faces: face_ids.len(),
@@ -125,21 +161,25 @@ impl PointMap {
             });
         }
         let n_faces = self.mesh.n_faces();
-        face_ids
-            .par_iter()
-            .zip(bary.par_iter())
-            .enumerate()
-            .map(|(row, (&face, &w))| {
-                if face < 0 || face as usize >= n_faces {
-                    return Err(PointMapError::FaceOutOfRange { row, face, n_faces });
-                }
-                let w = checked_weights(row, w)?;
-                Ok(match &self.inner {
-                    Inner::ThetaPhi(m) => m.to_sphere(face as u32, w),
-                    Inner::Gc(m) => m.to_sphere(face as u32, w),
+        batched(face_ids.len(), progress, |rows| {
+            let start = rows.start;
+            face_ids[rows.clone()]
+                .par_iter()
+                .zip(bary[rows].par_iter())
+                .enumerate()
+                .map(|(k, (&face, &w))| {
+                    let row = start + k;
+                    if face < 0 || face as usize >= n_faces {
+                        return Err(PointMapError::FaceOutOfRange { row, face, n_faces });
+                    }
+                    let w = checked_weights(row, w)?;
+                    Ok(match &self.inner {
+                        Inner::ThetaPhi(m) => m.to_sphere(face as u32, w),
+                        Inner::Gc(m) => m.to_sphere(face as u32, w),
+                    })
                 })
-            })
-            .collect()
+                .collect()
+        })
     }
 
     /// h^-1: for every unit vector, the face, the barycentric weights on it
@@ -149,24 +189,39 @@ impl PointMap {
         &self,
         points: &[[f64; 3]],
     ) -> Result<(Vec<u32>, Vec<[f64; 3]>, Vec<[f64; 3]>), PointMapError> {
+        self.to_surface_with(points, &|_, _| true)
+    }
+
+    /// [`PointMap::to_surface`], stopping with [`PointMapError::Cancelled`]
+    /// when `progress(0, 0)`, polled between batches of points, says so.
+    #[allow(clippy::type_complexity)]
+    pub fn to_surface_with(
+        &self,
+        points: &[[f64; 3]],
+        progress: &(dyn Fn(usize, usize) -> bool + Sync),
+    ) -> Result<(Vec<u32>, Vec<[f64; 3]>, Vec<[f64; 3]>), PointMapError> {
         if let Some(why) = &self.not_bijective {
             return Err(PointMapError::NotBijective(why.clone()));
         }
-        let located: Vec<(u32, [f64; 3])> = points
-            .par_iter()
-            .enumerate()
-            .map(|(row, &p)| {
-                let norm = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
-                if (norm - 1.0).abs().is_nan() || (norm - 1.0).abs() > NORM_TOLERANCE {
-                    return Err(PointMapError::NotOnSphere { row, point: p, norm });
-                }
-                let p = p.map(|x| x / norm);
-                Ok(match &self.inner {
-                    Inner::ThetaPhi(m) => m.to_surface(p),
-                    Inner::Gc(m) => m.to_surface(p),
+        let located: Vec<(u32, [f64; 3])> = batched(points.len(), progress, |rows| {
+            let start = rows.start;
+            points[rows]
+                .par_iter()
+                .enumerate()
+                .map(|(k, &p)| {
+                    let row = start + k;
+                    let norm = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
+                    if (norm - 1.0).abs().is_nan() || (norm - 1.0).abs() > NORM_TOLERANCE {
+                        return Err(PointMapError::NotOnSphere { row, point: p, norm });
+                    }
+                    let p = p.map(|x| x / norm);
+                    Ok(match &self.inner {
+                        Inner::ThetaPhi(m) => m.to_surface(p),
+                        Inner::Gc(m) => m.to_surface(p),
+                    })
                 })
-            })
-            .collect::<Result<_, _>>()?;
+                .collect::<Result<_, _>>()
+        })?;
         let xyz = located
             .par_iter()
             .map(|&(f, w)| {

@@ -31,7 +31,7 @@ use spherify_mesh::predicates::{det3_sign, Sign};
 use crate::distortion_energy::Energy;
 use crate::embedding::{normalize, SphereEmbedding, Status};
 use crate::error::SphereError;
-use crate::flip_free::{colour_classes, Problem};
+use crate::flip_free::Problem;
 use crate::genus_zero::GenusZeroMesh;
 use ring_mesh::{Collapse, RingMesh};
 
@@ -99,9 +99,12 @@ pub fn progressive(
 
     let started = Instant::now();
     let mut rings = RingMesh::from_faces(n, mesh.faces());
-    let hierarchy =
-        hierarchy::decimate(&mut rings, positions, &mut |removed| progress(removed, total))
-            .ok_or_else(|| cancelled("hierarchy", n - rings.n_alive))?;
+    // progress(0, 0) only asks whether to go on; the other calls report.
+    let go_on = || progress(0, 0);
+    let hierarchy = hierarchy::decimate(&mut rings, positions, &mut |removed| {
+        go_on() && progress(removed, total)
+    })
+    .ok_or_else(|| cancelled("hierarchy", n - rings.n_alive))?;
     seconds.push(("hierarchy", started.elapsed().as_secs_f64()));
 
     let started = Instant::now();
@@ -134,27 +137,23 @@ pub fn progressive(
         }
         inserted += collapses.len();
         let done = n + inserted;
-        if !progress(done, total) {
+        if !(go_on() && progress(done, total)) {
             return Err(cancelled("insertion", done));
         }
         if rings.n_alive as f64 >= LEVEL_GROWTH * optimised_at as f64 && rings.n_alive < n {
             optimised_at = rings.n_alive;
-            let classes = colour_classes(&rings.rings);
             let level = problem.at_level(&rings.rings);
             let sweeps = (LEVEL_MOVES / rings.n_alive).clamp(LEVEL_SWEEPS, MAX_LEVEL_SWEEPS);
-            for _ in 0..sweeps {
-                let k = level.area_scale(&rings.rings, &points);
-                level
-                    .sweep(k, &classes, &rings.rings, &mut points, &|| !progress(done, total))
-                    .map_err(|_| cancelled("insertion", done))?;
-            }
+            level
+                .optimise(&rings.rings, &mut points, sweeps, params.tolerance, &|_| !go_on())
+                .map_err(|_| cancelled("insertion", done))?;
         }
     }
     seconds.push(("insertion", started.elapsed().as_secs_f64()));
 
     let started = Instant::now();
     let max_iter = params.max_iter.max(1);
-    let stop = |sweep: usize| !progress(2 * n + n * sweep / max_iter, total);
+    let stop = |sweep: usize| !(go_on() && progress(2 * n + n * sweep / max_iter, total));
     let end = problem
         .optimise(&rings.rings, &mut points, params.max_iter, params.tolerance, &stop)
         .map_err(|_| cancelled("optimisation", 2 * n))?;

@@ -87,6 +87,16 @@ pub fn relaxation(
     mesh: &GenusZeroMesh,
     params: &RelaxationParams,
 ) -> Result<SphereEmbedding, SphereError> {
+    relaxation_with_progress(mesh, params, &|_, _| true)
+}
+
+/// [`relaxation`], polling `progress(0, 0)` once per iteration: `false` stops
+/// it with [`SphereError::Cancelled`] (Ctrl-C in Python).
+pub fn relaxation_with_progress(
+    mesh: &GenusZeroMesh,
+    params: &RelaxationParams,
+    progress: &(dyn Fn(usize, usize) -> bool + Sync),
+) -> Result<SphereEmbedding, SphereError> {
     let start = Instant::now();
     if let Weights::Chord { rho } = params.weights {
         if !rho.is_finite() {
@@ -111,6 +121,7 @@ pub fn relaxation(
         cap,
         setup,
         "relaxation",
+        progress,
         |old: &[[f64; 3]], i: usize| {
             let mut u = [0.0; 3];
             let (cols, vals) = w.row(i);

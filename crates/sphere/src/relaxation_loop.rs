@@ -135,13 +135,17 @@ fn collapsed(cap: CapLimit, cos: f64) -> bool {
 /// vertex `i` from the previous iterate (a Jacobi step). Tests for collapse
 /// after every iteration (O(N), fused with the sweep), for validity every
 /// `check_every` iterations, when the moves fall below `tol`, and at the end.
+/// Polls `progress(0, 0)` before every iteration (one sweep, milliseconds even
+/// at 10^6 vertices) and stops with [`SphereError::Cancelled`] on `false`.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn iterate<F>(
     faces: &[[u32; 3]],
     mut points: Vec<[f64; 3]>,
     controls: &Controls,
     cap: CapLimit,
     setup_seconds: f64,
-    method: &str,
+    method: &'static str,
+    progress: &(dyn Fn(usize, usize) -> bool + Sync),
     update: F,
 ) -> Result<SphereEmbedding, SphereError>
 where
@@ -153,6 +157,13 @@ where
     let mut r = 0usize;
     let mut settled_checked = false;
     let (status, message) = loop {
+        if !progress(0, 0) {
+            return Err(SphereError::Cancelled {
+                stage: method,
+                done: r,
+                total: controls.max_iter,
+            });
+        }
         if let Some((cos, resultant)) = enclosing_cap(&points, sum) {
             if collapsed(cap, cos) {
                 let radius = cos.clamp(-1.0, 1.0).acos().to_degrees();

@@ -199,7 +199,9 @@ pub fn theta_phi(
 /// [`theta_phi`] reporting the progress of `PoleChoice::Graph`, the one slow
 /// stage (O(N^2 log N)), as `progress(done, total)` sources, from worker
 /// threads. Returning `false` stops the search: the call then fails with
-/// [`SphereError::Cancelled`]. Other pole choices never call it.
+/// [`SphereError::Cancelled`]. Every stage also polls `progress(0, 0)`
+/// (between stages and refinement steps; one factorisation is not
+/// interrupted).
 pub fn theta_phi_with_progress(
     mesh: &GenusZeroMesh,
     params: &ThetaPhiParams,
@@ -248,6 +250,7 @@ pub fn theta_phi_with_progress(
     }
     .ok_or_else(|| topology(mesh, TopologyProblem::NotSphere))?;
     solver.watch.lap("poles");
+    go_on(progress, "poles")?;
 
     let path = match symmetry_path {
         Some(path) => finish_path(&graph, path, lengths),
@@ -269,7 +272,8 @@ pub fn theta_phi_with_progress(
 
     let mut fixed = rectangle_boundary(&cut.boundary, k, n_vertices);
     solver.watch.lap("system");
-    let mut uv = solver.solve(cut_he, &cut.mesh, &fixed)?;
+    go_on(progress, "cut")?;
+    let mut uv = solver.solve(cut_he, &cut.mesh, &fixed, progress)?;
 
     // Pole fans (6.5.1): re-embed with the fan pinned (6.38) where phi is not
     // strictly increasing. Eq. 6.38 needs the fan's inner vertices to be free;
@@ -295,7 +299,7 @@ pub fn theta_phi_with_progress(
         if !pinned {
             break;
         }
-        uv = solver.solve(HalfEdgeMesh::new(&cut.mesh)?, &cut.mesh, &fixed)?;
+        uv = solver.solve(HalfEdgeMesh::new(&cut.mesh)?, &cut.mesh, &fixed, progress)?;
     }
     let fans_monotone =
         [strictly_increasing_phi(&uv, &north_fan), strictly_increasing_phi(&uv, &south_fan)];
@@ -312,6 +316,7 @@ pub fn theta_phi_with_progress(
         .fold(f64::INFINITY, f64::min)
         / (2.0 * PI * PI);
     solver.watch.lap("check");
+    go_on(progress, "check")?;
 
     // The fold (6.35); originals keep their labels in the cut mesh.
     let mut points: Vec<[f64; 3]> = uv[..n_vertices].iter().copied().map(fold).collect();
@@ -380,6 +385,19 @@ impl Stopwatch {
     }
 }
 
+/// Polls `progress(0, 0)` between stages (see [`crate::embed::embed`]):
+/// `false` stops the method with [`SphereError::Cancelled`] at `stage`.
+fn go_on(
+    progress: &(dyn Fn(usize, usize) -> bool + Sync),
+    stage: &'static str,
+) -> Result<(), SphereError> {
+    if progress(0, 0) {
+        Ok(())
+    } else {
+        Err(SphereError::Cancelled { stage, done: 0, total: 0 })
+    }
+}
+
 /// What both rectangle solves (the first, and the one with pinned pole fans)
 /// share: the weights, the refinement budget, and the running counts.
 struct RectangleSolver {
@@ -403,6 +421,7 @@ impl RectangleSolver {
         he: HalfEdgeMesh,
         cut: &Mesh,
         fixed: &[Option<[f64; 2]>],
+        progress: &(dyn Fn(usize, usize) -> bool + Sync),
     ) -> Result<Vec<[f64; 2]>, SphereError> {
         let system = {
             let weights = half_edge_weights(cut.positions(), &he, self.weights)
@@ -415,8 +434,10 @@ impl RectangleSolver {
             return Ok(system.fixed_positions(fixed));
         }
         self.watch.lap("system");
+        go_on(progress, "rectangle system")?;
         let factor = Factorization::new(&system.matrix)?;
         self.watch.lap("factor");
+        go_on(progress, "factorisation")?;
         let mut uv = system.fixed_positions(fixed);
         let mut x = factor.solve(&system.matrix, &system.rhs)?;
         system.scatter(&mut uv, &x);
@@ -430,6 +451,7 @@ impl RectangleSolver {
                     break;
                 }
             }
+            go_on(progress, "refinement")?;
             let change = refine_step(&system.matrix, &factor, &system.rhs, &mut x)?;
             self.refinements += 1;
             system.scatter(&mut uv, &x);

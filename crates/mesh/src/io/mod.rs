@@ -96,10 +96,65 @@ pub fn format_from_path(path: &Path) -> Result<FileFormat, MeshError> {
 
 /// Reads a mesh file; the format comes from the extension. A missing or
 /// unreadable file gives [`MeshError::Io`], a malformed one [`MeshError::Format`].
+///
+/// Only regular files are read (symbolic links are followed): a FIFO would
+/// block the call until some writer appears, and a device such as
+/// `/dev/zero` never ends. Those give a [`MeshError::Format`] saying so. What
+/// is read is bounded by the size the file had when it was opened.
 pub fn read(path: &Path) -> Result<LoadedMesh, MeshError> {
     let format = format_from_path(path)?;
-    let bytes = std::fs::read(path).map_err(|e| MeshError::io(path, e))?;
+    let bytes = read_regular_file(path)?;
     read_bytes(&bytes, format, &path.display().to_string())
+}
+
+/// The bytes of the regular file at `path` (see [`read`]).
+fn read_regular_file(path: &Path) -> Result<Vec<u8>, MeshError> {
+    use std::io::Read;
+    let io = |e| MeshError::io(path, e);
+    let refuse = |kind: &str| {
+        file_error(
+            &path.display().to_string(),
+            format!("this is {kind}, not a regular file: only regular files are read"),
+        )
+    };
+    let kind = |meta: &std::fs::Metadata| -> Option<&'static str> {
+        let t = meta.file_type();
+        if t.is_file() {
+            return None;
+        }
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::FileTypeExt;
+            if t.is_fifo() {
+                return Some("a FIFO (named pipe)");
+            }
+            if t.is_char_device() || t.is_block_device() {
+                return Some("a device");
+            }
+            if t.is_socket() {
+                return Some("a socket");
+            }
+        }
+        Some("not a regular file")
+    };
+    // Checked before opening: opening a FIFO for reading blocks.
+    let meta = std::fs::metadata(path).map_err(io)?;
+    if meta.is_dir() {
+        return Err(io(std::io::Error::from(std::io::ErrorKind::IsADirectory)));
+    }
+    if let Some(what) = kind(&meta) {
+        return Err(refuse(what));
+    }
+    let file = std::fs::File::open(path).map_err(io)?;
+    // Checked again on the open file, in case the path changed in between.
+    let meta = file.metadata().map_err(io)?;
+    if let Some(what) = kind(&meta) {
+        return Err(refuse(what));
+    }
+    let size = meta.len();
+    let mut bytes = Vec::with_capacity(usize::try_from(size).unwrap_or(0));
+    file.take(size).read_to_end(&mut bytes).map_err(io)?;
+    Ok(bytes)
 }
 
 /// Parses the contents of a mesh file held in memory. `name` is only used in
@@ -128,7 +183,16 @@ pub fn write(
 ) -> Result<(), MeshError> {
     let format = format_from_path(path)?;
     check_attributes(mesh, attributes, format, &path.display().to_string())?;
+    check_representable(mesh, format, &path.display().to_string())?;
     atomic::write_file(path, |out| encode(out, mesh, attributes, format, options))
+}
+
+/// Writes `bytes` to `path` with the same atomic writer as [`write()`]
+/// (temporary beside it, sync, rename; links followed, mode kept, stale
+/// temporaries of dead writers removed): for files other than meshes that
+/// must not be left half-written, such as the `.npz` beside a mapped mesh.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), MeshError> {
+    atomic::write_bytes(path, bytes)
 }
 
 /// The bytes [`write()`] would put in a file of the given format. `name` is only
@@ -141,6 +205,7 @@ pub fn write_bytes(
     name: &str,
 ) -> Result<Vec<u8>, MeshError> {
     check_attributes(mesh, attributes, format, name)?;
+    check_representable(mesh, format, name)?;
     let mut out = Vec::new();
     encode(&mut out, mesh, attributes, format, options)
         .map_err(|source| MeshError::Io { path: name.to_string(), source })?;
@@ -160,6 +225,30 @@ fn encode<W: Write>(
         FileFormat::Ply => ply::write(out, mesh, attributes, options.ply_encoding),
         FileFormat::Stl => stl::write(out, mesh, options.stl_binary),
     }
+}
+
+/// Refuses coordinates that STL's `f32` would turn into infinity or zero: the
+/// file could not be read back (infinity), or would silently merge vertices
+/// (zero). Values that merely round are fine: STL is single precision.
+fn check_representable(mesh: &Mesh, format: FileFormat, name: &str) -> Result<(), MeshError> {
+    if format != FileFormat::Stl {
+        return Ok(());
+    }
+    let lost = |x: f64| {
+        let y = x as f32;
+        y.is_infinite() || (y == 0.0 && x != 0.0)
+    };
+    for (vertex, p) in mesh.positions().iter().enumerate() {
+        if let Some(&value) = p.iter().find(|&&x| lost(x)) {
+            return Err(MeshError::NotRepresentable {
+                path: name.to_string(),
+                vertex,
+                value,
+                format: ".stl",
+            });
+        }
+    }
+    Ok(())
 }
 
 /// Refuses attributes the format cannot store (rather than dropping them
@@ -359,6 +448,58 @@ pub(crate) mod tests {
     }
 
     #[test]
+    fn stl_refuses_coordinates_its_floats_turn_into_infinity_or_zero() {
+        let mesh = awkward_tetra(); // 1e300 and 5e-324
+        for binary in [true, false] {
+            let options = WriteOptions { stl_binary: binary, ..WriteOptions::default() };
+            let err =
+                write_bytes(&mesh, &VertexAttributes::default(), FileFormat::Stl, &options, "x")
+                    .unwrap_err();
+            assert!(
+                matches!(err, MeshError::NotRepresentable { vertex: 1, value, .. } if value == 1e300),
+                "{err}"
+            );
+        }
+        let tiny = Mesh::new(
+            vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 1e-320], [0.0, 0.0, 1.0]],
+            awkward_tetra().faces().to_vec(),
+        )
+        .unwrap();
+        let err = write_bytes(
+            &tiny,
+            &VertexAttributes::default(),
+            FileFormat::Stl,
+            &WriteOptions::default(),
+            "x",
+        )
+        .unwrap_err();
+        assert!(matches!(err, MeshError::NotRepresentable { vertex: 2, .. }), "{err}");
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn devices_and_directories_are_not_read() {
+        let dir = std::env::temp_dir().join(format!("spherify-io-dev-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let link = dir.join("zero.obj");
+        let _ = std::fs::remove_file(&link);
+        std::os::unix::fs::symlink("/dev/zero", &link).unwrap();
+        match read(&link) {
+            Err(MeshError::Format(e)) => assert!(e.message.contains("a device"), "{}", e.message),
+            other => panic!("{other:?}"),
+        }
+        let folder = dir.join("folder.obj");
+        std::fs::create_dir_all(&folder).unwrap();
+        match read(&folder) {
+            Err(MeshError::Io { source, .. }) => {
+                assert_eq!(source.kind(), std::io::ErrorKind::IsADirectory)
+            }
+            other => panic!("{other:?}"),
+        }
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
     fn write_and_read_through_the_file_system() {
         let dir = std::env::temp_dir().join(format!("spherify-io-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
@@ -412,7 +553,20 @@ pub(crate) mod tests {
             (FileFormat::Stl, opts(PlyEncoding::Ascii, true), &VertexAttributes::default()),
             (FileFormat::Stl, opts(PlyEncoding::Ascii, false), &VertexAttributes::default()),
         ] {
-            seeds.push((format, write_bytes(&mesh, attrs, format, &options, "seed").unwrap()));
+            // STL cannot hold 1e300 or 5e-324 (refused since issue 13): a
+            // tetrahedron with the same faces and single-precision corners.
+            let small;
+            let seed_mesh = if format == FileFormat::Stl {
+                let p = mesh
+                    .positions()
+                    .iter()
+                    .map(|q| q.map(|x| (x as f32).clamp(-1e30, 1e30) as f64));
+                small = Mesh::new(p.collect(), mesh.faces().to_vec()).unwrap();
+                &small
+            } else {
+                &mesh
+            };
+            seeds.push((format, write_bytes(seed_mesh, attrs, format, &options, "seed").unwrap()));
         }
         let mut state = 0x2545_f491_4f6c_dd1du64;
         let mut random = move |n: usize| {

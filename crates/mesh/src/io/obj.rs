@@ -26,6 +26,9 @@ const KNOWN: &[&[u8]] = &[
 
 /// Parses an OBJ file held in memory.
 pub(crate) fn read(bytes: &[u8], name: &str) -> Result<LoadedMesh, MeshError> {
+    // A UTF-8 byte order mark (Windows editors write one) is not part of the
+    // first statement: left in, it hid the first vertex (issue 13, item 17).
+    let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
     let mut reader = Reader::new(name, bytes.len());
     let mut lines = Lines::new(bytes);
     let mut joined = Vec::new();
@@ -514,5 +517,15 @@ mod tests {
             assert_eq!(got, want);
             assert!(loaded.notes.is_empty(), "{:?}", loaded.notes);
         }
+    }
+
+    #[test]
+    fn a_utf8_byte_order_mark_is_skipped() {
+        let plain = b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n".to_vec();
+        let mut marked = b"\xEF\xBB\xBF".to_vec();
+        marked.extend_from_slice(&plain);
+        let (a, b) = (read(&plain, "a.obj").unwrap(), read(&marked, "b.obj").unwrap());
+        assert_eq!(b.mesh.positions(), a.mesh.positions());
+        assert_eq!(b.mesh.faces(), a.mesh.faces());
     }
 }
