@@ -157,3 +157,25 @@ def test_an_improved_map_survives_pickle_and_save(tmp_path: Path) -> None:
     better.save(tmp_path / "x.spheremap.npz")
     again = sp.load_map(tmp_path / "x.spheremap.npz")
     assert again.method == "improve" and again.valid
+
+
+def test_the_bench_script_runs_small(tmp_path: Path) -> None:
+    import subprocess
+    import sys
+    script = Path(__file__).resolve().parents[1] / "benches" / "progressive.py"
+    out = tmp_path / "progressive.md"
+    done = subprocess.run([sys.executable, str(script), "--small", "--out", str(out)],
+                          capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stdout + done.stderr
+    text = out.read_text()
+    assert "| tentacles |" in text and "| valid |" in text and "CRASH" not in text
+
+
+def test_the_cli_maps_with_the_progressive_method(tmp_path: Path) -> None:
+    from spherify import cli
+    out = tmp_path / "t.ply"
+    code = cli.main(["map", "--dataset", "tentacles", "--n-vertices", "2000", "--method",
+                     "progressive", "--energy", "stretch", "-o", str(out)])
+    assert code == 0
+    back = sp.load(out)
+    assert back.n_vertices == sp.datasets.make("tentacles", 2000).n_vertices

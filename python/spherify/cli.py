@@ -196,6 +196,10 @@ def _cmd_map(args: argparse.Namespace) -> int:
             options["symmetry_eps"] = args.symmetry_eps
         if args.poles == "graph" and (args.progress or sys.stderr.isatty()):
             options["progress"] = True
+    elif args.method == "progressive":
+        options = {"energy": args.energy}
+        if args.progress or sys.stderr.isatty():
+            options["progress"] = True
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", SpherifyWarning)  # reported below instead
         try:
@@ -296,10 +300,12 @@ def main(argv: Optional[List[str]] = None) -> int:
                            help="--poles symmetry: band half-width around the plane in mesh "
                                 "units (default: automatic)")
             p.add_argument("--progress", action="store_true",
-                           help="--poles graph: show a progress bar even when stderr is not a "
-                                "terminal")
+                           help="--poles graph and --method progressive: show a progress bar "
+                                "even when stderr is not a terminal")
             p.add_argument("--weights", default="uniform",
                            choices=names["theta_phi_weights"])
+            p.add_argument("--energy", default="isometric", choices=names["energies"],
+                           help="--method progressive: the distortion energy it lowers")
         p.set_defaults(func=func)
     p = sub.add_parser("batch", help="map many meshes, in parallel and resumably")
     p.add_argument("inputs", nargs="+", help="mesh files, folders, or .txt files of paths")

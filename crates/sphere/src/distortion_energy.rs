@@ -91,6 +91,33 @@ impl Energy {
     }
 }
 
+impl Energy {
+    /// The second partial derivatives (f_aa, f_ad, f_dd) of [`Energy::density`].
+    /// Every density is linear in a, so f_aa = 0.
+    pub fn curvature(self, a: f64, d: f64) -> (f64, f64, f64) {
+        if d <= 0.0 || !d.is_finite() || !a.is_finite() {
+            return (0.0, 0.0, 0.0);
+        }
+        let (d2, d3) = (d * d, d * d * d);
+        match self {
+            Energy::Isometric => (0.0, -2.0 / d3, 6.0 * a / (d3 * d)),
+            Energy::Conformal => {
+                let mut f_dd = 2.0 * a / d3;
+                if d < CONFORMAL_AREA_FLOOR {
+                    let floor = CONFORMAL_AREA_FLOOR;
+                    f_dd += 2.0 * floor * floor / (d3 * d) + 4.0 * floor * (floor / d - 1.0) / d3;
+                }
+                (0.0, -1.0 / d2, f_dd)
+            }
+            Energy::Authalic => {
+                let w = AUTHALIC_ANGLE_WEIGHT;
+                (0.0, -w / d2, 2.0 / d3 + 2.0 * w * a / d3)
+            }
+            Energy::Stretch => (0.0, -1.0 / d3, 3.0 * a / (d3 * d)),
+        }
+    }
+}
+
 /// A surface triangle seen from one corner: the Gram matrix of its two edges
 /// from that corner, `[g00, g01, g11]`, and its area.
 #[derive(Debug, Clone, Copy)]
@@ -166,6 +193,50 @@ pub fn face_energy_gradient(
     (area_s * f, grad)
 }
 
+/// [`face_energy_gradient`] and the 3x3 Hessian with respect to `p0`: a is
+/// quadratic in p0 (its Hessian is a multiple of the identity) and d linear,
+/// so the Hessian is exact and costs little more than the gradient.
+pub fn face_energy_hessian(
+    energy: Energy,
+    r: &Reference,
+    k: f64,
+    p0: [f64; 3],
+    p1: [f64; 3],
+    p2: [f64; 3],
+) -> (f64, [f64; 3], [[f64; 3]; 3]) {
+    let (q1, q2) = (sub(p1, p0), sub(p2, p0));
+    let [g00, g01, g11] = r.gram;
+    let kdet = k * (g00 * g11 - g01 * g01);
+    let a = (dot(q1, q1) * g11 - 2.0 * dot(q1, q2) * g01 + dot(q2, q2) * g00) / kdet;
+    let area_s = k * r.area;
+    let d = 0.5 * det3(p0, p1, p2) / area_s;
+    let (f, f_a, f_d) = energy.density(a, d);
+    if !f.is_finite() {
+        return (f64::INFINITY, [0.0; 3], [[0.0; 3]; 3]);
+    }
+    let (_, f_ad, f_dd) = energy.curvature(a, d);
+    let d_area = cross(p1, p2);
+    let mut da = [0.0; 3];
+    let mut dd = [0.0; 3];
+    for i in 0..3 {
+        da[i] = (-2.0 * q1[i] * g11 + 2.0 * (q1[i] + q2[i]) * g01 - 2.0 * q2[i] * g00) / kdet;
+        dd[i] = 0.5 * d_area[i] / area_s;
+    }
+    let grad = [0, 1, 2].map(|i| area_s * (f_a * da[i] + f_d * dd[i]));
+    let a_curv = 2.0 * (g11 + g00 - 2.0 * g01) / kdet;
+    let mut hess = [[0.0; 3]; 3];
+    for i in 0..3 {
+        for j in 0..3 {
+            let mut h = f_ad * (da[i] * dd[j] + dd[i] * da[j]) + f_dd * dd[i] * dd[j];
+            if i == j {
+                h += f_a * a_curv;
+            }
+            hess[i][j] = area_s * h;
+        }
+    }
+    (area_s * f, grad, hess)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -211,6 +282,38 @@ mod tests {
                     "{e:?} {i}: {numeric} vs {}",
                     g[i]
                 );
+            }
+        }
+    }
+
+    #[test]
+    fn the_hessian_is_the_derivative_of_the_gradient() {
+        let r = Reference::new([0.0, 0.0, 0.0], [1.0, 0.1, 0.0], [0.3, 0.8, 0.2], 1e-12);
+        let (p0, p1, p2) = ([0.9, 0.1, 0.2], [0.1, 0.95, 0.1], [0.15, 0.2, 0.95]);
+        // Also inside the conformal barrier (d below the floor).
+        let (q1, q2) = ([0.91, 0.1, 0.2], [0.9, 0.11, 0.2]);
+        for e in ALL {
+            for (a, b) in [(p1, p2), (q1, q2)] {
+                let (f, g, h) = face_energy_hessian(e, &r, 0.7, p0, a, b);
+                let (f2, g2) = face_energy_gradient(e, &r, 0.7, p0, a, b);
+                assert_eq!((f, g), (f2, g2));
+                for j in 0..3 {
+                    let step = 1e-7;
+                    let (mut plus, mut minus) = (p0, p0);
+                    plus[j] += step;
+                    minus[j] -= step;
+                    let gp = face_energy_gradient(e, &r, 0.7, plus, a, b).1;
+                    let gm = face_energy_gradient(e, &r, 0.7, minus, a, b).1;
+                    for i in 0..3 {
+                        let numeric = (gp[i] - gm[i]) / (2.0 * step);
+                        let scale = 1.0 + h[i][j].abs();
+                        assert!(
+                            (numeric - h[i][j]).abs() < 1e-4 * scale,
+                            "{e:?} {i}{j}: {numeric} vs {}",
+                            h[i][j]
+                        );
+                    }
+                }
             }
         }
     }

@@ -16,7 +16,7 @@ use rayon::prelude::*;
 use spherify_mesh::predicates::{det3_sign, Sign};
 use spherify_mesh::vec3::{add, cross, det3, dot, norm, scale, sub};
 
-use crate::distortion_energy::{face_energy, face_energy_gradient, Energy, Reference};
+use crate::distortion_energy::{face_energy, face_energy_hessian, Energy, Reference};
 use crate::embedding::normalize;
 
 /// The energy to lower and the surface it measures against.
@@ -117,7 +117,7 @@ impl Problem<'_> {
     ) -> Option<[f64; 3]> {
         let p = points[i as usize];
         let star = self.star(i, ring, points);
-        let (e0, g) = star.gradient(self.energy, k, p);
+        let (e0, g, hess) = star.hessian(self.energy, k, p);
         if !e0.is_finite() {
             return None;
         }
@@ -129,24 +129,20 @@ impl Problem<'_> {
         }
         let reach =
             ring.iter().map(|&r| norm(sub(points[r as usize], p))).fold(f64::INFINITY, f64::min);
-        // Newton direction from a difference Hessian of the exact gradient.
-        let h = 1e-6 * reach;
-        let column = |e: [f64; 3]| -> Option<[f64; 2]> {
-            let q = normalize(add(p, scale(e, h)))?;
-            let (eq, gq) = star.gradient(self.energy, k, q);
-            eq.is_finite().then(|| [(dot(gq, e1) - gt[0]) / h, (dot(gq, e2) - gt[1]) / h])
-        };
+        // Newton direction in the tangent plane: p(s) = (p + s) / |p + s|
+        // = p + s - |s|^2 p / 2 + ..., so the Hessian in s is E^T H E - (g . p) I.
+        let he =
+            |u: [f64; 3], v: [f64; 3]| dot(u, [dot(hess[0], v), dot(hess[1], v), dot(hess[2], v)]);
+        let radial = dot(g, p);
+        let (h00, h11, h01) = (he(e1, e1) - radial, he(e2, e2) - radial, he(e1, e2));
         let mut dir = None;
-        if let (Some(c1), Some(c2)) = (column(e1), column(e2)) {
-            let (h00, h11, h01) = (c1[0], c2[1], 0.5 * (c1[1] + c2[0]));
-            let det = h00 * h11 - h01 * h01;
-            if det > 0.0 && h00 > 0.0 {
-                let d = [-(h11 * gt[0] - h01 * gt[1]) / det, -(h00 * gt[1] - h01 * gt[0]) / det];
-                let len = d[0].hypot(d[1]);
-                if len.is_finite() && len > 0.0 {
-                    let cap = (0.5 * reach / len).min(1.0);
-                    dir = Some([d[0] * cap, d[1] * cap]);
-                }
+        let det = h00 * h11 - h01 * h01;
+        if det > 0.0 && h00 > 0.0 {
+            let d = [-(h11 * gt[0] - h01 * gt[1]) / det, -(h00 * gt[1] - h01 * gt[0]) / det];
+            let len = d[0].hypot(d[1]);
+            if len.is_finite() && len > 0.0 {
+                let cap = (0.5 * reach / len).min(1.0);
+                dir = Some([d[0] * cap, d[1] * cap]);
             }
         }
         let d = dir.unwrap_or([-gt[0] * 0.25 * reach / gnorm, -gt[1] * 0.25 * reach / gnorm]);
@@ -237,12 +233,15 @@ impl Star {
         self.faces.iter().map(|(r, a, b)| face_energy(energy, r, k, p, *a, *b)).sum()
     }
 
-    fn gradient(&self, energy: Energy, k: f64, p: [f64; 3]) -> (f64, [f64; 3]) {
-        let mut total = (0.0, [0.0; 3]);
+    fn hessian(&self, energy: Energy, k: f64, p: [f64; 3]) -> (f64, [f64; 3], [[f64; 3]; 3]) {
+        let mut total = (0.0, [0.0; 3], [[0.0; 3]; 3]);
         for (r, a, b) in &self.faces {
-            let (e, g) = face_energy_gradient(energy, r, k, p, *a, *b);
+            let (e, g, h) = face_energy_hessian(energy, r, k, p, *a, *b);
             total.0 += e;
             total.1 = add(total.1, g);
+            for i in 0..3 {
+                total.2[i] = add(total.2[i], h[i]);
+            }
         }
         total
     }
