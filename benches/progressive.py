@@ -32,7 +32,7 @@ from pathlib import Path
 from typing import Any, Dict, List
 
 SHARED = Path(__file__).resolve().parents[2] / "shared" / "meshes"
-SHAPES = ["tentacles", "urchin", "helix_tube", "bumpy_blob", "ellipsoid"]
+SHAPES = ["tentacles", "urchin", "helix_tube", "bumpy_blob", "ellipsoid", "icosphere"]
 
 
 def measure(spec: Dict[str, Any]) -> Dict[str, Any]:
@@ -139,7 +139,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--out", default=str(Path(__file__).resolve().parents[1] / "docs" / "progressive.md"))
     ap.add_argument("--sizes", default="2000,20000,200000")
-    ap.add_argument("--large", default="1000000", help="sizes for tentacles and bumpy_blob only")
+    ap.add_argument("--large", default="1000000", help="sizes of the last table (every shape)")
     ap.add_argument("--energies", default="isometric,conformal,authalic,stretch")
     ap.add_argument("--small", action="store_true")
     args = ap.parse_args()
@@ -205,8 +205,8 @@ def main() -> None:
         large = [int(x) for x in args.large.split(",") if x]
         if large:
             table("Large shapes, isometric",
-                  [{"shape": s, "n": n, "energy": "isometric"} for n in large
-                   for s in ("bumpy_blob", "tentacles")], lambda s: s["shape"])
+                  [{"shape": s, "n": n, "energy": "isometric"} for n in large for s in SHAPES],
+                  lambda s: s["shape"])
     if lapy_rows:
         lines.extend(["## Conformal energy against LaPy", "",
                       "Mean angle distortion (degrees) of the progressive conformal map, and of "
