@@ -102,18 +102,20 @@ def embed(mesh: MeshLike, method: str = "theta_phi", *, progress: Any = None,
 
     energy : str
         ``"isometric"`` (default; symmetric Dirichlet), ``"conformal"``
-        (MIPS with a barrier below an area ratio of 0.05: an exactly
+        (MIPS with a barrier below an area ratio of 1e-3: an exactly
         conformal map of a limbed shape cannot be stored in doubles),
         ``"authalic"`` (area plus a small angle term) or ``"stretch"``
         (Sander's L2 stretch, as Praun and Hoppe).
     max_iter : int
-        Sweeps of the final optimisation (default 10). Most of the work is
-        done level by level on the way up; measured on 20k-vertex shapes, 30
-        final sweeps instead of 10 change the mean angle distortion by less
-        than 0.5 degrees and cost twice the time.
+        Sweeps of the final optimisation (default 10; 50 for ``"stretch"``, 100
+        for ``"conformal"``).
+        Most of the work is done level by level on the way up; measured on
+        20k-vertex shapes, 30 final sweeps instead of 10 change the mean angle
+        distortion by less than 0.5 degrees and cost twice the time.
     tol : float
         Stop when a sweep lowers the energy by less than this fraction
-        (default 1e-3).
+        (default 1e-3; 1e-5 for ``"stretch"`` and ``"conformal"``, which keep
+        improving in small steps).
 
     Raises
     ------

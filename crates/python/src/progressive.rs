@@ -21,12 +21,14 @@ pub fn energy(options: &Options<'_>, default: Energy) -> PyResult<Energy> {
     })
 }
 
-/// `energy` ("isometric"), `max_iter` (final sweeps, 10), `tol` (1e-3: stop
-/// when a sweep lowers the energy by less than this fraction).
+/// `energy` ("isometric"), `max_iter` (final sweeps; 10, 50 for "stretch",
+/// 100 for "conformal"), `tol` (stop when a sweep lowers the energy by less
+/// than this fraction; 1e-3, or 1e-5 for "stretch" and "conformal").
 pub fn method(options: &Options<'_>) -> PyResult<Method> {
-    let defaults = ProgressiveParams::default();
+    let energy = energy(options, ProgressiveParams::default().energy)?;
+    let defaults = ProgressiveParams::for_energy(energy);
     Ok(Method::Progressive(ProgressiveParams {
-        energy: energy(options, defaults.energy)?,
+        energy,
         max_iter: options.count("max_iter", defaults.max_iter, 0)?,
         tolerance: options.number("tol", defaults.tolerance)?,
     }))

