@@ -127,8 +127,12 @@ pub fn progressive(
     let started = Instant::now();
     let mut points = vec![[0.0; 3]; n];
     place_tetrahedron(&rings, &mut points);
-    let problem =
-        Problem { energy: params.energy, surface: positions, area_floor: area_floor(mesh) };
+    let problem = Problem {
+        energy: params.energy,
+        surface: positions,
+        area_floor: area_floor(mesh),
+        cache: None,
+    };
     let mut optimised_at = 4usize;
     let mut inserted = 0usize;
     for round in hierarchy.rounds.iter().rev() {
