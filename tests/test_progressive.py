@@ -179,3 +179,18 @@ def test_the_cli_maps_with_the_progressive_method(tmp_path: Path) -> None:
     assert code == 0
     back = sp.load(out)
     assert back.n_vertices == sp.datasets.make("tentacles", 2000).n_vertices
+
+
+def test_a_certified_map_with_a_sliver_warns_about_its_margin() -> None:
+    # Issue 13, item 8: a valid map whose thinnest triangle is 1e-14 of the
+    # mean says that distinct points may map to the same doubles.
+    mesh = sp.datasets.icosphere(2)
+    points = mesh.vertices / np.linalg.norm(mesh.vertices, axis=1, keepdims=True)
+    quiet = sp.SphereMap.from_points(mesh, points)
+    assert quiet.valid and quiet.margin > 0.1
+    a, b = mesh.faces[0][:2]
+    thin = points.copy()
+    thin[a] = points[b] + 1e-13 * (points[a] - points[b])
+    with pytest.warns(sp.SpherifyWarning, match="smallest triangle"):
+        m = sp.SphereMap.from_points(mesh, thin)
+    assert m.valid and m.margin < 1e-12

@@ -13,7 +13,7 @@ from . import _core
 from ._errors import SpherifyWarning
 from ._mesh import MeshLike, as_mesh
 from ._progress import as_callback
-from ._spheremap import SphereMap, ThetaPhiMap
+from ._spheremap import SphereMap, ThetaPhiMap, warn_if_thin
 
 
 def methods() -> List[str]:
@@ -138,11 +138,13 @@ def embed(mesh: MeshLike, method: str = "theta_phi", *, progress: Any = None,
     if core.tp_valid is None:
         plain = SphereMap(core, mesh)
         plain._options = dict(options)
+        warn_if_thin(plain)
         return plain
     result = ThetaPhiMap(core, mesh)
     result._options = dict(options)
     if not result.tp_valid:
         warnings.warn(f"theta-phi: {result.message}", SpherifyWarning, stacklevel=2)
+    warn_if_thin(result)
     symmetry = result.details.get("symmetry")
     if symmetry is not None and symmetry["fallback"] is not None:
         warnings.warn(f"theta-phi: symmetry poles fell back to fast_graph: {symmetry['fallback']}",
@@ -173,4 +175,6 @@ def improve(sphere_map: SphereMap, *, energy: str = "isometric", max_iter: int =
     """
     options = {"energy": energy, "max_iter": max_iter, "tol": tol}
     core = _core.improve(sphere_map._core, options, as_callback(progress, "improve"))
-    return SphereMap(core, sphere_map.mesh)
+    result = SphereMap(core, sphere_map.mesh)
+    warn_if_thin(result)
+    return result

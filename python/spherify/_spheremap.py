@@ -15,9 +15,26 @@ import numpy as np
 import numpy.typing as npt
 
 from . import _args, _core
-from ._errors import MeshError
+from ._errors import MeshError, SpherifyWarning
 from ._mesh import Mesh, MeshLike, as_mesh
 from ._report import SphereReport
+
+#: A certified map whose smallest triangle is below this fraction of the mean
+#: comes with a :class:`SpherifyWarning`: its thinnest triangles are within a
+#: few thousand units in the last place of collapsing, so the map can send
+#: distinct surface points to the same doubles (issue 13, item 8).
+THIN_MARGIN = 1e-12
+
+
+def warn_if_thin(m: "SphereMap", stacklevel: int = 3) -> None:
+    """The :data:`THIN_MARGIN` warning for a certified map ``m``."""
+    certified = m.tp_valid if isinstance(m, ThetaPhiMap) else m.valid
+    margin = m.margin
+    if certified and margin < THIN_MARGIN:
+        import warnings
+        warnings.warn(f"the map is certified, but its smallest triangle is {margin:.2g} of the mean "
+                      f"(below {THIN_MARGIN:g}): distinct surface points may map to the same "
+                      "doubles", SpherifyWarning, stacklevel=stacklevel)
 
 
 def _read_only(array: np.ndarray) -> np.ndarray:
@@ -153,7 +170,9 @@ class SphereMap:
         mesh = as_mesh(mesh)
         core = _core.from_points(mesh._core, _float_rows(points, "points"))
         # SphereMap, not cls: a ThetaPhiMap needs the core's theta-phi data.
-        return SphereMap(core, mesh)
+        result = SphereMap(core, mesh)
+        warn_if_thin(result)
+        return result
 
     @property
     def mesh(self) -> Mesh:
@@ -198,6 +217,15 @@ class SphereMap:
     @property
     def report(self) -> SphereReport:
         return self._report
+
+    @property
+    def margin(self) -> float:
+        """The smallest triangle of the certified drawing over the mean
+        triangle: on the sphere (``report.min_area_ratio``), or for theta-phi
+        in the rectangle, where the bijection h lives. Below
+        :data:`THIN_MARGIN` distinct surface points may map to the same
+        doubles, and :func:`spherify.embed` warns."""
+        return float(self.report.min_area_ratio)
 
     @property
     def details(self) -> Dict[str, Any]:
@@ -341,6 +369,12 @@ class ThetaPhiMap(SphereMap):
         * ``fallback``: None when the poles and cut path came from the plane,
           else why the fast-graph poles were used instead.
     """
+
+    @property
+    def margin(self) -> float:
+        """The smallest triangle of the theta-phi rectangle over the mean:
+        the margin of the bijection h, which lives in the rectangle."""
+        return float(self.details["min_area_ratio"])
 
     def __init__(self, core: _core.CoreSphereMap, mesh: Mesh) -> None:
         super().__init__(core, mesh)
