@@ -2,6 +2,8 @@
 
     python benches/theta_phi_pipeline.py [--quick] [--max-vertices 2000000]
                                          [--lapy-timeout 600] [--write docs/benchmarks.md]
+                                         [--shapes helix_tube:1000000 ...]
+                                         [--no-lapy | --no-lapy-conformal]
 
 For every mesh (bumpy blobs from 10k to 2M vertices, a few other generated
 shapes at 100k-1M, and every corpus mesh of ../shared/meshes when present),
@@ -212,8 +214,11 @@ def run_worker(args: List[str], timeout: Optional[float]) -> Dict[str, Any]:
 def jobs(args: argparse.Namespace, scratch: Path) -> List[Tuple[str, str, str]]:
     """(label, kind, path) for every mesh of this run; generated meshes are
     written to ``scratch`` as .npz so that each worker only reads arrays."""
-    shapes = QUICK if args.quick else (
-        [("bumpy_blob", n) for n in BLOB_SIZES] + OTHER_SHAPES)
+    if args.shapes:
+        shapes = [(spec.split(":")[0], int(spec.split(":")[1])) for spec in args.shapes]
+    else:
+        shapes = QUICK if args.quick else (
+            [("bumpy_blob", n) for n in BLOB_SIZES] + OTHER_SHAPES)
     out = []
     for name, n in shapes:
         if n > args.max_vertices:
@@ -225,7 +230,7 @@ def jobs(args: argparse.Namespace, scratch: Path) -> List[Tuple[str, str, str]]:
             continue
         out.append((f"{name} {n // 1000}k", "dataset", str(path)))
     manifest = SHARED / "MANIFEST.json"
-    if manifest.exists() and not args.quick:
+    if manifest.exists() and not args.quick and not args.shapes:
         for entry in sorted(json.loads(manifest.read_text()), key=lambda e: e["V"]):
             if entry.get("genus") == 0 and entry["V"] <= args.max_vertices:
                 out.append((entry["name"], "corpus", str(SHARED / entry["path"])))
@@ -301,6 +306,10 @@ def main() -> None:
                         help="spherify and CHOLMOD runs per mesh (the fastest is kept)")
     parser.add_argument("--lapy-timeout", type=float, default=600.0)
     parser.add_argument("--no-lapy", action="store_true")
+    parser.add_argument("--no-lapy-conformal", action="store_true",
+                        help="run LaPy's spherical_tutte_map only")
+    parser.add_argument("--shapes", nargs="+", metavar="NAME:N",
+                        help="only these generated shapes (e.g. helix_tube:1000000), no corpus")
     parser.add_argument("--write", nargs="?", const=str(DOC), default=None,
                         help=f"write the table as a new section of {DOC.name}")
     parser.add_argument("--worker", nargs="+", help=argparse.SUPPRESS)
@@ -332,7 +341,8 @@ def main() -> None:
             row["check_orient"] = row["spherify"].get("check_orient")
             for which in ("spherical_tutte_map", "spherical_conformal_map"):
                 key = "lapy_tutte" if which == "spherical_tutte_map" else "lapy_conformal"
-                if lapy_version is None or args.no_lapy:
+                if lapy_version is None or args.no_lapy or (
+                        args.no_lapy_conformal and which == "spherical_conformal_map"):
                     row[key] = {"error": "not run", "seconds": 0.0}
                 else:
                     row[key] = run_worker([which, path], args.lapy_timeout)

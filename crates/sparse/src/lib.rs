@@ -22,6 +22,7 @@ pub mod weights;
 mod cg;
 mod direct;
 mod gauss_seidel;
+mod nested_dissection;
 mod preconditioner;
 mod solve;
 mod solver_kind;

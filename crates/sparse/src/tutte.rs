@@ -205,31 +205,30 @@ impl FixedSystem {
                 free.push(v as u32);
             }
         }
-        let (mut rows, mut cols, mut vals) = (Vec::new(), Vec::new(), Vec::new());
-        let mut rhs = vec![vec![0.0; free.len()]; 2];
-        for (row, &i) in free.iter().enumerate() {
-            let mut diagonal = 0.0;
+        // Row by row in parallel; each row's sums run in rotation order, as
+        // they always have, so the system is the same bit for bit.
+        let (matrix, fixed_sums) = CsrMatrix::from_rows(free.len(), free.len(), |row, entries| {
+            let i = free[row];
+            let (mut diagonal, mut x, mut y) = (0.0, 0.0, 0.0);
             for h in he.rotation(i) {
                 let w = weights[h as usize];
                 let j = he.head(h);
                 diagonal += w;
                 match fixed[j as usize] {
                     Some(p) => {
-                        rhs[0][row] += w * p[0];
-                        rhs[1][row] += w * p[1];
+                        x += w * p[0];
+                        y += w * p[1];
                     }
-                    None => {
-                        rows.push(row as u32);
-                        cols.push(unknown[j as usize]);
-                        vals.push(-w);
-                    }
+                    None => entries.push((unknown[j as usize], -w)),
                 }
             }
-            rows.push(row as u32);
-            cols.push(row as u32);
-            vals.push(diagonal);
-        }
-        let matrix = CsrMatrix::from_triplets(free.len(), free.len(), &rows, &cols, &vals)?;
+            entries.push((row as u32, diagonal));
+            [x, y]
+        })?;
+        let rhs = vec![
+            fixed_sums.iter().map(|s| s[0]).collect(),
+            fixed_sums.iter().map(|s| s[1]).collect(),
+        ];
         Ok(FixedSystem { matrix, rhs, free })
     }
 

@@ -7,6 +7,7 @@
 
 use spherify_mesh::dijkstra::{dijkstra, dijkstra_to, EdgeWeights};
 use spherify_mesh::Adjacency;
+use std::collections::HashMap;
 
 /// A shortest path from n to s (6.2.4) without chords between its inner
 /// vertices and with at least two of them (k >= 2).
@@ -39,20 +40,31 @@ pub(crate) fn finish_path(
 
 /// Replaces p_i ... p_j by the edge p_i p_j wherever two inner path vertices
 /// more than one step apart are adjacent: such a chord would lie along one side
-/// of the rectangle.
+/// of the rectangle. From the first inner vertex on, each kept vertex jumps to
+/// the farthest inner vertex it is adjacent to: one pass, O(path + its
+/// neighbours). Shortcutting only drops vertices after the current one, so no
+/// earlier vertex gains a chord, and the result is the one restarting from
+/// the start after every shortcut would give.
 fn shortcut_chords(graph: &Adjacency, path: &mut Vec<u32>) {
-    'again: loop {
-        let last = path.len() - 1;
-        for i in 1..last {
-            for j in (i + 2..last).rev() {
-                if graph.neighbors(path[i]).contains(&path[j]) {
-                    path.drain(i + 1..j);
-                    continue 'again;
-                }
-            }
-        }
-        return;
+    let last = path.len() - 1;
+    let index: HashMap<u32, usize> = path.iter().enumerate().map(|(i, &v)| (v, i)).collect();
+    let mut kept = Vec::with_capacity(path.len());
+    kept.push(path[0]);
+    let mut i = 1;
+    while i < last {
+        kept.push(path[i]);
+        let farthest = graph
+            .neighbors(path[i])
+            .iter()
+            .filter_map(|v| index.get(v).copied())
+            .filter(|&j| j >= i + 2 && j < last)
+            .max();
+        i = farthest.unwrap_or(i + 1);
     }
+    if last > 0 {
+        kept.push(path[last]);
+    }
+    *path = kept;
 }
 
 /// A path n, a, ..., s with at least two inner vertices: through a neighbour a

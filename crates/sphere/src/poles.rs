@@ -87,11 +87,26 @@ pub fn physical(positions: &[[f64; 3]]) -> Option<Poles> {
 /// Two sweeps (thesis eq. 6.6-6.7): the farthest vertex n from `start`, then the
 /// farthest vertex s from n. Returns `None` for an out-of-range start.
 pub fn fast_graph(graph: &Adjacency, start: u32, weights: EdgeWeights) -> Option<Poles> {
+    fast_graph_with_path(graph, start, weights).map(|(poles, _)| poles)
+}
+
+/// [`fast_graph`] and a shortest path from n to s, both included: the one
+/// the second sweep's tree holds, which is the path a search from n stopped
+/// at s finds (a search settles the same vertices in the same order up to s,
+/// and a settled vertex's predecessor never changes), so the cut path
+/// (6.2.4) costs no third search.
+pub fn fast_graph_with_path(
+    graph: &Adjacency,
+    start: u32,
+    weights: EdgeWeights,
+) -> Option<(Poles, Vec<u32>)> {
     let first = dijkstra(graph, start, weights)?;
     let (north, _) = first.farthest()?;
+    drop(first);
     let second = dijkstra(graph, north, weights)?;
     let (south, distance) = second.farthest()?;
-    Some(Poles { north, south, distance })
+    let path = second.path_to(south)?;
+    Some((Poles { north, south, distance }, path))
 }
 
 /// [`graph`] stopped early because its progress callback returned `false`.

@@ -218,9 +218,16 @@ pub fn theta_phi_with_progress(
     let graph = he.adjacency();
     let lengths = EdgeWeights::Length(mesh.positions());
     let mut found_symmetry = None;
-    let mut symmetry_path = None;
+    // A shortest path between the poles when the pole search found one.
+    let mut pole_path = None;
+    let fast_graph = |pole_path: &mut Option<Vec<u32>>| {
+        poles::fast_graph_with_path(&graph, 0, lengths).map(|(poles, path)| {
+            *pole_path = Some(path);
+            poles
+        })
+    };
     let chosen = match params.poles {
-        PoleChoice::FastGraph => poles::fast_graph(&graph, 0, lengths),
+        PoleChoice::FastGraph => fast_graph(&mut pole_path),
         PoleChoice::Graph => poles::graph(&graph, lengths, progress).map_err(|c| {
             SphereError::Cancelled { stage: "graph poles", done: c.done, total: c.total }
         })?,
@@ -228,10 +235,10 @@ pub fn theta_phi_with_progress(
             let sym = symmetry::symmetry(mesh.positions(), mesh.faces(), &graph, &sym_params)?;
             let chosen = match (sym.fallback, sym.poles) {
                 (None, Some(p)) => {
-                    symmetry_path = Some(sym.path.clone());
+                    pole_path = Some(sym.path.clone());
                     Some(p)
                 }
-                _ => poles::fast_graph(&graph, 0, lengths),
+                _ => fast_graph(&mut pole_path),
             };
             found_symmetry = Some(sym);
             chosen
@@ -252,7 +259,7 @@ pub fn theta_phi_with_progress(
     solver.watch.lap("poles");
     go_on(progress, "poles")?;
 
-    let path = match symmetry_path {
+    let path = match pole_path {
         Some(path) => finish_path(&graph, path, lengths),
         None => cut_path(&graph, chosen.north, chosen.south, lengths),
     }
