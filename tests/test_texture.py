@@ -152,6 +152,72 @@ def test_octahedral_layout_is_praun_and_hoppes_square() -> None:
     assert t.bake(sp.datasets.checkerboard, 32).shape == (32, 32, 3)
 
 
+@pytest.mark.parametrize("projection", PROJECTIONS)
+def test_save_writes_per_corner_uvs_and_a_material(blob: sp.SphereMap, tmp_path: Path,
+                                                   projection: str) -> None:
+    t = sp.texture.uv(blob, projection)
+    image = t.bake(sp.datasets.checkerboard, 32)
+    # A layout or its array, with an image array: as sp.texture.save_obj.
+    sp.save(blob.mesh, tmp_path / "a.obj", uv=t, texture=image)
+    sp.texture.save_obj(blob.mesh, tmp_path / "b.obj", t, image)
+    for suffix in (".obj", ".mtl", ".png"):
+        assert ((tmp_path / f"a{suffix}").read_bytes().replace(b"a.", b"b.")
+                == (tmp_path / f"b{suffix}").read_bytes())
+    sp.save(blob.mesh, tmp_path / "c.obj", uv=t.uv, texture=image)
+    vts = [line for line in (tmp_path / "c.obj").read_text().splitlines() if line.startswith("vt ")]
+    assert len(vts) == 3 * blob.mesh.n_faces
+    np.testing.assert_array_equal([[float(x) for x in v.split()[1:]] for v in vts],
+                                  t.uv.reshape(-1, 2))
+    back = sp.load(tmp_path / "c.obj")
+    np.testing.assert_array_equal(back.faces, blob.mesh.faces)
+    np.testing.assert_allclose(back.vertices, blob.mesh.vertices)
+
+
+def test_save_references_a_texture_file(blob: sp.SphereMap, tmp_path: Path,
+                                        monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "out").mkdir()
+    sp.texture.write_png(np.zeros((2, 2, 3)), "earth.png")
+    t = sp.texture.uv(blob, "octahedral")
+    sp.save(blob.mesh, "out/m.obj", uv=t.uv, texture="earth.png")
+    assert "map_Kd ../earth.png" in (tmp_path / "out" / "m.mtl").read_text()
+    assert "mtllib m.mtl" in (tmp_path / "out" / "m.obj").read_text()
+    assert sorted(p.name for p in (tmp_path / "out").iterdir()) == ["m.mtl", "m.obj"]
+    # Per-vertex UVs with a texture go through the same writer, one vt per
+    # corner; without a texture they stay the core's per-vertex vt.
+    per_vertex = np.random.default_rng(0).random((blob.mesh.n_vertices, 2))
+    sp.save(blob.mesh, "out/v.obj", uv=per_vertex, texture=tmp_path / "earth.png")
+    vts = [line for line in (tmp_path / "out" / "v.obj").read_text().splitlines()
+           if line.startswith("vt ")]
+    assert len(vts) == 3 * blob.mesh.n_faces
+    assert "map_Kd " + (tmp_path / "earth.png").as_posix() in (tmp_path / "out" / "v.mtl"
+                                                                ).read_text()
+    sp.save(blob.mesh, "out/w.obj", uv=per_vertex)
+    assert not (tmp_path / "out" / "w.mtl").exists()
+    np.testing.assert_array_equal(sp.load("out/w.obj").attributes["uv"], per_vertex)
+
+
+def test_save_refuses_textures_it_cannot_write(blob: sp.SphereMap, tmp_path: Path) -> None:
+    t = sp.texture.uv(blob, "cube")
+    image = np.zeros((4, 4, 3))
+    for name in ("m.ply", "m.stl", "m.off", "m.npz"):
+        with pytest.raises(sp.MeshError, match="only"):
+            sp.save(blob.mesh, tmp_path / name, uv=t, texture=image)
+        with pytest.raises(sp.MeshError, match="only"):
+            sp.save(blob.mesh, tmp_path / name, uv=t.uv)
+    with pytest.raises(sp.MeshError, match="needs texture coordinates"):
+        sp.save(blob.mesh, tmp_path / "m.obj", texture=image)
+    with pytest.raises(sp.MeshError, match="shape"):
+        sp.save(blob.mesh, tmp_path / "m.obj", uv=t.uv[:-1], texture=image)
+    bad = t.uv.copy()
+    bad[7, 1, 0] = np.nan
+    with pytest.raises(sp.MeshError, match="face 7"):
+        sp.save(blob.mesh, tmp_path / "m.obj", uv=bad)
+    with pytest.raises(sp.FormatError, match="sphere"):
+        sp.save(blob.mesh, tmp_path / "m.obj", uv=t, sphere=blob.points)
+    assert list(tmp_path.iterdir()) == []
+
+
 def test_bad_arguments(blob: sp.SphereMap) -> None:
     with pytest.raises(sp.MeshError, match="unknown projection"):
         sp.texture.uv(blob, "mercator")

@@ -56,7 +56,7 @@ from typing import Any, Callable, Dict, Optional, Union
 import numpy as np
 import numpy.typing as npt
 
-from ._errors import MeshError
+from ._errors import FormatError, MeshError
 from ._geometry_image import _chunk
 from ._mesh import Mesh
 from ._quality import quality
@@ -455,20 +455,76 @@ def save_obj(mesh: Mesh, path: PathLike, layout: UVLayout,
              image: Optional[npt.ArrayLike] = None) -> None:
     """Write ``mesh`` as OBJ with one ``vt`` per face corner and, with
     ``image``, an MTL next to it whose ``map_Kd`` is that image written as
-    PNG (``<stem>.png``). Every file is written atomically."""
-    target = Path(path)
+    PNG (``<stem>.png``). Every file is written atomically. The same as
+    ``sp.save(mesh, path, uv=layout, texture=image)``."""
     if layout.uv.shape != (mesh.n_faces, 3, 2):
         raise MeshError(f"the layout has {layout.uv.shape[0]} faces, the mesh {mesh.n_faces}")
-    lines = [f"# spherify: {layout.projection} texture coordinates, one vt per face corner"]
-    if image is not None:
-        write_png(image, target.with_suffix(".png"))
+    _write_obj(mesh, Path(path), layout.uv, layout.projection, image)
+
+
+def _write_obj(mesh: Mesh, target: Path, corners: np.ndarray, label: str,
+               texture: Any = None) -> None:
+    """OBJ with ``vt`` per corner; ``texture`` an image array (written as
+    ``<stem>.png``) or the path of an image file (referenced, not copied)."""
+    lines = [f"# spherify: {label} texture coordinates, one vt per face corner"]
+    if texture is not None:
+        if isinstance(texture, (str, os.PathLike)):
+            image_path = Path(texture)
+            name = (image_path.as_posix() if image_path.is_absolute()
+                    else Path(os.path.relpath(image_path, target.parent)).as_posix())
+            if any(c.isspace() for c in name):
+                raise MeshError(f"the texture's path {name!r} holds white space, which MTL "
+                                "cannot reference")
+        else:
+            write_png(texture, target.with_suffix(".png"))
+            name = target.with_suffix(".png").name
         mtl = target.with_suffix(".mtl")
-        _atomic_write(mtl, (f"newmtl texture\nKa 1 1 1\nKd 1 1 1\n"
-                            f"map_Kd {target.with_suffix('.png').name}\n").encode())
+        _atomic_write(mtl, f"newmtl texture\nKa 1 1 1\nKd 1 1 1\nmap_Kd {name}\n".encode())
         lines += [f"mtllib {mtl.name}", "usemtl texture"]
     lines += ["v %.17g %.17g %.17g" % tuple(p) for p in mesh.vertices.tolist()]
-    lines += ["vt %.17g %.17g" % tuple(p) for p in layout.uv.reshape(-1, 2).tolist()]
+    lines += ["vt %.17g %.17g" % tuple(p) for p in corners.reshape(-1, 2).tolist()]
     f = mesh.faces + 1
     t = np.arange(1, 3 * mesh.n_faces + 1).reshape(-1, 3)
     lines += [f"f {a}/{ta} {b}/{tb} {c}/{tc}" for (a, b, c), (ta, tb, tc) in zip(f, t)]
     _atomic_write(target, ("\n".join(lines) + "\n").encode())
+
+
+def _is_per_corner(uv: Any) -> bool:
+    """Whether ``uv`` (for :func:`spherify.save`) is per face corner: a
+    :class:`UVLayout` or an array of three dimensions."""
+    return isinstance(uv, UVLayout) or (uv is not None and np.ndim(uv) == 3)
+
+
+def _save_textured(mesh: Mesh, target: Path, uv: Any, texture: Any, sphere: Any,
+                  format: Optional[str]) -> None:
+    """:func:`spherify.save` with per-corner ``uv`` or a ``texture``: OBJ only."""
+    if format is not None or target.suffix.lower() != ".obj":
+        raise MeshError(f"per-corner texture coordinates and textures are written to .obj "
+                        f"only (with an MTL), got {target.name}"
+                        + (f" with format={format!r}" if format is not None else ""))
+    if sphere is not None:
+        raise FormatError("a .obj file cannot hold per-vertex sphere positions: .ply and "
+                          ".npz do", path=str(target))
+    if uv is None:
+        raise MeshError("a texture needs texture coordinates: pass uv= (sp.texture.uv(m).uv, "
+                        "or a per-vertex (n, 2) array)")
+    if isinstance(uv, UVLayout):
+        corners, label = uv.uv, uv.projection
+    else:
+        try:
+            array = np.asarray(uv, dtype=np.float64)
+        except (TypeError, ValueError) as err:
+            raise MeshError(f"uv must be a numeric array: {err}") from None
+        if array.shape == (mesh.n_vertices, 2) and array.ndim == 2:
+            corners, label = array[mesh.faces], "per-vertex"
+        elif array.shape == (mesh.n_faces, 3, 2):
+            corners, label = array, "per-corner"
+        else:
+            raise MeshError(f"uv must have shape ({mesh.n_faces}, 3, 2) (per face corner) or "
+                            f"({mesh.n_vertices}, 2) (per vertex), got {array.shape}")
+    if corners.shape != (mesh.n_faces, 3, 2):
+        raise MeshError(f"the layout has {corners.shape[0]} faces, the mesh {mesh.n_faces}")
+    if not np.all(np.isfinite(corners)):
+        f = int(np.nonzero(~np.isfinite(corners).all(axis=(1, 2)))[0][0])
+        raise MeshError(f"uv of face {f} is not finite")
+    _write_obj(mesh, target, corners, label, texture)
