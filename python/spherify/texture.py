@@ -3,7 +3,7 @@ atlas to bake any spherical texture into, and OBJ + MTL export.
 
     t = sp.texture.uv(m, projection="cube")     # UVLayout: t.uv (F, 3, 2)
     image = t.bake(sp.datasets.checkerboard, 512)
-    sp.texture.save_obj(m.mesh, "out.obj", t, image)
+    sp.save(m.mesh, "out.obj", uv=t, texture=image)  # as sp.texture.save_obj(...)
 
 Projections (the image a UV points into is the layout's atlas, made by
 :meth:`UVLayout.bake` from a function of the direction on the sphere):
@@ -42,7 +42,7 @@ Projections (the image a UV points into is the layout's atlas, made by
   projection of one octant extended beyond it (the one whose UVs come
   nearest its points), which keeps it positive exactly, as the cube
   projection does; its corners then show their points only to within some
-  degrees on coarse meshes (15 at 1.5k vertices, 6 at 20k).
+  degrees on coarse meshes (10 at 1.5k vertices, 6 at 20k).
 """
 
 from __future__ import annotations
