@@ -46,17 +46,17 @@ def test_uvs_are_in_the_unit_square_positive_and_point_back_at_their_vertices(
     # No face smeared across a seam or a pole: every UV triangle is positive.
     assert uv_areas(t.uv).min() > 0
     # Each corner's UV shows its own vertex's point of the sphere; for the
-    # octahedral projection, except the few faces it reversed and so gave
-    # an octant's projection, whose corners show their points to some
-    # degrees on this coarse mesh (measured at most 10.2 over 30 turns; 5.6
-    # at 20k vertices).
+    # octahedral projection, except the few faces it reversed or left thin
+    # and so gave an octant's projection (measured at most 21 of 2880 here
+    # over 300 turns), whose corners show their points to some degrees on
+    # this coarse mesh (at most 19.5 over those turns; 6.2 at 20k vertices).
     shown, want = t.direction_at(t.uv), m.points[m.mesh.faces]
     exact = np.ones(m.mesh.n_faces, dtype=bool)
     if projection == "octahedral":
         exact[t.params["projected"]] = False
-        assert len(t.params["projected"]) <= m.mesh.n_faces // 500
+        assert len(t.params["projected"]) <= m.mesh.n_faces // 100
         angle = np.arccos(np.clip(np.sum(shown * want, axis=-1), -1, 1))
-        assert np.degrees(angle.max()) < 20
+        assert np.degrees(angle.max()) < 30
     np.testing.assert_allclose(shown[exact], want[exact], atol=1e-12)
 
 
@@ -78,8 +78,8 @@ def test_texture_stretch_is_the_maps_stretch_times_the_projections(
     sphere = sp.quality(blob.mesh, blob.points)["stretch_l2"]
     texture = t.quality(blob.mesh)["stretch_l2"]
     # The octahedral map: gnomonic onto an octant's face and affine, 1.02 here
-    # (but its bends can leave a thin face across them much thinner: in 30
-    # turns of this mesh 1.006 to 31, at 20k vertices 1.01 to 2.2).
+    # (1.006 to 1.26 times the sphere's over 30 turns of this mesh; without
+    # the octant projection of the faces its bends leave thin, up to 31).
     bound = 1 + 2 * t.params["extent"] ** 2 if projection == "cube" else 3.0
     assert sphere / bound <= texture <= sphere * bound
     # And it is the core's measure of the exploded mesh against its UVs.
