@@ -104,10 +104,12 @@ def test_morph_with_landmarks_and_bad_landmarks(
     assert "I:J" in capsys.readouterr().err
 
 
-def test_texture_writes_obj_mtl_and_png(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+@pytest.mark.parametrize("projection", ["equirectangular", "octahedral"])
+def test_texture_writes_obj_mtl_and_png(tmp_path: Path, capsys: pytest.CaptureFixture[str],
+                                        projection: str) -> None:
     out = tmp_path / "t.obj"
     assert cli.main(["texture", "--dataset", "bumpy_blob", "--n-vertices", "500",
-                     "--projection", "equirectangular", "--pattern", "grid", "--size", "64",
+                     "--projection", projection, "--pattern", "grid", "--size", "64",
                      "-o", str(out)]) == 0
     assert "0 UV triangles not positive" in capsys.readouterr().out
     assert sorted(p.name for p in tmp_path.iterdir()) == ["t.mtl", "t.obj", "t.png"]

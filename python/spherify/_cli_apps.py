@@ -8,7 +8,8 @@
                                    semi-regular icosphere remesh, or an octahedral
                                    geometry image (OUT's .png, 16-bit) and its mesh;
                                    prints the distance to the input
-    spherify texture MESH -o OUT.obj [--projection cube] [--pattern checkerboard]
+    spherify texture MESH -o OUT.obj [--projection cube|equirectangular|octahedral]
+                                   [--pattern checkerboard]
                                    per-corner UVs, a baked procedural texture; writes
                                    OUT.obj, OUT.mtl and OUT.png
     spherify morph A B -o OUT [--frames K] [--align rotation] [--landmarks I:J ...]

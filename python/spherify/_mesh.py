@@ -222,8 +222,8 @@ def _from_arrays(path: Path, loaded: _formats.Loaded) -> Mesh:
 
 
 def save(mesh: MeshLike, path: PathLike, *, sphere: Any = None, uv: Any = None,
-         ply_encoding: str = "binary_little_endian", stl_binary: bool = True,
-         format: Optional[str] = None) -> None:
+         texture: Any = None, ply_encoding: str = "binary_little_endian",
+         stl_binary: bool = True, format: Optional[str] = None) -> None:
     """Write ``mesh`` to ``path`` (format by the name, or ``format``).
 
     Parameters
@@ -231,9 +231,16 @@ def save(mesh: MeshLike, path: PathLike, *, sphere: Any = None, uv: Any = None,
     sphere : (n, 3) array_like of float, optional
         Per-vertex sphere positions, stored as PLY properties
         ``sphere_x sphere_y sphere_z`` (``.ply``) or an array ``sphere`` (``.npz``).
-    uv : (n, 2) array_like of float, optional
+    uv : (n, 2) or (m, 3, 2) array_like of float, or a UVLayout, optional
         Per-vertex texture coordinates (``.ply`` as ``u v``, ``.obj`` as
-        ``vt``, ``.npz`` as ``uv``).
+        ``vt``, ``.npz`` as ``uv``), or per face corner (``.obj`` only, one
+        ``vt`` per corner): ``sp.texture.uv(m)`` or its ``.uv``.
+    texture : str, os.PathLike or (h, w, 3) array_like, optional
+        ``.obj`` only, with ``uv``: an MTL ``<stem>.mtl`` is written next to
+        the OBJ whose ``map_Kd`` is this image: a path (relative to the
+        current folder, referenced from the OBJ's folder, not copied) or an
+        RGB image in [0, 1] (written as ``<stem>.png``, e.g. from
+        ``UVLayout.bake``).
     ply_encoding : {"binary_little_endian", "binary_big_endian", "ascii"}
     stl_binary : bool
     format : {None, "npz", "freesurfer", "gifti"}
@@ -246,6 +253,12 @@ def save(mesh: MeshLike, path: PathLike, *, sphere: Any = None, uv: Any = None,
     The file is written under a temporary name and renamed into place, so an
     existing file is never left half-written.
     """
+    from . import texture as _texture  # here: texture imports this module
+
+    if texture is not None or _texture._is_per_corner(uv):
+        _texture._save_textured(as_mesh(mesh), Path(_args.path(path)), uv, texture, sphere,
+                               format)
+        return
     sphere_array = None if sphere is None else _as_vertices(sphere, "sphere")
     uv_array = None if uv is None else _as_vertices(uv, "uv")
     mesh = as_mesh(mesh)

@@ -3,7 +3,7 @@ atlas to bake any spherical texture into, and OBJ + MTL export.
 
     t = sp.texture.uv(m, projection="cube")     # UVLayout: t.uv (F, 3, 2)
     image = t.bake(sp.datasets.checkerboard, 512)
-    sp.texture.save_obj(m.mesh, "out.obj", t, image)
+    sp.save(m.mesh, "out.obj", uv=t, texture=image)  # as sp.texture.save_obj(...)
 
 Projections (the image a UV points into is the layout's atlas, made by
 :meth:`UVLayout.bake` from a function of the direction on the sphere):
@@ -25,6 +25,25 @@ Projections (the image a UV points into is the layout's atlas, made by
   u of its face's other corners. Faces across the date line keep their own
   unwrapped u; the atlas covers a little more than 2 pi in phi
   (``u_span``), so every u stays in [0, 1].
+* ``"octahedral"``: Praun and Hoppe's (2003) octahedral map onto a square:
+  a point p goes to p / (|x| + |y| + |z|) on the octahedron, the upper half
+  (z >= 0) to the diamond |s| + |t| <= 1 by (s, t) = (x, y), each lower
+  octant folded out to its corner of [-1, 1]^2. On each octant this is a
+  gnomonic projection followed by an affine map of positive determinant, so
+  a face inside one octant keeps its orientation. The seams are the four
+  half-meridians of the lower half (the square's edges, each glued to
+  itself turned by 180 degrees about its midpoint): a face across one takes,
+  for each corner, the copy under those turns nearest its other corners, and
+  the atlas shows a margin beyond the square (``extent`` E >= 1: the atlas
+  is [-E, E]^2, read back by the same turns). The map bends at the octant
+  boundaries, so a thin face across one (or a face around one of the four
+  equator vertices of the octahedron) can come out reversed or much thinner
+  than on the sphere: such a face (``projected``, under one in a hundred
+  on a 1.5k-vertex mesh, 0.15 % at 20k) takes its corners from the
+  projection of one octant extended beyond it (the one whose UVs come
+  nearest its points), which keeps it positive exactly, as the cube
+  projection does; its corners then show their points only to within some
+  degrees on coarse meshes (up to 20 at 1.5k vertices, 6 at 20k).
 """
 
 from __future__ import annotations
@@ -38,7 +57,7 @@ from typing import Any, Callable, Dict, Optional, Union
 import numpy as np
 import numpy.typing as npt
 
-from ._errors import MeshError
+from ._errors import FormatError, MeshError
 from ._geometry_image import _chunk
 from ._mesh import Mesh
 from ._quality import quality
@@ -46,7 +65,7 @@ from ._spheremap import SphereMap
 
 __all__ = ["PROJECTIONS", "UVLayout", "save_obj", "uv", "write_png"]
 
-PROJECTIONS = ("cube", "equirectangular")
+PROJECTIONS = ("cube", "equirectangular", "octahedral")
 PathLike = Union[str, "os.PathLike[str]"]
 
 # Cube tiles: normal, s axis, t axis (s x t = normal, so CCW stays CCW), atlas column, row.
@@ -103,7 +122,10 @@ class UVLayout:
         -z) and ``extent`` L (each tile shows the gnomonic square [-L, L]^2).
         ``equirectangular``: ``u_span`` (u = phi / (2 pi u_span)),
         ``rotation``, ``shift`` (the Moebius translation) and ``poles`` (the
-        two vertex ids at the projection's poles).
+        two vertex ids at the projection's poles). ``octahedral``:
+        ``extent`` E (the atlas shows [-E, E]^2 of the octahedral square)
+        and ``projected`` (the faces that take their corners from their
+        own octant's projection, see the module doc).
     """
 
     def __init__(self, projection: str, uv: np.ndarray, params: Dict[str, Any]) -> None:
@@ -149,6 +171,9 @@ class UVLayout:
             s = ((uu * 3 - col) * 2 - 1) * extent
             t = ((vv * 2 - row) * 2 - 1) * extent
             d = _NORMALS[tile] + s[..., None] * _S[tile] + t[..., None] * _T[tile]
+        elif self._projection == "octahedral":
+            extent = self._params["extent"]
+            d = _octahedral_inverse((uu * 2 - 1) * extent, (vv * 2 - 1) * extent)
         else:
             phi = 2 * np.pi * uu * self._params["u_span"]
             theta = np.pi * (1 - vv)
@@ -165,10 +190,11 @@ class UVLayout:
              width: Optional[int] = None) -> np.ndarray:
         """The atlas image: ``texture(directions)`` (for example
         ``sp.datasets.checkerboard``) at every pixel. ``width`` defaults to
-        ``1.5 height`` for the cube atlas and ``2 height`` for
-        equirectangular. Returns (height, width, 3) float64."""
+        ``1.5 height`` for the cube atlas, ``2 height`` for equirectangular
+        and ``height`` for octahedral. Returns (height, width, 3) float64."""
         if width is None:
-            width = int(round(height * (1.5 if self._projection == "cube" else 2.0)))
+            aspect = {"cube": 1.5, "equirectangular": 2.0}.get(self._projection, 1.0)
+            width = int(round(height * aspect))
         image: np.ndarray = np.asarray(texture(self.directions(height, width)), dtype=np.float64)
         return image
 
@@ -251,6 +277,154 @@ def _equirectangular(points: np.ndarray, faces: np.ndarray) -> UVLayout:
                      "poles": (north, south)})
 
 
+#: The turns of the octahedral square that glue its edges (180 degrees about
+#: each edge's midpoint) and their products nearest the square (translations
+#: by (+-2, +-2)); the identity first.
+_TURN_CENTRES = np.array([[0.0, 1.0], [0.0, -1.0], [1.0, 0.0], [-1.0, 0.0]])
+_SHIFTS = np.array([[2.0, 2.0], [2.0, -2.0], [-2.0, 2.0], [-2.0, -2.0]])
+#: The octants (signs of x, y, z) in the order of ``_octant``'s index.
+_OCTANTS = np.array([[sx, sy, sz] for sz in (1, -1) for sy in (1, -1) for sx in (1, -1)],
+                    dtype=np.float64)
+
+
+def _octahedral_forward(q: np.ndarray) -> np.ndarray:
+    """Praun and Hoppe's octahedral map of unit vectors to [-1, 1]^2."""
+    o = q / np.abs(q).sum(axis=-1, keepdims=True)
+    x, y, z = o[..., 0], o[..., 1], o[..., 2]
+    sx, sy = np.where(x >= 0, 1.0, -1.0), np.where(y >= 0, 1.0, -1.0)
+    lower = z < 0
+    s = np.where(lower, sx * (1 - np.abs(y)), x)
+    t = np.where(lower, sy * (1 - np.abs(x)), y)
+    st: np.ndarray = np.stack([s, t], axis=-1)
+    return st
+
+
+def _octahedral_inverse(s: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """The unit vector at (s, t) of the octahedral plane: first brought into
+    [-1, 1]^2 by the turns that glue the square's edges."""
+    s, t = s.copy(), t.copy()
+    for _ in range(8):  # each turn brings a point at most E <= 3 a step closer
+        top, bottom = t > 1, t < -1
+        s[top | bottom] = -s[top | bottom]
+        t[top], t[bottom] = 2 - t[top], -2 - t[bottom]
+        right, left = s > 1, s < -1
+        t[right | left] = -t[right | left]
+        s[right], s[left] = 2 - s[right], -2 - s[left]
+    sx, sy = np.where(s >= 0, 1.0, -1.0), np.where(t >= 0, 1.0, -1.0)
+    lower = np.abs(s) + np.abs(t) > 1
+    x = np.where(lower, sx * (1 - np.abs(t)), s)
+    y = np.where(lower, sy * (1 - np.abs(s)), t)
+    z = np.where(lower, -1.0, 1.0) * (1 - np.abs(x) - np.abs(y))
+    d: np.ndarray = np.stack([x, y, z], axis=-1)
+    return d
+
+
+def _nearest_copies(w: np.ndarray, reference: np.ndarray) -> np.ndarray:
+    """For each corner (m, 3, 2), its copy under the gluing turns nearest
+    ``reference`` (m, 3, 2)."""
+    copies = np.concatenate([w[:, :, None, :],
+                             2 * _TURN_CENTRES[None, None] - w[:, :, None, :],
+                             w[:, :, None, :] + _SHIFTS[None, None]], axis=2)  # (m, 3, 9, 2)
+    best = np.argmin(np.linalg.norm(copies - reference[:, :, None, :], axis=-1), axis=2)
+    nearest: np.ndarray = np.take_along_axis(copies, best[..., None, None], axis=2)[:, :, 0]
+    return nearest
+
+
+def _octahedral_shared(points: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """Each corner at the octahedral map of its point, a face across a seam
+    put in one piece by the gluing turns: (m, 3, 2)."""
+    w = _octahedral_forward(points)[faces]
+    # Next to the corner farthest from the south pole; then a corner at the
+    # south pole itself (which the square shows at all four of its corners)
+    # goes to the corner between its face's other two.
+    top = np.argmax(points[faces][..., 2], axis=1)
+    w = _nearest_copies(w, np.repeat(w[np.arange(len(w)), top][:, None], 3, axis=1))
+    pole = np.all(np.abs(np.abs(w) - 1) == 0, axis=-1) & (points[faces][..., 2] < 0)
+    if pole.any():
+        between = _nearest_copies(w, (w.sum(axis=1, keepdims=True) - w) / 2)
+        w[pole] = between[pole]
+    return w
+
+
+def _octant_projection(p: np.ndarray, signs: np.ndarray) -> np.ndarray:
+    """The octahedral map of one octant (signs (k, 3)) extended beyond it:
+    p (k, 3, 3) -> (k, 3, 2). A gnomonic projection onto that face of the
+    octahedron and an affine map of positive determinant."""
+    o = p / (p * signs[:, None]).sum(axis=-1, keepdims=True)
+    sx, sy, sz = (signs[:, k, None] for k in range(3))
+    s = np.where(sz > 0, o[..., 0], sx * (1 - sy * o[..., 1]))
+    t = np.where(sz > 0, o[..., 1], sy * (1 - sx * o[..., 0]))
+    st: np.ndarray = np.stack([s, t], axis=-1)
+    return st
+
+
+#: A face across an octant boundary whose UV triangle (under the shared
+#: octahedral map) has less than this part of the shape quality of its
+#: sphere triangle takes its best octant's projection, if that is better.
+_THIN = 0.25
+
+
+def _doubled_areas(w: np.ndarray) -> np.ndarray:
+    e1, e2 = w[:, 1] - w[:, 0], w[:, 2] - w[:, 0]
+    areas: np.ndarray = e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]
+    return areas
+
+
+def _shape(doubled_areas: np.ndarray, corners: np.ndarray) -> np.ndarray:
+    """2 sqrt(3) (doubled area) / (sum of squared edges): 1 for an
+    equilateral triangle, 0 for a degenerate one, negative if reversed."""
+    edges = corners - np.roll(corners, 1, axis=1)
+    q: np.ndarray = 2 * np.sqrt(3) * doubled_areas / np.sum(edges ** 2, axis=(1, 2))
+    return q
+
+
+def _octahedral(points: np.ndarray, faces: np.ndarray) -> UVLayout:
+    w = _octahedral_shared(points, faces)
+    area = _doubled_areas(w)
+    # The octahedral map bends at the octant boundaries, and around the four
+    # octahedron vertices of the equator the square has half the sphere's
+    # angle: a thin face across a bend, or a face around such a vertex, may
+    # come out reversed or much thinner than on the sphere (shape quality
+    # below a quarter of its sphere triangle's). Such a face takes its corners from
+    # the projection of one octant, extended beyond it: a gnomonic
+    # projection (great circles to lines, so a positive spherical triangle
+    # stays positive, exactly, as in the cube projection) followed by an
+    # affine map of positive determinant. Of the octants whose projection
+    # reaches every corner, the one whose UVs, read back by the shared map,
+    # come nearest the corners.
+    octant = (points[faces] >= 0) @ np.array([1, 2, 4])
+    across = np.nonzero((octant != octant[:, :1]).any(axis=1) | (area <= 0))[0]
+    p = points[faces[across]]
+    best = np.zeros((len(p), 3, 2))
+    best_error = np.full(len(p), np.inf)
+    for signs in _OCTANTS:
+        depth = (p @ signs).min(axis=1)
+        candidate = _octant_projection(p, np.broadcast_to(signs, (len(p), 3)))
+        shown = _octahedral_inverse(candidate[..., 0], candidate[..., 1])
+        shown /= np.linalg.norm(shown, axis=-1, keepdims=True)
+        error = np.where(depth >= _MIN_COS, -np.sum(shown * p, axis=-1).min(axis=1), np.inf)
+        better = error < best_error
+        best[better] = candidate[better]
+        best_error[better] = error[better]
+    reached = np.isfinite(best_error)
+    if not np.all(reached | (area[across] > 0)):
+        f = int(across[np.argmax(~reached & (area[across] <= 0))])
+        raise MeshError(f"face {f} is too large for the octahedral projection: the "
+                        "octahedral map reverses it and no octant's projection reaches all "
+                        "its corners")
+    sphere = points[faces[across]]
+    sphere_shape = _shape(np.linalg.norm(np.cross(sphere[:, 1] - sphere[:, 0],
+                                                  sphere[:, 2] - sphere[:, 0]), axis=1), sphere)
+    shared_shape = _shape(area[across], w[across])
+    use = reached & ((area[across] <= 0) | ((shared_shape < _THIN * sphere_shape)
+                                            & (_shape(_doubled_areas(best), best) > shared_shape)))
+    projected = across[use]
+    w[projected] = best[use]
+    extent = float(max(1.0, np.abs(w).max())) * (1 + 1e-12)
+    return UVLayout("octahedral", (w / extent + 1) / 2,
+                    {"extent": extent, "projected": projected})
+
+
 def uv(m: SphereMap, projection: str = "cube") -> UVLayout:
     """Per-corner texture coordinates of ``m.mesh`` from its sphere points.
 
@@ -260,7 +434,8 @@ def uv(m: SphereMap, projection: str = "cube") -> UVLayout:
         Best a certified one (``valid``): then every UV triangle of the cube
         projection is positively oriented.
     projection : str
-        ``"cube"`` or ``"equirectangular"`` (see the module doc).
+        ``"cube"``, ``"equirectangular"`` or ``"octahedral"`` (see the
+        module doc).
 
     Returns
     -------
@@ -271,12 +446,17 @@ def uv(m: SphereMap, projection: str = "cube") -> UVLayout:
     ------
     MeshError
         Unknown projection; for ``"cube"``, a face so large that a corner is
-        more than 78 degrees from its tile's axis.
+        more than 78 degrees from its tile's axis; for ``"octahedral"``, a
+        reversed face that no octant's projection reaches whole.
     """
     if projection not in PROJECTIONS:
         raise MeshError(f"unknown projection {projection!r}; available: {', '.join(PROJECTIONS)}")
     points, faces = np.asarray(m.points), m.mesh.faces
-    return _cube(points, faces) if projection == "cube" else _equirectangular(points, faces)
+    if projection == "cube":
+        return _cube(points, faces)
+    if projection == "octahedral":
+        return _octahedral(points, faces)
+    return _equirectangular(points, faces)
 
 
 def _atomic_write(path: Path, data: bytes) -> None:
@@ -307,20 +487,76 @@ def save_obj(mesh: Mesh, path: PathLike, layout: UVLayout,
              image: Optional[npt.ArrayLike] = None) -> None:
     """Write ``mesh`` as OBJ with one ``vt`` per face corner and, with
     ``image``, an MTL next to it whose ``map_Kd`` is that image written as
-    PNG (``<stem>.png``). Every file is written atomically."""
-    target = Path(path)
+    PNG (``<stem>.png``). Every file is written atomically. The same as
+    ``sp.save(mesh, path, uv=layout, texture=image)``."""
     if layout.uv.shape != (mesh.n_faces, 3, 2):
         raise MeshError(f"the layout has {layout.uv.shape[0]} faces, the mesh {mesh.n_faces}")
-    lines = [f"# spherify: {layout.projection} texture coordinates, one vt per face corner"]
-    if image is not None:
-        write_png(image, target.with_suffix(".png"))
+    _write_obj(mesh, Path(path), layout.uv, layout.projection, image)
+
+
+def _write_obj(mesh: Mesh, target: Path, corners: np.ndarray, label: str,
+               texture: Any = None) -> None:
+    """OBJ with ``vt`` per corner; ``texture`` an image array (written as
+    ``<stem>.png``) or the path of an image file (referenced, not copied)."""
+    lines = [f"# spherify: {label} texture coordinates, one vt per face corner"]
+    if texture is not None:
+        if isinstance(texture, (str, os.PathLike)):
+            image_path = Path(texture)
+            name = (image_path.as_posix() if image_path.is_absolute()
+                    else Path(os.path.relpath(image_path, target.parent)).as_posix())
+            if any(c.isspace() for c in name):
+                raise MeshError(f"the texture's path {name!r} holds white space, which MTL "
+                                "cannot reference")
+        else:
+            write_png(texture, target.with_suffix(".png"))
+            name = target.with_suffix(".png").name
         mtl = target.with_suffix(".mtl")
-        _atomic_write(mtl, (f"newmtl texture\nKa 1 1 1\nKd 1 1 1\n"
-                            f"map_Kd {target.with_suffix('.png').name}\n").encode())
+        _atomic_write(mtl, f"newmtl texture\nKa 1 1 1\nKd 1 1 1\nmap_Kd {name}\n".encode())
         lines += [f"mtllib {mtl.name}", "usemtl texture"]
     lines += ["v %.17g %.17g %.17g" % tuple(p) for p in mesh.vertices.tolist()]
-    lines += ["vt %.17g %.17g" % tuple(p) for p in layout.uv.reshape(-1, 2).tolist()]
+    lines += ["vt %.17g %.17g" % tuple(p) for p in corners.reshape(-1, 2).tolist()]
     f = mesh.faces + 1
     t = np.arange(1, 3 * mesh.n_faces + 1).reshape(-1, 3)
     lines += [f"f {a}/{ta} {b}/{tb} {c}/{tc}" for (a, b, c), (ta, tb, tc) in zip(f, t)]
     _atomic_write(target, ("\n".join(lines) + "\n").encode())
+
+
+def _is_per_corner(uv: Any) -> bool:
+    """Whether ``uv`` (for :func:`spherify.save`) is per face corner: a
+    :class:`UVLayout` or an array of three dimensions."""
+    return isinstance(uv, UVLayout) or (uv is not None and np.ndim(uv) == 3)
+
+
+def _save_textured(mesh: Mesh, target: Path, uv: Any, texture: Any, sphere: Any,
+                  format: Optional[str]) -> None:
+    """:func:`spherify.save` with per-corner ``uv`` or a ``texture``: OBJ only."""
+    if format is not None or target.suffix.lower() != ".obj":
+        raise MeshError(f"per-corner texture coordinates and textures are written to .obj "
+                        f"only (with an MTL), got {target.name}"
+                        + (f" with format={format!r}" if format is not None else ""))
+    if sphere is not None:
+        raise FormatError("a .obj file cannot hold per-vertex sphere positions: .ply and "
+                          ".npz do", path=str(target))
+    if uv is None:
+        raise MeshError("a texture needs texture coordinates: pass uv= (sp.texture.uv(m).uv, "
+                        "or a per-vertex (n, 2) array)")
+    if isinstance(uv, UVLayout):
+        corners, label = uv.uv, uv.projection
+    else:
+        try:
+            array = np.asarray(uv, dtype=np.float64)
+        except (TypeError, ValueError) as err:
+            raise MeshError(f"uv must be a numeric array: {err}") from None
+        if array.shape == (mesh.n_vertices, 2) and array.ndim == 2:
+            corners, label = array[mesh.faces], "per-vertex"
+        elif array.shape == (mesh.n_faces, 3, 2):
+            corners, label = array, "per-corner"
+        else:
+            raise MeshError(f"uv must have shape ({mesh.n_faces}, 3, 2) (per face corner) or "
+                            f"({mesh.n_vertices}, 2) (per vertex), got {array.shape}")
+    if corners.shape != (mesh.n_faces, 3, 2):
+        raise MeshError(f"the layout has {corners.shape[0]} faces, the mesh {mesh.n_faces}")
+    if not np.all(np.isfinite(corners)):
+        f = int(np.nonzero(~np.isfinite(corners).all(axis=(1, 2)))[0][0])
+        raise MeshError(f"uv of face {f} is not finite")
+    _write_obj(mesh, target, corners, label, texture)
