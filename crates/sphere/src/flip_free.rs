@@ -278,8 +278,8 @@ impl Star {
             let (e, g, h) = face_energy_hessian(energy, r, k, p, *a, *b);
             total.0 += e;
             total.1 = add(total.1, g);
-            for i in 0..3 {
-                total.2[i] = add(total.2[i], h[i]);
+            for (row, h_row) in total.2.iter_mut().zip(h) {
+                *row = add(*row, h_row);
             }
         }
         total
