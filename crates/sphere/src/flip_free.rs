@@ -286,6 +286,18 @@ impl Star {
     }
 }
 
+/// Refuses a stopping tolerance that is negative or not finite.
+pub fn check_tolerance(tolerance: f64) -> Result<(), crate::error::SphereError> {
+    if tolerance >= 0.0 && tolerance.is_finite() {
+        return Ok(());
+    }
+    Err(crate::error::SphereError::InvalidParameter {
+        name: "tolerance",
+        value: tolerance.to_string(),
+        expected: "a finite number >= 0",
+    })
+}
+
 /// A sweep was asked to stop.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Stopped;

@@ -9,7 +9,7 @@ use std::time::Instant;
 use crate::distortion_energy::Energy;
 use crate::embedding::{SphereEmbedding, Status};
 use crate::error::SphereError;
-use crate::flip_free::Problem;
+use crate::flip_free::{check_tolerance, Problem};
 use crate::genus_zero::GenusZeroMesh;
 use crate::progressive::area_floor;
 use crate::validity::check_sphere;
@@ -40,13 +40,7 @@ pub fn improve(
     params: &ImproveParams,
     progress: &(dyn Fn(usize, usize) -> bool + Sync),
 ) -> Result<SphereEmbedding, SphereError> {
-    if !(params.tolerance >= 0.0 && params.tolerance.is_finite()) {
-        return Err(SphereError::InvalidParameter {
-            name: "tolerance",
-            value: params.tolerance.to_string(),
-            expected: "a finite number >= 0",
-        });
-    }
+    check_tolerance(params.tolerance)?;
     if points.len() != mesh.n_vertices() {
         return Err(SphereError::InvalidParameter {
             name: "points",

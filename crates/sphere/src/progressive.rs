@@ -31,7 +31,7 @@ use spherify_mesh::predicates::{det3_sign, Sign};
 use crate::distortion_energy::Energy;
 use crate::embedding::{normalize, SphereEmbedding, Status};
 use crate::error::SphereError;
-use crate::flip_free::Problem;
+use crate::flip_free::{check_tolerance, Problem};
 use crate::genus_zero::GenusZeroMesh;
 use ring_mesh::{Collapse, RingMesh};
 
@@ -100,13 +100,7 @@ pub fn progressive(
     params: &ProgressiveParams,
     progress: &(dyn Fn(usize, usize) -> bool + Sync),
 ) -> Result<SphereEmbedding, SphereError> {
-    if !(params.tolerance >= 0.0 && params.tolerance.is_finite()) {
-        return Err(SphereError::InvalidParameter {
-            name: "tolerance",
-            value: params.tolerance.to_string(),
-            expected: "a finite number >= 0",
-        });
-    }
+    check_tolerance(params.tolerance)?;
     let n = mesh.n_vertices();
     let total = 3 * n;
     let positions = mesh.positions();
