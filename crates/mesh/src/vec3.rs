@@ -50,6 +50,12 @@ pub fn solve3(m: [[f64; 3]; 3], b: [f64; 3]) -> [f64; 3] {
     x
 }
 
+/// Area of the triangle `a, b, c`.
+#[inline]
+pub fn triangle_area(a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> f64 {
+    0.5 * norm(cross(sub(b, a), sub(c, a)))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -67,5 +73,9 @@ mod tests {
         );
         let x = solve3([[2.0, 1.0, 0.0], [1.0, 3.0, 1.0], [0.0, 1.0, 4.0]], [3.0, 5.0, 5.0]);
         assert!(x.iter().all(|&v| (v - 1.0).abs() < 1e-15), "{x:?}");
+        assert_eq!(
+            triangle_area([1.0, 0.0, 0.0], [3.0, 0.0, 0.0], [1.0, 3.0, 5.0]),
+            0.5 * 2.0 * 34f64.sqrt()
+        );
     }
 }

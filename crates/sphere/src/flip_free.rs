@@ -154,6 +154,12 @@ impl Problem<'_> {
         ring: &[u32],
         points: &[[f64; 3]],
     ) -> Option<[f64; 3]> {
+        self.step(k, i, ring, points).map(|(q, _)| q)
+    }
+
+    /// [`Problem::move_vertex`], and the length of the vertex's shortest edge
+    /// before the move (which also bounds the step).
+    fn step(&self, k: f64, i: u32, ring: &[u32], points: &[[f64; 3]]) -> Option<([f64; 3], f64)> {
         let p = points[i as usize];
         let star = self.star(i, ring, points);
         let (e0, g, hess) = star.hessian(self.energy, k, p);
@@ -203,7 +209,7 @@ impl Problem<'_> {
             if let Some(q) = normalize(add(p, scale(step, t))) {
                 let e = star.energy(self.energy, k, q);
                 if e <= e0 + 1e-4 * t * slope && positive_star(q, ring, points) {
-                    return Some(q);
+                    return Some((q, reach));
                 }
             }
             t *= 0.5;
@@ -239,13 +245,8 @@ impl Problem<'_> {
                         return None;
                     }
                     let ring = &rings[i as usize];
-                    let q = self.move_vertex(k, i, ring, shared)?;
-                    let p = shared[i as usize];
-                    let shortest = ring
-                        .iter()
-                        .map(|&r| norm(sub(shared[r as usize], p)))
-                        .fold(f64::INFINITY, f64::min);
-                    Some((q, norm(sub(q, p)) > NOTICEABLE * shortest))
+                    let (q, shortest) = self.step(k, i, ring, shared)?;
+                    Some((q, norm(sub(q, shared[i as usize])) > NOTICEABLE * shortest))
                 })
                 .collect();
             for (&i, q) in class.iter().zip(moves) {

@@ -113,24 +113,7 @@ struct FaceStats {
 /// Errors: [`QualityError::LengthMismatch`], [`QualityError::NonFinite`],
 /// [`QualityError::AllDegenerate`].
 pub fn quality(mesh: &Mesh, points: &[[f64; 3]]) -> Result<Quality, QualityError> {
-    let n = mesh.n_vertices();
-    if points.len() != n {
-        return Err(QualityError::LengthMismatch { got: points.len(), expected: n });
-    }
-    if let Some((index, value)) =
-        points.iter().enumerate().find(|(_, p)| !p.iter().all(|x| x.is_finite()))
-    {
-        return Err(QualityError::NonFinite { index, value: *value });
-    }
-    let positions = mesh.positions();
-    let stats: Vec<Option<FaceStats>> = mesh
-        .faces()
-        .par_iter()
-        .map(|&[a, b, c]| {
-            let tri = |p: &[[f64; 3]]| [p[a as usize], p[b as usize], p[c as usize]];
-            face_stats(tri(points), tri(positions))
-        })
-        .collect();
+    let stats = every_face_stats(mesh, points)?;
     let good: Vec<&FaceStats> = stats.iter().flatten().collect();
     let n_faces = stats.len();
     if good.is_empty() {
@@ -208,6 +191,30 @@ pub struct FaceMeasures {
 ///
 /// Errors: as [`quality`].
 pub fn face_measures(mesh: &Mesh, points: &[[f64; 3]]) -> Result<FaceMeasures, QualityError> {
+    let stats = every_face_stats(mesh, points)?;
+    let good = stats.iter().flatten();
+    let (total_p, total_q) = good.fold((0.0, 0.0), |(p, q), s| (p + s.area_p, q + s.area_q));
+    if total_p == 0.0 {
+        return Err(QualityError::AllDegenerate { faces: stats.len() });
+    }
+    let scale = (total_p / total_q).sqrt();
+    let per = |f: &dyn Fn(&FaceStats) -> f64| -> Vec<f64> {
+        stats.iter().map(|s| s.as_ref().map_or(f64::NAN, f)).collect()
+    };
+    Ok(FaceMeasures {
+        angle_max_deg: per(&|s| s.angle_diff.iter().fold(0.0, |m: f64, &d| m.max(d))),
+        conformal: per(&|s| s.sigma1 / s.sigma2),
+        area_log: per(&|s| (s.area_p / total_p).ln() - (s.area_q / total_q).ln()),
+        stretch: per(&|s| scale * (0.5 * (s.sigma1 * s.sigma1 + s.sigma2 * s.sigma2)).sqrt()),
+    })
+}
+
+/// [`face_stats`] of every face, after checking `points` (one finite point
+/// per vertex); in parallel, in face order.
+fn every_face_stats(
+    mesh: &Mesh,
+    points: &[[f64; 3]],
+) -> Result<Vec<Option<FaceStats>>, QualityError> {
     let n = mesh.n_vertices();
     if points.len() != n {
         return Err(QualityError::LengthMismatch { got: points.len(), expected: n });
@@ -226,21 +233,7 @@ pub fn face_measures(mesh: &Mesh, points: &[[f64; 3]]) -> Result<FaceMeasures, Q
             face_stats(tri(points), tri(positions))
         })
         .collect();
-    let good = stats.iter().flatten();
-    let (total_p, total_q) = good.fold((0.0, 0.0), |(p, q), s| (p + s.area_p, q + s.area_q));
-    if total_p == 0.0 {
-        return Err(QualityError::AllDegenerate { faces: stats.len() });
-    }
-    let scale = (total_p / total_q).sqrt();
-    let per = |f: &dyn Fn(&FaceStats) -> f64| -> Vec<f64> {
-        stats.iter().map(|s| s.as_ref().map_or(f64::NAN, f)).collect()
-    };
-    Ok(FaceMeasures {
-        angle_max_deg: per(&|s| s.angle_diff.iter().fold(0.0, |m: f64, &d| m.max(d))),
-        conformal: per(&|s| s.sigma1 / s.sigma2),
-        area_log: per(&|s| (s.area_p / total_p).ln() - (s.area_q / total_q).ln()),
-        stretch: per(&|s| scale * (0.5 * (s.sigma1 * s.sigma1 + s.sigma2 * s.sigma2)).sqrt()),
-    })
+    Ok(stats)
 }
 
 /// Angles, areas and singular values of one face; `None` when degenerate.

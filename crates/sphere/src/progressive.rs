@@ -27,6 +27,7 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 use spherify_mesh::predicates::{det3_sign, Sign};
+use spherify_mesh::vec3::triangle_area;
 
 use crate::distortion_energy::Energy;
 use crate::embedding::{normalize, SphereEmbedding, Status};
@@ -195,13 +196,7 @@ pub(crate) fn area_floor(mesh: &GenusZeroMesh) -> f64 {
     let total: f64 = mesh
         .faces()
         .iter()
-        .map(|&[a, b, c]| {
-            let [pa, pb, pc] = [a, b, c].map(|v| p[v as usize]);
-            0.5 * spherify_mesh::vec3::norm(spherify_mesh::vec3::cross(
-                spherify_mesh::vec3::sub(pb, pa),
-                spherify_mesh::vec3::sub(pc, pa),
-            ))
-        })
+        .map(|&[a, b, c]| triangle_area(p[a as usize], p[b as usize], p[c as usize]))
         .sum();
     let floor = 1e-6 * total / mesh.n_faces().max(1) as f64;
     if floor > 0.0 && floor.is_finite() {

@@ -27,7 +27,6 @@
 use spherify_mesh::cut::{cut_open_with, CutError};
 use spherify_mesh::{HalfEdgeMesh, TopologyError};
 use spherify_sparse::tutte::inverted_faces;
-use std::f64::consts::PI;
 
 use crate::embed::{Details, Embedding, MethodName};
 use crate::embedding::{SphereEmbedding, Status};
@@ -35,6 +34,7 @@ use crate::genus_zero::GenusZeroMesh;
 use crate::h_map::fold;
 use crate::pole_fans::{pole_fan, rectangle_boundary, strictly_increasing_phi};
 use crate::poles::Poles;
+use crate::theta_phi::rectangle_margin;
 use crate::theta_phi::ThetaPhi;
 /// How far stored theta-phi points may be from the fold of their rectangle.
 pub const FOLD_TOLERANCE: f64 = 1e-9;
@@ -191,16 +191,7 @@ fn theta_phi(
     let fans = [pole_fan(&cut_he, north, false), pole_fan(&cut_he, south, true)];
     let fans_monotone = fans.each_ref().map(|fan| strictly_increasing_phi(&uv, fan));
     let inverted = inverted_faces(cut.mesh.faces(), &uv);
-    let min_area_ratio = cut
-        .mesh
-        .faces()
-        .iter()
-        .map(|&[a, b, c]| {
-            let (a, b, c) = (uv[a as usize], uv[b as usize], uv[c as usize]);
-            0.5 * ((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]))
-        })
-        .fold(f64::INFINITY, f64::min)
-        / (2.0 * PI * PI);
+    let min_area_ratio = rectangle_margin(cut.mesh.faces(), &uv);
     Ok(ThetaPhi {
         poles: Poles { north, south, distance: f64::NAN },
         cut_path: path,

@@ -312,16 +312,7 @@ pub fn theta_phi_with_progress(
         [strictly_increasing_phi(&uv, &north_fan), strictly_increasing_phi(&uv, &south_fan)];
     let inverted = inverted_faces(cut.mesh.faces(), &uv);
     let tp_valid = inverted.is_empty();
-    let min_area_ratio = cut
-        .mesh
-        .faces()
-        .iter()
-        .map(|&[a, b, c]| {
-            let (a, b, c) = (uv[a as usize], uv[b as usize], uv[c as usize]);
-            0.5 * ((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]))
-        })
-        .fold(f64::INFINITY, f64::min)
-        / (2.0 * PI * PI);
+    let min_area_ratio = rectangle_margin(cut.mesh.faces(), &uv);
     solver.watch.lap("check");
     go_on(progress, "check")?;
 
@@ -469,6 +460,19 @@ impl RectangleSolver {
         }
         Ok(uv)
     }
+}
+
+/// The smallest signed triangle area of the theta-phi rectangle divided by
+/// the rectangle's area, 2 pi^2: [`ThetaPhi::min_area_ratio`].
+pub(crate) fn rectangle_margin(faces: &[[u32; 3]], uv: &[[f64; 2]]) -> f64 {
+    faces
+        .iter()
+        .map(|&[a, b, c]| {
+            let (a, b, c) = (uv[a as usize], uv[b as usize], uv[c as usize]);
+            0.5 * ((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]))
+        })
+        .fold(f64::INFINITY, f64::min)
+        / (2.0 * PI * PI)
 }
 
 #[cfg(test)]

@@ -21,7 +21,7 @@
 //! hierarchy always reaches four vertices.
 
 use rayon::prelude::*;
-use spherify_mesh::vec3::{cross, dot, norm, sub};
+use spherify_mesh::vec3::{cross, dot, norm, sub, triangle_area};
 
 use super::ring_mesh::{Collapse, RingMesh};
 
@@ -102,7 +102,7 @@ pub fn decimate(
             for (x, y) in quadrics[i].iter_mut().zip(q) {
                 *x += y;
             }
-            total_area += q_area(positions[i], positions[a as usize], positions[b as usize]);
+            total_area += triangle_area(positions[i], positions[a as usize], positions[b as usize]);
             n_faces += 1;
         }
     }
@@ -139,10 +139,6 @@ pub fn decimate(
         }
     }
     Some(hierarchy)
-}
-
-fn q_area(p: [f64; 3], q: [f64; 3], r: [f64; 3]) -> f64 {
-    0.5 * norm(cross(sub(q, p), sub(r, p)))
 }
 
 /// Every alive vertex's cheapest legal collapse, cheapest first.
