@@ -194,3 +194,13 @@ def test_a_certified_map_with_a_sliver_warns_about_its_margin() -> None:
     with pytest.warns(sp.SpherifyWarning, match="smallest triangle"):
         m = sp.SphereMap.from_points(mesh, thin)
     assert m.valid and m.margin < 1e-12
+
+
+def test_margins_are_over_the_mean_triangle_for_every_map() -> None:
+    # A round mesh's thinnest triangle is a sizeable fraction of the mean, in
+    # theta-phi's rectangle as on the sphere: the same scale for THIN_MARGIN.
+    mesh = sp.datasets.icosphere(3)
+    tp = sp.embed(mesh, "theta_phi")
+    assert tp.margin == pytest.approx(tp.details["min_area_ratio"] * tp.cut_mesh.n_faces)
+    assert 1e-3 < tp.margin <= 1.0
+    assert 1e-3 < sp.embed(mesh, "progressive").margin <= 1.0

@@ -9,6 +9,7 @@ never takes a verdict back from Python.
 from __future__ import annotations
 
 import os
+import warnings
 from typing import Any, Dict, List, Optional, Tuple, Union
 
 import numpy as np
@@ -31,7 +32,6 @@ def warn_if_thin(m: "SphereMap", stacklevel: int = 3) -> None:
     certified = m.tp_valid if isinstance(m, ThetaPhiMap) else m.valid
     margin = m.margin
     if certified and margin < THIN_MARGIN:
-        import warnings
         warnings.warn(f"the map is certified, but its smallest triangle is {margin:.2g} of the mean "
                       f"(below {THIN_MARGIN:g}): distinct surface points may map to the same "
                       "doubles", SpherifyWarning, stacklevel=stacklevel)
@@ -372,9 +372,11 @@ class ThetaPhiMap(SphereMap):
 
     @property
     def margin(self) -> float:
-        """The smallest triangle of the theta-phi rectangle over the mean:
-        the margin of the bijection h, which lives in the rectangle."""
-        return float(self.details["min_area_ratio"])
+        """The smallest triangle of the theta-phi rectangle over the mean
+        triangle of the rectangle: the margin of the bijection h, which lives
+        in the rectangle. (``details["min_area_ratio"]`` is over the whole
+        rectangle, so it is multiplied by the number of cut-mesh faces.)"""
+        return float(self.details["min_area_ratio"]) * self.cut_mesh.n_faces
 
     def __init__(self, core: _core.CoreSphereMap, mesh: Mesh) -> None:
         super().__init__(core, mesh)
