@@ -28,18 +28,38 @@ pub struct Problem<'a> {
     /// Surface triangles smaller than this count as this large (see
     /// [`Reference::new`]).
     pub area_floor: f64,
-    /// The references of every face around every vertex, when
-    /// [`Problem::optimise`] has computed them for its sweeps.
-    pub cache: Option<&'a References>,
 }
 
-/// Every face's surface reference seen from each of its corners, vertex by
-/// vertex in ring order: computed once for many sweeps over one connectivity
-/// (building them was a quarter of the time of a move).
+/// Every vertex's ring and the surface reference of each face around it,
+/// vertex by vertex in ring order, in three flat arrays: built once for the
+/// many sweeps over one connectivity. Building the references was a quarter
+/// of a move's time, and a sweep that reads rings from one array instead of
+/// one allocation per vertex waits far less on memory.
 #[derive(Debug, Clone)]
-pub struct References {
+pub struct Stars {
     start: Vec<usize>,
+    ring: Vec<u32>,
     refs: Vec<Reference>,
+}
+
+impl Stars {
+    /// Number of vertices (removed ones have an empty ring).
+    pub fn len(&self) -> usize {
+        self.start.len() - 1
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    pub fn ring(&self, i: u32) -> &[u32] {
+        &self.ring[self.start[i as usize]..self.start[i as usize + 1]]
+    }
+
+    /// The references of the faces `(i, r_j, r_j+1)`, in ring order.
+    pub fn refs(&self, i: u32) -> &[Reference] {
+        &self.refs[self.start[i as usize]..self.start[i as usize + 1]]
+    }
 }
 
 /// A move shorter than this fraction of the vertex's shortest edge does not
@@ -56,21 +76,20 @@ impl Problem<'_> {
         Reference::new(s[i as usize], s[a as usize], s[b as usize], self.area_floor)
     }
 
-    /// The reference of the `j`-th face around `i`, `(i, a, b)`.
-    fn reference_at(&self, i: u32, j: usize, a: u32, b: u32) -> Reference {
-        match self.cache {
-            Some(c) => c.refs[c.start[i as usize] + j],
-            None => self.reference(i, a, b),
-        }
+    /// The references of the faces around `i`, in ring order.
+    fn references(&self, i: u32, ring: &[u32]) -> Vec<Reference> {
+        let m = ring.len();
+        (0..m).map(|j| self.reference(i, ring[j], ring[(j + 1) % m])).collect()
     }
 
-    /// The references of every face around every vertex of `rings`.
-    pub fn references(&self, rings: &[Vec<u32>]) -> References {
+    /// The rings and references of every vertex of `rings`.
+    pub fn stars(&self, rings: &[Vec<u32>]) -> Stars {
         let mut start = Vec::with_capacity(rings.len() + 1);
         start.push(0);
         for ring in rings {
             start.push(start[start.len() - 1] + ring.len());
         }
+        let ring = rings.concat();
         let refs = rings
             .par_iter()
             .enumerate()
@@ -79,48 +98,23 @@ impl Problem<'_> {
                 (0..m).map(move |j| self.reference(i as u32, ring[j], ring[(j + 1) % m]))
             })
             .collect();
-        References { start, refs }
-    }
-
-    /// The energy of the faces around `i` with `i` at `p`.
-    pub fn star_energy(
-        &self,
-        k: f64,
-        i: u32,
-        p: [f64; 3],
-        ring: &[u32],
-        points: &[[f64; 3]],
-    ) -> f64 {
-        self.star(i, ring, points).energy(self.energy, k, p)
-    }
-
-    /// The faces around `i`, gathered once for the several evaluations of a move.
-    fn star(&self, i: u32, ring: &[u32], points: &[[f64; 3]]) -> Star {
-        let m = ring.len();
-        let mut star = Star { faces: Vec::with_capacity(m) };
-        for j in 0..m {
-            let (a, b) = (ring[j], ring[(j + 1) % m]);
-            let r = self.reference_at(i, j, a, b);
-            star.faces.push((r, points[a as usize], points[b as usize]));
-        }
-        star
+        Stars { start, ring, refs }
     }
 
     /// Sum of image areas (det / 2, see [`crate::distortion_energy`]) over
     /// surface areas of the current faces:
     /// the `k` that gives mesh and image equal total area.
-    pub fn area_scale(&self, rings: &[Vec<u32>], points: &[[f64; 3]]) -> f64 {
-        let per_vertex: Vec<(f64, f64)> = rings
-            .par_iter()
-            .enumerate()
-            .map(|(i, ring)| {
+    pub fn area_scale(&self, stars: &Stars, points: &[[f64; 3]]) -> f64 {
+        let per_vertex: Vec<(f64, f64)> = (0..stars.len() as u32)
+            .into_par_iter()
+            .map(|i| {
                 let mut sums = (0.0, 0.0);
+                let (ring, refs) = (stars.ring(i), stars.refs(i));
                 let m = ring.len();
                 for j in 0..m {
-                    let (a, b) = (ring[j], ring[(j + 1) % m]);
-                    let [p, pa, pb] = [i as u32, a, b].map(|v| points[v as usize]);
+                    let [p, pa, pb] = [i, ring[j], ring[(j + 1) % m]].map(|v| points[v as usize]);
                     sums.0 += 0.5 * det3(p, pa, pb);
-                    sums.1 += self.reference_at(i as u32, j, a, b).area;
+                    sums.1 += refs[j].area;
                 }
                 sums
             })
@@ -134,15 +128,25 @@ impl Problem<'_> {
         }
     }
 
-    /// Total energy of the current faces (each face counted once).
-    pub fn total_energy(&self, k: f64, rings: &[Vec<u32>], points: &[[f64; 3]]) -> f64 {
-        let per_vertex: Vec<f64> = rings
-            .par_iter()
-            .enumerate()
-            .map(|(i, ring)| self.star_energy(k, i as u32, points[i], ring, points))
+    /// Total energy of the current faces, each face seen from its smallest corner.
+    pub fn total_energy(&self, k: f64, stars: &Stars, points: &[[f64; 3]]) -> f64 {
+        let per_vertex: Vec<f64> = (0..stars.len() as u32)
+            .into_par_iter()
+            .map(|i| {
+                let (ring, refs) = (stars.ring(i), stars.refs(i));
+                let m = ring.len();
+                let p = points[i as usize];
+                (0..m)
+                    .filter(|&j| i < ring[j] && i < ring[(j + 1) % m])
+                    .map(|j| {
+                        let (a, b) = (points[ring[j] as usize], points[ring[(j + 1) % m] as usize]);
+                        face_energy(self.energy, &refs[j], k, p, a, b)
+                    })
+                    .sum::<f64>()
+            })
             .collect();
         // A fixed order of summation: the same total on every thread count.
-        per_vertex.iter().sum::<f64>() / 3.0
+        per_vertex.iter().sum::<f64>()
     }
 
     /// One flip-free move of vertex `i`: the new point, or `None` when no step
@@ -154,26 +158,35 @@ impl Problem<'_> {
         ring: &[u32],
         points: &[[f64; 3]],
     ) -> Option<[f64; 3]> {
-        self.step(k, i, ring, points).map(|(q, _)| q)
+        let refs = self.references(i, ring);
+        self.step(k, i, ring, &refs, points, &mut Vec::new()).map(|(q, _)| q)
     }
 
-    /// [`Problem::move_vertex`], and the length of the vertex's shortest edge
-    /// before the move (which also bounds the step).
-    fn step(&self, k: f64, i: u32, ring: &[u32], points: &[[f64; 3]]) -> Option<([f64; 3], f64)> {
+    /// [`Problem::move_vertex`] with the references of `i`'s faces given and
+    /// a buffer for its ring's points; also returns the length of the
+    /// vertex's shortest edge before the move (which also bounds the step).
+    fn step(
+        &self,
+        k: f64,
+        i: u32,
+        ring: &[u32],
+        refs: &[Reference],
+        points: &[[f64; 3]],
+        corners: &mut Vec<[f64; 3]>,
+    ) -> Option<([f64; 3], f64)> {
         let p = points[i as usize];
-        let star = self.star(i, ring, points);
+        let star = Star::gather(refs, ring, points, corners);
         let (e0, g, hess) = star.hessian(self.energy, k, p);
         if !e0.is_finite() {
             return None;
         }
         let (e1, e2) = tangent_basis(p);
         let gt = [dot(g, e1), dot(g, e2)];
-        let gnorm = gt[0].hypot(gt[1]);
+        let gnorm = (gt[0] * gt[0] + gt[1] * gt[1]).sqrt();
         if gnorm == 0.0 || !gnorm.is_finite() {
             return None;
         }
-        let reach =
-            ring.iter().map(|&r| norm(sub(points[r as usize], p))).fold(f64::INFINITY, f64::min);
+        let reach = star.corners.iter().map(|&r| norm(sub(r, p))).fold(f64::INFINITY, f64::min);
         // Newton direction in the tangent plane: p(s) = (p + s) / |p + s|
         // = p + s - |s|^2 p / 2 + ..., so the Hessian in s is E^T H E - (g . p) I.
         let he =
@@ -184,7 +197,7 @@ impl Problem<'_> {
         let det = h00 * h11 - h01 * h01;
         if det > 0.0 && h00 > 0.0 {
             let d = [-(h11 * gt[0] - h01 * gt[1]) / det, -(h00 * gt[1] - h01 * gt[0]) / det];
-            let len = d[0].hypot(d[1]);
+            let len = (d[0] * d[0] + d[1] * d[1]).sqrt();
             if len.is_finite() && len > 0.0 {
                 let cap = (0.5 * reach / len).min(1.0);
                 dir = Some([d[0] * cap, d[1] * cap]);
@@ -198,7 +211,7 @@ impl Problem<'_> {
         let step = add(scale(e1, d[0]), scale(e2, d[1]));
         // det[p + t step, a, b] = det[p, a, b] + t det[step, a, b].
         let mut t_safe = f64::INFINITY;
-        for &(_, a, b) in &star.faces {
+        for (_, a, b) in star.faces() {
             let rate = det3(step, a, b);
             if rate < 0.0 {
                 t_safe = t_safe.min(-det3(p, a, b) / rate);
@@ -208,7 +221,7 @@ impl Problem<'_> {
         for _ in 0..MAX_HALVINGS {
             if let Some(q) = normalize(add(p, scale(step, t))) {
                 let e = star.energy(self.energy, k, q);
-                if e <= e0 + 1e-4 * t * slope && positive_star(q, ring, points) {
+                if e <= e0 + 1e-4 * t * slope && positive_fan(q, star.corners) {
                     return Some((q, reach));
                 }
             }
@@ -226,7 +239,7 @@ impl Problem<'_> {
         &self,
         k: f64,
         classes: &[Vec<u32>],
-        rings: &[Vec<u32>],
+        stars: &Stars,
         points: &mut [[f64; 3]],
         active: Option<&[bool]>,
         stop: &(dyn Fn() -> bool + Sync),
@@ -240,12 +253,12 @@ impl Problem<'_> {
             let moves: Vec<Option<([f64; 3], bool)>> = class
                 .par_iter()
                 .with_min_len(64)
-                .map(|&i| {
+                .map_init(Vec::new, |corners, &i| {
                     if active.is_some_and(|a| !a[i as usize]) {
                         return None;
                     }
-                    let ring = &rings[i as usize];
-                    let (q, shortest) = self.step(k, i, ring, shared)?;
+                    let (ring, refs) = (stars.ring(i), stars.refs(i));
+                    let (q, shortest) = self.step(k, i, ring, refs, shared, corners)?;
                     Some((q, norm(sub(q, shared[i as usize])) > NOTICEABLE * shortest))
                 })
                 .collect();
@@ -262,21 +275,39 @@ impl Problem<'_> {
     }
 }
 
-/// The faces around one vertex: each face's surface reference and the
-/// positions of its other two corners.
-struct Star {
-    faces: Vec<(Reference, [f64; 3], [f64; 3])>,
+/// The faces around one vertex: each face's surface reference, and the
+/// ring's points gathered once for the several evaluations of a move.
+struct Star<'a> {
+    refs: &'a [Reference],
+    corners: &'a [[f64; 3]],
 }
 
-impl Star {
+impl<'a> Star<'a> {
+    fn gather(
+        refs: &'a [Reference],
+        ring: &[u32],
+        points: &[[f64; 3]],
+        corners: &'a mut Vec<[f64; 3]>,
+    ) -> Star<'a> {
+        corners.clear();
+        corners.extend(ring.iter().map(|&r| points[r as usize]));
+        Star { refs, corners }
+    }
+
+    /// Each face's reference and its two corners other than the vertex.
+    fn faces(&self) -> impl Iterator<Item = (&Reference, [f64; 3], [f64; 3])> + '_ {
+        let m = self.corners.len();
+        self.refs.iter().enumerate().map(move |(j, r)| (r, self.corners[j], self.corners[(j + 1) % m]))
+    }
+
     fn energy(&self, energy: Energy, k: f64, p: [f64; 3]) -> f64 {
-        self.faces.iter().map(|(r, a, b)| face_energy(energy, r, k, p, *a, *b)).sum()
+        self.faces().map(|(r, a, b)| face_energy(energy, r, k, p, a, b)).sum()
     }
 
     fn hessian(&self, energy: Energy, k: f64, p: [f64; 3]) -> (f64, [f64; 3], [[f64; 3]; 3]) {
         let mut total = (0.0, [0.0; 3], [[0.0; 3]; 3]);
-        for (r, a, b) in &self.faces {
-            let (e, g, h) = face_energy_hessian(energy, r, k, p, *a, *b);
+        for (r, a, b) in self.faces() {
+            let (e, g, h) = face_energy_hessian(energy, r, k, p, a, b);
             total.0 += e;
             total.1 = add(total.1, g);
             for (row, h_row) in total.2.iter_mut().zip(h) {
@@ -310,6 +341,12 @@ pub fn positive_star(p: [f64; 3], ring: &[u32], points: &[[f64; 3]]) -> bool {
         let (a, b) = (points[ring[j] as usize], points[ring[(j + 1) % m] as usize]);
         det3_sign(p, a, b) == Sign::Positive
     })
+}
+
+/// [`positive_star`] with the ring's points given in order.
+fn positive_fan(p: [f64; 3], corners: &[[f64; 3]]) -> bool {
+    let m = corners.len();
+    (0..m).all(|j| det3_sign(p, corners[j], corners[(j + 1) % m]) == Sign::Positive)
 }
 
 /// An orthonormal basis of the plane orthogonal to the unit vector `p`.
@@ -365,6 +402,8 @@ pub struct Optimised {
     /// Relative fall of the energy in the last sweep.
     pub last_change: f64,
     pub converged: bool,
+    /// The area scale `k` of the last sweep (see [`Problem::area_scale`]).
+    pub scale: f64,
 }
 
 impl Problem<'_> {
@@ -378,39 +417,28 @@ impl Problem<'_> {
         tolerance: f64,
         stop: &(dyn Fn(usize) -> bool + Sync),
     ) -> Result<Optimised, Stopped> {
-        let references = self.references(rings);
-        let cached = Problem { cache: Some(&references), ..*self };
-        cached.optimise_cached(rings, points, max_sweeps, tolerance, stop)
-    }
-
-    fn optimise_cached(
-        &self,
-        rings: &[Vec<u32>],
-        points: &mut [[f64; 3]],
-        max_sweeps: usize,
-        tolerance: f64,
-        stop: &(dyn Fn(usize) -> bool + Sync),
-    ) -> Result<Optimised, Stopped> {
+        let stars = self.stars(rings);
         let classes = colour_classes(rings);
         let mut active = vec![true; rings.len()];
-        let mut k = self.area_scale(rings, points);
-        let mut energy = self.total_energy(k, rings, points);
+        let mut k = self.area_scale(&stars, points);
+        let mut energy = self.total_energy(k, &stars, points);
         let mut result =
-            Optimised { sweeps: 0, energy, last_change: f64::INFINITY, converged: false };
+            Optimised { sweeps: 0, energy, last_change: f64::INFINITY, converged: false, scale: k };
         while result.sweeps < max_sweeps {
             let sweeps = result.sweeps;
-            let moved = self.sweep(k, &classes, rings, points, Some(&active), &|| stop(sweeps))?;
+            let moved =
+                self.sweep(k, &classes, &stars, points, Some(&active), &|| stop(sweeps))?;
             result.sweeps += 1;
             // Only what moved, and its neighbours, can still go down much.
             active.iter_mut().for_each(|a| *a = false);
             for &v in &moved {
                 active[v as usize] = true;
-                for &r in &rings[v as usize] {
+                for &r in stars.ring(v) {
                     active[r as usize] = true;
                 }
             }
-            k = self.area_scale(rings, points);
-            let next = self.total_energy(k, rings, points);
+            k = self.area_scale(&stars, points);
+            let next = self.total_energy(k, &stars, points);
             result.last_change = (energy - next).abs() / energy.abs().max(f64::MIN_POSITIVE);
             energy = next;
             if moved.is_empty() || result.last_change < tolerance {
@@ -418,7 +446,14 @@ impl Problem<'_> {
                 break;
             }
         }
-        result.energy = energy / (k * self.surface_area(rings)).max(f64::MIN_POSITIVE);
+        // Per vertex, then in a fixed order: the same on every thread count.
+        let per_vertex: Vec<f64> = (0..stars.len() as u32)
+            .into_par_iter()
+            .map(|i| stars.refs(i).iter().map(|r| r.area).sum())
+            .collect();
+        let surface_area = per_vertex.iter().sum::<f64>() / 3.0;
+        result.energy = energy / (k * surface_area).max(f64::MIN_POSITIVE);
+        result.scale = k;
         Ok(result)
     }
 
@@ -426,27 +461,25 @@ impl Problem<'_> {
     /// smaller than [`crate::progressive::LEVEL_AREA_FLOOR`] times the
     /// level's mean face area count as that large.
     pub fn at_level(&self, rings: &[Vec<u32>]) -> Problem<'_> {
-        let faces: usize = rings.iter().map(Vec::len).sum::<usize>() / 3;
-        let mean = self.surface_area(rings) / faces.max(1) as f64;
-        let floor = crate::progressive::LEVEL_AREA_FLOOR * mean;
-        Problem {
-            area_floor: self.area_floor.max(if floor.is_finite() { floor } else { 0.0 }),
-            cache: None,
-            ..*self
-        }
-    }
-
-    fn surface_area(&self, rings: &[Vec<u32>]) -> f64 {
-        let per_vertex: Vec<f64> = rings
+        let (area, corners): (f64, usize) = rings
             .par_iter()
             .enumerate()
             .map(|(i, ring)| {
                 let m = ring.len();
-                (0..m)
-                    .map(|j| self.reference_at(i as u32, j, ring[j], ring[(j + 1) % m]).area)
-                    .sum()
+                let area: f64 = (0..m)
+                    .map(|j| self.reference(i as u32, ring[j], ring[(j + 1) % m]).area)
+                    .sum();
+                (area, m)
             })
-            .collect();
-        per_vertex.iter().sum::<f64>() / 3.0
+            .collect::<Vec<_>>()
+            .into_iter()
+            .fold((0.0, 0), |t, x| (t.0 + x.0, t.1 + x.1));
+        // Each face is seen from its three corners.
+        let mean = (area / 3.0) / (corners / 3).max(1) as f64;
+        let floor = crate::progressive::LEVEL_AREA_FLOOR * mean;
+        Problem {
+            area_floor: self.area_floor.max(if floor.is_finite() { floor } else { 0.0 }),
+            ..*self
+        }
     }
 }

@@ -61,7 +61,6 @@ pub fn improve(
         energy: params.energy,
         surface: mesh.positions(),
         area_floor: area_floor(mesh),
-        cache: None,
     };
     let mut points = points.to_vec();
     let total = params.max_iter.max(1);

@@ -2,12 +2,15 @@
 //! to a tetrahedron, in rounds of independent collapses.
 //!
 //! Each round scores every vertex `u` by its cheapest legal collapse `u -> v`
-//! and takes collapses greedily, cheapest first, as long as their closed
-//! rings (`u` and its neighbours) are disjoint from those already taken. Such
-//! collapses edit disjoint neighbour lists, so within a round their order
-//! does not matter, and when the progressive method undoes a round the
-//! re-inserted vertices see no other vertex of the round: they can be placed
-//! in parallel. The result depends on nothing but the mesh.
+//! and makes collapses greedily, cheapest first, skipping any `u` that was
+//! in the ring of a vertex already removed in the round. So no vertex
+//! removed in a round is a neighbour of another, and each one's ring holds
+//! only vertices that outlive the round: when the progressive method undoes
+//! the round (last collapse first), every re-inserted vertex can be placed
+//! from positions known before the round, all of them in parallel. The
+//! stars the round's collapses turn into fans share no face, so the
+//! insertions do not disturb one another. The result depends on nothing but
+//! the mesh.
 //!
 //! The score is the quadric error of Garland and Heckbert (1997) accumulated
 //! over collapses, plus a small multiple of the squared edge length: flat
@@ -91,35 +94,59 @@ pub fn decimate(
     report: &mut dyn FnMut(usize) -> bool,
 ) -> Option<Hierarchy> {
     let n = mesh.rings.len();
-    let mut quadrics: Vec<Quadric> = vec![[0.0; 10]; n];
-    let mut total_area = 0.0;
-    let mut n_faces = 0usize;
-    for (i, ring) in mesh.rings.iter().enumerate() {
-        let m = ring.len();
-        for j in 0..m {
-            let (a, b) = (ring[j], ring[(j + 1) % m]);
-            let q = plane_quadric(positions[i], positions[a as usize], positions[b as usize]);
-            for (x, y) in quadrics[i].iter_mut().zip(q) {
-                *x += y;
+    let per_vertex: Vec<(Quadric, f64)> = mesh
+        .rings
+        .par_iter()
+        .enumerate()
+        .map(|(i, ring)| {
+            let (mut quadric, mut area) = ([0.0; 10], 0.0);
+            let m = ring.len();
+            for j in 0..m {
+                let [p, a, b] =
+                    [positions[i], positions[ring[j] as usize], positions[ring[(j + 1) % m] as usize]];
+                for (x, y) in quadric.iter_mut().zip(plane_quadric(p, a, b)) {
+                    *x += y;
+                }
+                area += triangle_area(p, a, b);
             }
-            total_area += triangle_area(positions[i], positions[a as usize], positions[b as usize]);
-            n_faces += 1;
-        }
-    }
+            (quadric, area)
+        })
+        .collect();
+    // A fixed order of summation: the same weight on every thread count.
+    let total_area: f64 = per_vertex.iter().map(|x| x.1).sum();
+    let n_faces: usize = mesh.rings.iter().map(Vec::len).sum();
+    let mut quadrics: Vec<Quadric> = per_vertex.into_iter().map(|x| x.0).collect();
     let length_weight = LENGTH_WEIGHT * total_area / n_faces.max(1) as f64;
     let mut alive: Vec<u32> = (0..n as u32).collect();
     let mut locked = vec![u32::MAX; n];
     let mut hierarchy = Hierarchy::default();
     let mut round = 0u32;
     while mesh.n_alive > 4 {
-        let mut taken = take_round(mesh, positions, &quadrics, length_weight, &alive, true);
+        let mut careful = true;
+        let mut taken = take_round(mesh, positions, &quadrics, length_weight, &alive, careful);
         if taken.is_empty() {
-            taken = take_round(mesh, positions, &quadrics, length_weight, &alive, false);
+            careful = false;
+            taken = take_round(mesh, positions, &quadrics, length_weight, &alive, careful);
         }
         let start = hierarchy.collapses.len();
-        for (u, v) in greedy(mesh, taken, &mut locked, round) {
+        for (_, u, v) in taken {
             if mesh.n_alive <= 4 {
                 break;
+            }
+            // No vertex of a ring collapsed this round collapses itself in
+            // the same round. So an unlocked `u` was no neighbour of any
+            // vertex removed before it, and its ring is the one it was
+            // scored with; `v`'s may have grown, so the degree and link
+            // condition are asked again.
+            let ring = &mesh.rings[u as usize];
+            if locked[u as usize] == round
+                || (careful && mesh.rings[v as usize].len() + ring.len() - 4 > MAX_DEGREE)
+                || !mesh.can_collapse(u, v)
+            {
+                continue;
+            }
+            for &r in ring {
+                locked[r as usize] = round;
             }
             let qu = quadrics[u as usize];
             for (x, y) in quadrics[v as usize].iter_mut().zip(qu) {
@@ -153,53 +180,31 @@ fn take_round(
     let mut scored: Vec<(f64, u32, u32)> = alive
         .par_iter()
         .with_min_len(256)
-        .filter_map(|&u| {
+        .map_init(Vec::new, |candidates: &mut Vec<(f64, u32)>, &u| {
+            // Cost every edge first, then test legality cheapest first: the
+            // cheapest edge is nearly always legal, and the legality tests
+            // cost far more than the quadric.
             let ring = &mesh.rings[u as usize];
-            let mut best: Option<(f64, u32, u32)> = None;
-            for &v in ring {
-                if careful
-                    && (mesh.rings[v as usize].len() + ring.len() - 4 > MAX_DEGREE
-                        || !keeps_normals(positions, u, v, ring))
-                {
-                    continue;
-                }
-                if !mesh.can_collapse(u, v) {
-                    continue;
-                }
+            candidates.clear();
+            candidates.extend(ring.iter().map(|&v| {
                 let q: Quadric =
                     std::array::from_fn(|i| quadrics[u as usize][i] + quadrics[v as usize][i]);
                 let edge = sub(positions[u as usize], positions[v as usize]);
                 let cost = quadric_at(&q, positions[v as usize]).max(0.0)
                     + length_weight * dot(edge, edge);
-                if best.is_none_or(|(c, _, bv)| cost < c || (cost == c && v < bv)) {
-                    best = Some((cost, u, v));
-                }
-            }
-            best
+                (cost, v)
+            }));
+            candidates.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+            candidates.iter().find_map(|&(cost, v)| {
+                let legal = (!careful
+                    || (mesh.rings[v as usize].len() + ring.len() - 4 <= MAX_DEGREE
+                        && keeps_normals(positions, u, v, ring)))
+                    && mesh.can_collapse(u, v);
+                legal.then_some((cost, u, v))
+            })
         })
+        .flatten()
         .collect();
     scored.par_sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
     scored
-}
-
-/// The cheapest collapses whose closed rings are pairwise disjoint.
-fn greedy(
-    mesh: &RingMesh,
-    scored: Vec<(f64, u32, u32)>,
-    locked: &mut [u32],
-    round: u32,
-) -> Vec<(u32, u32)> {
-    let mut taken = Vec::new();
-    for (_, u, v) in scored {
-        let ring = &mesh.rings[u as usize];
-        if locked[u as usize] == round || ring.iter().any(|&r| locked[r as usize] == round) {
-            continue;
-        }
-        locked[u as usize] = round;
-        for &r in ring {
-            locked[r as usize] = round;
-        }
-        taken.push((u, v));
-    }
-    taken
 }
