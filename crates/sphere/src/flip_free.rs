@@ -297,7 +297,10 @@ impl<'a> Star<'a> {
     /// Each face's reference and its two corners other than the vertex.
     fn faces(&self) -> impl Iterator<Item = (&Reference, [f64; 3], [f64; 3])> + '_ {
         let m = self.corners.len();
-        self.refs.iter().enumerate().map(move |(j, r)| (r, self.corners[j], self.corners[(j + 1) % m]))
+        self.refs
+            .iter()
+            .enumerate()
+            .map(move |(j, r)| (r, self.corners[j], self.corners[(j + 1) % m]))
     }
 
     fn energy(&self, energy: Energy, k: f64, p: [f64; 3]) -> f64 {
@@ -426,8 +429,7 @@ impl Problem<'_> {
             Optimised { sweeps: 0, energy, last_change: f64::INFINITY, converged: false, scale: k };
         while result.sweeps < max_sweeps {
             let sweeps = result.sweeps;
-            let moved =
-                self.sweep(k, &classes, &stars, points, Some(&active), &|| stop(sweeps))?;
+            let moved = self.sweep(k, &classes, &stars, points, Some(&active), &|| stop(sweeps))?;
             result.sweeps += 1;
             // Only what moved, and its neighbours, can still go down much.
             active.iter_mut().for_each(|a| *a = false);
@@ -466,9 +468,8 @@ impl Problem<'_> {
             .enumerate()
             .map(|(i, ring)| {
                 let m = ring.len();
-                let area: f64 = (0..m)
-                    .map(|j| self.reference(i as u32, ring[j], ring[(j + 1) % m]).area)
-                    .sum();
+                let area: f64 =
+                    (0..m).map(|j| self.reference(i as u32, ring[j], ring[(j + 1) % m]).area).sum();
                 (area, m)
             })
             .collect::<Vec<_>>()

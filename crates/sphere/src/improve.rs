@@ -57,11 +57,8 @@ pub fn improve(
     }
     let started = Instant::now();
     let rings = crate::progressive::rings_of(mesh);
-    let problem = Problem {
-        energy: params.energy,
-        surface: mesh.positions(),
-        area_floor: area_floor(mesh),
-    };
+    let problem =
+        Problem { energy: params.energy, surface: mesh.positions(), area_floor: area_floor(mesh) };
     let mut points = points.to_vec();
     let total = params.max_iter.max(1);
     let end = problem

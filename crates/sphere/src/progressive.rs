@@ -127,11 +127,8 @@ pub fn progressive(
     let started = Instant::now();
     let mut points = vec![[0.0; 3]; n];
     place_tetrahedron(&rings, &mut points);
-    let problem = Problem {
-        energy: params.energy,
-        surface: positions,
-        area_floor: area_floor(mesh),
-    };
+    let problem =
+        Problem { energy: params.energy, surface: positions, area_floor: area_floor(mesh) };
     let mut optimised_at = 4usize;
     // The last level's problem and area scale, for the moves of new vertices.
     let mut level: Option<(Problem<'_>, f64)> = None;

@@ -102,8 +102,11 @@ pub fn decimate(
             let (mut quadric, mut area) = ([0.0; 10], 0.0);
             let m = ring.len();
             for j in 0..m {
-                let [p, a, b] =
-                    [positions[i], positions[ring[j] as usize], positions[ring[(j + 1) % m] as usize]];
+                let [p, a, b] = [
+                    positions[i],
+                    positions[ring[j] as usize],
+                    positions[ring[(j + 1) % m] as usize],
+                ];
                 for (x, y) in quadric.iter_mut().zip(plane_quadric(p, a, b)) {
                     *x += y;
                 }

@@ -93,11 +93,8 @@ fn improve_lowers_the_energy_of_a_theta_phi_map_and_keeps_it_valid() {
     let params = ImproveParams::default();
     let improved = improve_embedding(&mesh, &start, &params, &|_, _| true).unwrap();
     assert!(improved.certificate.valid);
-    let problem = Problem {
-        energy: params.energy,
-        surface: mesh.positions(),
-        area_floor: area_floor(&mesh),
-    };
+    let problem =
+        Problem { energy: params.energy, surface: mesh.positions(), area_floor: area_floor(&mesh) };
     let stars = problem.stars(&rings_of(&mesh));
     let energy = |p: &[[f64; 3]]| problem.total_energy(problem.area_scale(&stars, p), &stars, p);
     assert!(energy(&improved.result.points) < 0.9 * energy(&start.result.points));
