@@ -2,6 +2,7 @@
 use super::*;
 use crate::validity::check_sphere;
 use spherify_mesh::Mesh;
+use spherify_sparse::{solve, SolveParams, SolverKind};
 
 /// The method on a test mesh, validated here.
 fn gotsman(mesh: &Mesh, params: &GotsmanParams) -> Result<SphereEmbedding, SphereError> {
