@@ -102,7 +102,7 @@ def embed(mesh: MeshLike, method: str = "theta_phi", *, progress: Any = None,
 
     energy : str
         ``"isometric"`` (default; symmetric Dirichlet), ``"conformal"``
-        (MIPS with a barrier below an area ratio of 1e-3: an exactly
+        (MIPS with a barrier below an area ratio of 1e-5: an exactly
         conformal map of a limbed shape cannot be stored in doubles),
         ``"authalic"`` (area plus a small angle term) or ``"stretch"``
         (Sander's L2 stretch, as Praun and Hoppe).
