@@ -449,6 +449,27 @@ impl Factor {
         Ok(())
     }
 
+    /// `A x = b` for every `b` in `rhs`, one solve with the factor and
+    /// nothing more: no residual (the callers, iterative refinement, take
+    /// their own in double-double).
+    ///
+    /// Errors: [`SparseError::Singular`] if a solution is not finite.
+    fn solve_once(&self, rhs: &[Vec<f64>]) -> Result<Vec<Vec<f64>>, SparseError> {
+        guarded("sparse triangular solve", || {
+            let n = rhs.first().map_or(0, Vec::len);
+            let mut x = Mat::from_fn(n, rhs.len(), |i, j| rhs[j][i]);
+            self.solve_in_place(&mut x)?;
+            let sol: Vec<Vec<f64>> =
+                (0..rhs.len()).map(|j| x.col(j).iter().copied().collect()).collect();
+            if sol.iter().flatten().any(|v| !v.is_finite()) {
+                return Err(SparseError::Singular {
+                    detail: "numerically singular, the solution is not finite".into(),
+                });
+            }
+            Ok(sol)
+        })
+    }
+
     /// `A x = b` for every `b` in `rhs` (lengths validated by the dispatcher),
     /// then up to [`MAX_REFINEMENT_STEPS`] steps of iterative refinement
     /// `x += A^{-1} (b - A x)` for as long as some relative residual is above
@@ -513,8 +534,16 @@ impl Factorization {
         Ok(Factorization { factor, n: a.n_rows() })
     }
 
-    /// Solves `A x = b` for every `b`, with no refinement.
+    /// Solves `A x = b` for every `b`, with no refinement and no residual;
+    /// `a` is the matrix that was factorised (its size is checked).
     pub fn solve(&self, a: &CsrMatrix, rhs: &[Vec<f64>]) -> Result<Vec<Vec<f64>>, SparseError> {
+        if a.n_rows() != self.n {
+            return Err(SparseError::LengthMismatch {
+                what: "matrix rows",
+                got: a.n_rows(),
+                expected: self.n,
+            });
+        }
         for b in rhs {
             if b.len() != self.n {
                 return Err(SparseError::LengthMismatch {
@@ -524,8 +553,7 @@ impl Factorization {
                 });
             }
         }
-        // A tolerance of infinity turns the factor's own refinement off.
-        self.factor.solve(a, rhs, f64::INFINITY).map(|(x, _)| x)
+        self.factor.solve_once(rhs)
     }
 }
 
