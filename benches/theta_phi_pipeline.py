@@ -113,7 +113,7 @@ def cut_system(m: Any) -> Tuple[Any, np.ndarray]:
     return A, np.ascontiguousarray(B)
 
 
-def worker_spherify(path: str, repeats: int) -> Dict[str, Any]:
+def worker_spherify(path: str, repeats: int, cholmod: bool = True) -> Dict[str, Any]:
     mesh = load_job(path)
     n = mesh.n_vertices
     gc.collect()
@@ -153,6 +153,8 @@ def worker_spherify(path: str, repeats: int) -> Dict[str, Any]:
     try:
         from sksparse.cholmod import cholesky
     except ImportError:
+        cholmod = False
+    if not cholmod:
         out["cholmod"] = None
         return out
     A, B = cut_system(m)
@@ -296,7 +298,7 @@ def table(rows: List[Dict[str, Any]]) -> str:
         chol = s.get("cholmod")
         ratio_chol = f"{s['seconds'] / chol:.2f}x" if chol else "-"
         chol_cell = (f"{chol:.3f} ({s['cholmod_amd']:.2f} / {s['cholmod_metis']:.2f})"
-                     if chol else "-")
+                     if chol else "not run")
         cells = [
             row["label"], f"{s['n']:,}", fmt(row["check_orient"]), fmt(stage("poles")),
             fmt(stage("cut")), fmt(stage("system")), fmt(stage("factor")),
@@ -319,6 +321,7 @@ def main() -> None:
                         help="spherify and CHOLMOD runs per mesh (the fastest is kept)")
     parser.add_argument("--lapy-timeout", type=float, default=600.0)
     parser.add_argument("--no-lapy", action="store_true")
+    parser.add_argument("--no-cholmod", action="store_true", help="time spherify alone")
     parser.add_argument("--no-lapy-conformal", action="store_true",
                         help="run LaPy's spherical_tutte_map only")
     parser.add_argument("--shapes", nargs="+", metavar="NAME:N",
@@ -333,7 +336,7 @@ def main() -> None:
         if kind == "generate":
             result = worker_generate(rest[0], int(rest[1]), rest[2])
         elif kind == "spherify":
-            result = worker_spherify(rest[0], int(rest[1]))
+            result = worker_spherify(rest[0], int(rest[1]), rest[2:] != ["no-cholmod"])
         else:
             result = worker_lapy(rest[0], kind)
         print(json.dumps(result))
@@ -351,7 +354,9 @@ def main() -> None:
         for label, kind, path in jobs(args, Path(tmp)):
             print(f"{label} ...", file=sys.stderr, flush=True)
             row: Dict[str, Any] = {"label": label, "kind": kind}
-            row["spherify"] = run_worker(["spherify", path, str(args.repeats)], None)
+            row["spherify"] = run_worker(
+                ["spherify", path, str(args.repeats)] + (["no-cholmod"] if args.no_cholmod else []),
+                None)
             row["check_orient"] = row["spherify"].get("check_orient")
             for which in ("spherical_tutte_map", "spherical_conformal_map"):
                 key = "lapy_tutte" if which == "spherical_tutte_map" else "lapy_conformal"
