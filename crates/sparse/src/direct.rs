@@ -1,9 +1,10 @@
 //! Sparse direct solvers: Cholesky `L L^T` for symmetric positive definite
 //! matrices and LU with partial pivoting for the rest, both from the `faer`
 //! crate (supernodal, with a fill-reducing ordering: nested dissection
-//! (`crate::nested_dissection`) or AMD for Cholesky, COLAMD for LU).
+//! (`crate::nested_dissection`) or AMD for Cholesky, COLAMD for LU). Large
+//! Cholesky factors are made in two halves in parallel ([`bordered`]).
 //!
-//! This is the only module that names `faer`: its API changes between minor
+//! This module (with its child [`bordered`]) is the only one that names `faer`: its API changes between minor
 //! versions, and STYLE.md ("Avoid") wants such a dependency behind one small
 //! module so an upgrade touches one file.
 //!
@@ -16,6 +17,8 @@
 //! [`Factorization`], the public face of a factor kept for many solves (the
 //! iterative refinement of `crate::refine`), lives here too.
 
+mod bordered;
+
 use crate::error::SparseError;
 use crate::nested_dissection::{nested_dissection, pseudo_diameter};
 use crate::solve::{find_asymmetry, validate, SolveParams};
@@ -26,10 +29,11 @@ use faer::linalg::cholesky::llt::factor::LltError as DenseLltError;
 use faer::perm::PermRef;
 use faer::sparse::linalg::amd;
 use faer::sparse::linalg::cholesky::{
-    factorize_symbolic_cholesky, LltRef, SymbolicCholesky, SymmetricOrdering,
+    factorize_symbolic_cholesky, CholeskySymbolicParams, LltRef, SymbolicCholesky,
+    SymmetricOrdering,
 };
 use faer::sparse::linalg::lu::{factorize_symbolic_lu, LuRef, NumericLu, SymbolicLu};
-use faer::sparse::linalg::LuError;
+use faer::sparse::linalg::{LuError, SupernodalThreshold};
 use faer::sparse::FaerError;
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{Conj, Index, Mat, Par, Side};
@@ -61,6 +65,9 @@ pub(crate) enum Factor {
     Cholesky32 { symbolic: SymbolicCholesky<u32>, values: Vec<f64> },
     /// The same with 64-bit indices, for factors too large for 32 bits.
     Cholesky { symbolic: SymbolicCholesky<usize>, values: Vec<f64> },
+    /// The same in two halves factored in parallel and a dense corner
+    /// ([`bordered`]), for large matrices.
+    Bordered(Box<bordered::Bordered>),
     /// LU of `A^T`; see [`Factor::lu`] for why the transpose.
     LuOfTranspose { symbolic: SymbolicLu<usize>, numeric: NumericLu<usize, f64> },
 }
@@ -124,13 +131,36 @@ const COMPARE_ORDERINGS_UP_TO: usize = 200_000;
 /// least this many times `sqrt(n)`, AMD otherwise (see [`analyse`]).
 const LONG_GRAPH: f64 = 1.5;
 
-/// The symbolic factor of `m` (its lower triangle) under the permutation
-/// `perm` (`perm[k]` = the row eliminated `k`-th), or under AMD for `None`;
+/// The fill-reducing ordering of a symbolic factor.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum Ordering<'a> {
+    /// faer's approximate minimum degree.
+    Amd,
+    /// `perm[k]` = the row eliminated `k`-th.
+    Custom(&'a [u32]),
+    /// The matrix's own order (no permuted copy of it is made).
+    AsGiven,
+}
+
+/// Whether a symbolic factor may be simplicial (faer's choice, by its
+/// predicted flops) or must be supernodal.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum Supernodal {
+    FaerChooses,
+    Always,
+}
+
+/// The symbolic factor of `m` (its lower triangle) under `ordering`;
 /// `None` back when the factor has more entries than `I` can count.
 pub(crate) fn symbolic_llt<I: Index>(
     m: SymbolicSparseColMatRef<'_, I>,
-    perm: Option<&[u32]>,
+    ordering: Ordering<'_>,
+    supernodal: Supernodal,
 ) -> Result<Option<SymbolicCholesky<I>>, SparseError> {
+    let perm = match ordering {
+        Ordering::Amd | Ordering::AsGiven => None,
+        Ordering::Custom(perm) => Some(perm),
+    };
     let arrays = perm.map(|perm| {
         let forward: Vec<I> = perm.iter().map(|&v| I::truncate(v as usize)).collect();
         let mut inverse = vec![I::truncate(0); perm.len()];
@@ -144,9 +174,14 @@ pub(crate) fn symbolic_llt<I: Index>(
         Some((forward, inverse)) => {
             SymmetricOrdering::Custom(PermRef::new_checked(forward, inverse, m.nrows()))
         }
+        None if ordering == Ordering::AsGiven => SymmetricOrdering::Identity,
         None => SymmetricOrdering::Amd,
     };
-    match factorize_symbolic_cholesky(m, Side::Lower, ordering, Default::default()) {
+    let mut params = CholeskySymbolicParams::default();
+    if supernodal == Supernodal::Always {
+        params.supernodal_flop_ratio_threshold = SupernodalThreshold::FORCE_SUPERNODAL;
+    }
+    match factorize_symbolic_cholesky(m, Side::Lower, ordering, params) {
         Ok(symbolic) => Ok(Some(symbolic)),
         Err(FaerError::IndexOverflow) => Ok(None),
         Err(e) => Err(failed("sparse Cholesky analysis", e)),
@@ -173,20 +208,27 @@ fn analyse<I: Index>(
     let n = m.nrows();
     let nested = || {
         let perm = nested_dissection(offsets, indices);
-        symbolic_llt(m, Some(&perm))
+        symbolic_llt(m, Ordering::Custom(&perm), Supernodal::FaerChooses)
     };
     if n <= COMPARE_ORDERINGS_UP_TO {
-        let (nested, amd) = (nested()?, symbolic_llt(m, None)?);
+        let (nested, amd) = (nested()?, symbolic_llt(m, Ordering::Amd, Supernodal::FaerChooses)?);
         return Ok(match (nested, amd) {
             (Some(nd), Some(amd)) => Some(if amd.len_val() < nd.len_val() { amd } else { nd }),
             (nd, amd) => nd.or(amd),
         });
     }
-    if pseudo_diameter(offsets, indices) as f64 >= LONG_GRAPH * (n as f64).sqrt() {
+    if is_long(offsets, indices) {
         nested()
     } else {
-        symbolic_llt(m, None)
+        symbolic_llt(m, Ordering::Amd, Supernodal::FaerChooses)
     }
+}
+
+/// Whether the graph is long for its size: pseudo-diameter at least
+/// [`LONG_GRAPH`] times `sqrt(n)` (see [`analyse`]).
+fn is_long(offsets: &[usize], indices: &[u32]) -> bool {
+    let n = offsets.len().saturating_sub(1);
+    pseudo_diameter(offsets, indices) as f64 >= LONG_GRAPH * (n as f64).sqrt()
 }
 
 /// Symbolic analysis ([`analyse`]) and numeric `L L^T` of the lower
@@ -204,6 +246,15 @@ fn llt<I: Index>(
         Some(symbolic) => symbolic,
         None => return Ok(None),
     };
+    let values = numeric_llt(&symbolic, m)?;
+    Ok(Some((symbolic, values)))
+}
+
+/// The numeric `L L^T` of the lower triangle of `m` under `symbolic`.
+fn numeric_llt<I: Index>(
+    symbolic: &SymbolicCholesky<I>,
+    m: SparseColMatRef<'_, I, f64>,
+) -> Result<Vec<f64>, SparseError> {
     let mut values = Vec::new();
     values
         .try_reserve_exact(symbolic.len_val())
@@ -224,7 +275,7 @@ fn llt<I: Index>(
     if let Err(DenseLltError::NonPositivePivot { .. }) = result {
         return Err(SparseError::NotPositiveDefinite { method: "sparse Cholesky pivot" });
     }
-    Ok(Some((symbolic, values)))
+    Ok(values)
 }
 
 /// Approximate minimum degree ordering (faer's AMD) of the `n`-vertex graph
@@ -301,6 +352,13 @@ impl Factor {
     /// Errors: [`SparseError::NotPositiveDefinite`] on a non-positive pivot.
     pub(crate) fn cholesky(a: &CsrMatrix) -> Result<Factor, SparseError> {
         guarded("sparse Cholesky", || {
+            // Large matrices are factored in two halves on two cores
+            // ([`bordered`]); faer alone keeps one core busy on a mesh factor.
+            if a.n_rows() > COMPARE_ORDERINGS_UP_TO {
+                if let Some(halves) = bordered::factor(a)? {
+                    return Ok(Factor::Bordered(Box::new(halves)));
+                }
+            }
             // 32-bit indices when A and L fit (faer reports an L that does
             // not as `IndexOverflow`), 64-bit otherwise.
             if let Ok(col_ptr) =
@@ -376,6 +434,7 @@ impl Factor {
         match self {
             Factor::Cholesky32 { symbolic, values } => llt_solve(symbolic, values, x)?,
             Factor::Cholesky { symbolic, values } => llt_solve(symbolic, values, x)?,
+            Factor::Bordered(halves) => halves.solve_in_place(x.as_mut())?,
             Factor::LuOfTranspose { symbolic, numeric } => {
                 let mut mem =
                     scratch(symbolic.solve_transpose_in_place_scratch::<f64>(k, SOLVE_PAR))?;
@@ -388,6 +447,27 @@ impl Factor {
             }
         }
         Ok(())
+    }
+
+    /// `A x = b` for every `b` in `rhs`, one solve with the factor and
+    /// nothing more: no residual (the callers, iterative refinement, take
+    /// their own in double-double).
+    ///
+    /// Errors: [`SparseError::Singular`] if a solution is not finite.
+    fn solve_once(&self, rhs: &[Vec<f64>]) -> Result<Vec<Vec<f64>>, SparseError> {
+        guarded("sparse triangular solve", || {
+            let n = rhs.first().map_or(0, Vec::len);
+            let mut x = Mat::from_fn(n, rhs.len(), |i, j| rhs[j][i]);
+            self.solve_in_place(&mut x)?;
+            let sol: Vec<Vec<f64>> =
+                (0..rhs.len()).map(|j| x.col(j).iter().copied().collect()).collect();
+            if sol.iter().flatten().any(|v| !v.is_finite()) {
+                return Err(SparseError::Singular {
+                    detail: "numerically singular, the solution is not finite".into(),
+                });
+            }
+            Ok(sol)
+        })
     }
 
     /// `A x = b` for every `b` in `rhs` (lengths validated by the dispatcher),
@@ -454,8 +534,16 @@ impl Factorization {
         Ok(Factorization { factor, n: a.n_rows() })
     }
 
-    /// Solves `A x = b` for every `b`, with no refinement.
+    /// Solves `A x = b` for every `b`, with no refinement and no residual;
+    /// `a` is the matrix that was factorised (its size is checked).
     pub fn solve(&self, a: &CsrMatrix, rhs: &[Vec<f64>]) -> Result<Vec<Vec<f64>>, SparseError> {
+        if a.n_rows() != self.n {
+            return Err(SparseError::LengthMismatch {
+                what: "matrix rows",
+                got: a.n_rows(),
+                expected: self.n,
+            });
+        }
         for b in rhs {
             if b.len() != self.n {
                 return Err(SparseError::LengthMismatch {
@@ -465,74 +553,9 @@ impl Factorization {
                 });
             }
         }
-        // A tolerance of infinity turns the factor's own refinement off.
-        self.factor.solve(a, rhs, f64::INFINITY).map(|(x, _)| x)
+        self.factor.solve_once(rhs)
     }
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::test_support::{dense_solve, grid_laplacian, mean_value_like, random_spd, rel_err};
-
-    #[test]
-    fn cholesky_matches_dense() {
-        for a in [grid_laplacian(7, 9), random_spd(50, 4, 0.5)] {
-            let n = a.n_rows();
-            let b1: Vec<f64> = (0..n).map(|i| (i as f64 * 0.7).cos()).collect();
-            let b2: Vec<f64> = (0..n).map(|i| (i % 3) as f64).collect();
-            let narrow = Factor::cholesky(&a).unwrap();
-            assert!(matches!(narrow, Factor::Cholesky32 { .. }));
-            for f in [narrow, Factor::cholesky_wide(&a).unwrap()] {
-                let (x, res) = f.solve(&a, &[b1.clone(), b2.clone()], 1e-12).unwrap();
-                assert!(rel_err(&x[0], &dense_solve(&a, &b1)) < 1e-10);
-                assert!(rel_err(&x[1], &dense_solve(&a, &b2)) < 1e-10);
-                assert!(res.iter().all(|&r| r < 1e-12));
-            }
-        }
-    }
-
-    #[test]
-    fn small_systems_keep_the_smaller_predicted_factor() {
-        for a in [grid_laplacian(40, 40), grid_laplacian(300, 4), random_spd(300, 5, 0.5)] {
-            let col_ptr: Vec<u32> = a.row_offsets().iter().map(|&o| o as u32).collect();
-            let m = SymbolicSparseColMatRef::new_checked(
-                a.n_rows(),
-                a.n_rows(),
-                &col_ptr,
-                None,
-                a.col_indices(),
-            );
-            let amd = symbolic_llt(m, None).unwrap().unwrap().len_val();
-            let perm = nested_dissection(a.row_offsets(), a.col_indices());
-            let nd = symbolic_llt(m, Some(&perm)).unwrap().unwrap().len_val();
-            let Factor::Cholesky32 { symbolic, .. } = Factor::cholesky(&a).unwrap() else {
-                panic!("expected a 32-bit Cholesky factor");
-            };
-            assert_eq!(symbolic.len_val(), amd.min(nd));
-        }
-    }
-
-    #[test]
-    fn lu_matches_dense_on_nonsymmetric() {
-        let (a, b) = mean_value_like(80, 5);
-        let f = Factor::lu(&a).unwrap();
-        let (x, _) = f.solve(&a, std::slice::from_ref(&b), 1e-12).unwrap();
-        assert!(rel_err(&x[0], &dense_solve(&a, &b)) < 1e-10);
-    }
-
-    #[test]
-    fn indefinite_cholesky_and_singular_lu_are_errors() {
-        let a = CsrMatrix::from_triplets(2, 2, &[0, 1], &[0, 1], &[1.0, -1.0]).unwrap();
-        assert!(matches!(Factor::cholesky(&a), Err(SparseError::NotPositiveDefinite { .. })));
-        // Structurally singular: row 1 is empty.
-        let s = CsrMatrix::from_triplets(2, 2, &[0, 0], &[0, 1], &[1.0, 1.0]).unwrap();
-        let r = Factor::lu(&s).and_then(|f| f.solve(&s, &[vec![1.0, 1.0]], 1e-10));
-        assert!(matches!(r, Err(SparseError::Singular { .. })), "{r:?}");
-        // Numerically singular: two equal rows.
-        let s = CsrMatrix::from_triplets(2, 2, &[0, 0, 1, 1], &[0, 1, 0, 1], &[1.0, 2.0, 1.0, 2.0])
-            .unwrap();
-        let r = Factor::lu(&s).and_then(|f| f.solve(&s, &[vec![1.0, 1.0]], 1e-10));
-        assert!(matches!(r, Err(SparseError::Singular { .. })), "{r:?}");
-    }
-}
+mod tests;

@@ -45,6 +45,12 @@ const PARALLEL: usize = 8_192;
 /// piece (0.33 against 0.25 and 0.45: the smallest factor on the 1M shapes).
 const BALANCE: f64 = 0.33;
 
+/// [`BALANCE`] of [`bisection`], whose halves are factored on two cores at
+/// once: there the larger half sets the time (a 45/55 split costs 57% of
+/// one core's time at `O(n^1.5)` work, a 33/67 split 70%), and the
+/// separator, factored dense, costs little unless it is much larger.
+const HALVES_BALANCE: f64 = 0.45;
+
 /// The label of a vertex placed in a separator: never a piece's label.
 const PLACED: u32 = u32::MAX;
 
@@ -114,6 +120,56 @@ impl Levels {
     fn level(&self, k: usize) -> &[u32] {
         &self.queue[self.starts[k]..self.starts[k + 1]]
     }
+}
+
+/// What [`Dissection::cut`] made of a piece: the labels of its two sides
+/// and their sizes.
+struct Cut {
+    near: u32,
+    far: u32,
+    n_near: usize,
+    n_separator: usize,
+}
+
+/// The first cut of [`nested_dissection`] alone: the vertices of a connected
+/// graph in three runs, `near`, `far` and `separator`, in that order, where
+/// no edge joins `near` to `far` and neither is empty (`vs[..n_near]`,
+/// `vs[n_near..n - n_separator]`, `vs[n - n_separator..]`). `None` for a
+/// disconnected graph or one too small or too short to cut (fewer than
+/// three levels).
+pub(crate) struct Bisection {
+    pub(crate) vs: Vec<u32>,
+    pub(crate) n_near: usize,
+    pub(crate) n_separator: usize,
+}
+
+pub(crate) fn bisection(offsets: &[usize], indices: &[u32]) -> Option<Bisection> {
+    let n = offsets.len().saturating_sub(1);
+    if n <= LEAF {
+        return None;
+    }
+    let work = Dissection {
+        offsets,
+        indices,
+        label: (0..n).map(|_| AtomicU32::new(0)).collect(),
+        next_label: AtomicU32::new(1),
+        local: Vec::new(),
+    };
+    let first = work.fresh();
+    let sweep = work.bfs(0, 0, first, n);
+    if sweep.queue.len() < n {
+        return None;
+    }
+    let far_end = sweep.queue[n - 1];
+    drop(sweep);
+    let second = work.fresh();
+    let levels = work.bfs(far_end, first, second, n);
+    if levels.count() < 3 {
+        return None;
+    }
+    let mut vs = vec![0u32; n];
+    let cut = work.cut(&levels, &mut vs, HALVES_BALANCE);
+    Some(Bisection { vs, n_near: cut.n_near, n_separator: cut.n_separator })
 }
 
 /// A fill-reducing ordering of the `n`-vertex graph whose adjacency is the
@@ -317,7 +373,26 @@ impl Dissection<'_> {
             self.minimum_degree(vs, &levels.queue, second);
             return;
         }
-        let k = separator_level(&levels.starts, len);
+        let Cut { near, far, n_near, n_separator } = self.cut(&levels, vs, BALANCE);
+        let far_hint = levels.queue[len - 1];
+        drop(levels);
+        let (near_part, rest) = vs.split_at_mut(n_near);
+        let far_part = &mut rest[..len - n_near - n_separator];
+        // Both sides search twice: from the near side's root levels would be
+        // rings around it, and starting the far side at its last vertex
+        // (measured) gave 5% more fill on blobs for little time.
+        self.both(
+            Piece { vs: near_part, label: near, hint: far_end },
+            Piece { vs: far_part, label: far, hint: far_hint },
+        );
+    }
+
+    /// Cuts a connected piece, searched in `levels` (at least three), at the
+    /// level [`separator_level`] picks: writes the near side, the far side and
+    /// the separator into `vs` in that order, each in breadth-first order, and
+    /// labels the sides afresh (the separator [`PLACED`]).
+    fn cut(&self, levels: &Levels, vs: &mut [u32], balance: f64) -> Cut {
+        let k = separator_level(&levels.starts, vs.len(), balance);
         let (near, far) = (self.fresh(), self.fresh());
         for &v in &levels.queue[..levels.starts[k]] {
             self.label[v as usize].store(near, Relaxed);
@@ -345,17 +420,7 @@ impl Dissection<'_> {
         let far_part = &levels.queue[levels.starts[k + 1]..];
         vs[n_near..n_near + far_part.len()].copy_from_slice(far_part);
         vs[n_near + far_part.len()..].copy_from_slice(&separator);
-        let far_hint = levels.queue[len - 1];
-        drop(levels);
-        let (near_part, rest) = vs.split_at_mut(n_near);
-        let far_part = &mut rest[..len - n_near - separator.len()];
-        // Both sides search twice: from the near side's root levels would be
-        // rings around it, and starting the far side at its last vertex
-        // (measured) gave 5% more fill on blobs for little time.
-        self.both(
-            Piece { vs: near_part, label: near, hint: far_end },
-            Piece { vs: far_part, label: far, hint: far_hint },
-        );
+        Cut { near, far, n_near, n_separator: separator.len() }
     }
 
     /// Orders a small piece (`members`, each labelled `piece`) by approximate
@@ -407,11 +472,11 @@ impl Dissection<'_> {
 }
 
 /// The level to cut at: the smallest one that leaves each side at least
-/// [`BALANCE`] of the piece, or the one holding the median vertex when none
+/// `balance` of the piece, or the one holding the median vertex when none
 /// does. Never the first or the last level, so both sides are non-empty.
-fn separator_level(starts: &[usize], len: usize) -> usize {
+fn separator_level(starts: &[usize], len: usize, balance: f64) -> usize {
     let count = starts.len() - 1;
-    let least = (BALANCE * len as f64) as usize;
+    let least = (balance * len as f64) as usize;
     let size = |k: usize| starts[k + 1] - starts[k];
     let balanced = (1..count - 1)
         .filter(|&k| starts[k] >= least && len - starts[k + 1] >= least)
@@ -423,118 +488,4 @@ fn separator_level(starts: &[usize], len: usize) -> usize {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::test_support::grid_laplacian;
-    use crate::CsrMatrix;
-
-    fn order(a: &CsrMatrix) -> Vec<u32> {
-        nested_dissection(a.row_offsets(), a.col_indices())
-    }
-
-    fn is_permutation(perm: &[u32]) -> bool {
-        let mut seen = vec![false; perm.len()];
-        perm.iter().all(|&v| !std::mem::replace(&mut seen[v as usize], true))
-    }
-
-    /// Nonzeros of the Cholesky factor of the pattern of `a` under `perm`
-    /// (elimination by sets: the reach of each column), for small matrices.
-    fn fill(a: &CsrMatrix, perm: &[u32]) -> usize {
-        let n = a.n_rows();
-        let mut inverse = vec![0usize; n];
-        for (k, &v) in perm.iter().enumerate() {
-            inverse[v as usize] = k;
-        }
-        let mut cols: Vec<std::collections::BTreeSet<usize>> = vec![Default::default(); n];
-        for i in 0..n {
-            for &j in a.row(i).0 {
-                let (p, q) = (inverse[i], inverse[j as usize]);
-                if p > q {
-                    cols[q].insert(p);
-                }
-            }
-        }
-        let mut total = 0;
-        for k in 0..n {
-            let below: Vec<usize> = cols[k].iter().copied().collect();
-            total += below.len() + 1;
-            if let Some((&parent, rest)) = below.split_first() {
-                let merged: Vec<usize> = rest.to_vec();
-                cols[parent].extend(merged);
-            }
-        }
-        total
-    }
-
-    #[test]
-    fn orders_every_vertex_once() {
-        for (w, h) in [(1, 1), (1, 2), (3, 1), (7, 9), (40, 3), (60, 60)] {
-            let a = grid_laplacian(w, h);
-            let perm = order(&a);
-            assert_eq!(perm.len(), a.n_rows());
-            assert!(is_permutation(&perm), "{w} x {h}");
-        }
-    }
-
-    #[test]
-    fn disconnected_pieces_and_isolated_vertices() {
-        // Two 10 x 10 grids side by side with no coupling, and a diagonal-only block.
-        let g = grid_laplacian(10, 10);
-        let (mut rows, mut cols, mut vals) = (vec![], vec![], vec![]);
-        for shift in [0u32, 100] {
-            for i in 0..100 {
-                let (c, v) = g.row(i);
-                for (&j, &x) in c.iter().zip(v) {
-                    rows.push(i as u32 + shift);
-                    cols.push(j + shift);
-                    vals.push(x);
-                }
-            }
-        }
-        for i in 200..230 {
-            rows.push(i);
-            cols.push(i);
-            vals.push(1.0);
-        }
-        let a = CsrMatrix::from_triplets(230, 230, &rows, &cols, &vals).unwrap();
-        assert!(is_permutation(&order(&a)));
-    }
-
-    #[test]
-    fn a_million_components_need_no_deep_recursion() {
-        // A diagonal matrix: every vertex its own component.
-        let n = 1_000_000;
-        let offsets: Vec<usize> = (0..=n).collect();
-        let indices: Vec<u32> = (0..n as u32).collect();
-        let perm = nested_dissection(&offsets, &indices);
-        assert!(is_permutation(&perm));
-    }
-
-    #[test]
-    fn fills_far_less_than_the_band() {
-        // On a square grid the natural order is a band as wide as the grid's
-        // side (fill ~ n^1.5); nested dissection's is ~ n log n.
-        let a = grid_laplacian(60, 60);
-        let natural: Vec<u32> = (0..a.n_rows() as u32).collect();
-        let nd = fill(&a, &order(&a));
-        let band = fill(&a, &natural);
-        assert!(nd * 3 < band, "nested dissection {nd} against band {band}");
-    }
-
-    #[test]
-    fn pseudo_diameter_of_grids() {
-        // A w x h grid's diameter is w + h - 2 edges, w + h - 1 levels; the
-        // two sweeps find it from any corner, and vertex 0 is one.
-        for (w, h) in [(1, 1), (5, 1), (7, 9), (100, 3)] {
-            let a = grid_laplacian(w, h);
-            assert_eq!(pseudo_diameter(a.row_offsets(), a.col_indices()), w + h - 1);
-        }
-        assert_eq!(pseudo_diameter(&[0], &[]), 0);
-    }
-
-    #[test]
-    fn deterministic() {
-        let a = grid_laplacian(150, 140);
-        assert_eq!(order(&a), order(&a));
-    }
-}
+mod tests;

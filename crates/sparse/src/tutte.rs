@@ -8,6 +8,7 @@
 //! without flipped triangles (thesis Thm. 4.5-4.7) in exact arithmetic; after the
 //! floating-point solve every triangle is checked again with an exact predicate.
 
+use rayon::prelude::*;
 use spherify_mesh::predicates::{orient2d, Sign};
 use spherify_mesh::{validate, HalfEdgeMesh, Mesh, TopologyError, TopologyProblem};
 
@@ -252,15 +253,31 @@ fn scatter(uv: &mut [[f64; 2]], free: &[u32], solution: &[Vec<f64>]) {
     }
 }
 
-/// Faces that are clockwise or degenerate in the plane, decided exactly.
+/// Faces that are clockwise or degenerate in the plane, decided exactly, in
+/// increasing order. The faces are checked in parallel blocks (theta-phi
+/// checks every face after each refinement step).
 pub fn inverted_faces(faces: &[[u32; 3]], uv: &[[f64; 2]]) -> InvertedFaces {
+    const FACES_PER_TASK: usize = 16_384;
+    let blocks: Vec<InvertedFaces> = faces
+        .par_chunks(FACES_PER_TASK)
+        .enumerate()
+        .map(|(block, chunk)| {
+            let mut out = InvertedFaces::default();
+            for (k, &[a, b, c]) in chunk.iter().enumerate() {
+                let f = (block * FACES_PER_TASK + k) as u32;
+                match orient2d(uv[a as usize], uv[b as usize], uv[c as usize]) {
+                    Sign::Positive => {}
+                    Sign::Negative => out.flipped.push(f),
+                    Sign::Zero => out.degenerate.push(f),
+                }
+            }
+            out
+        })
+        .collect();
     let mut out = InvertedFaces::default();
-    for (f, &[a, b, c]) in faces.iter().enumerate() {
-        match orient2d(uv[a as usize], uv[b as usize], uv[c as usize]) {
-            Sign::Positive => {}
-            Sign::Negative => out.flipped.push(f as u32),
-            Sign::Zero => out.degenerate.push(f as u32),
-        }
+    for block in blocks {
+        out.flipped.extend(block.flipped);
+        out.degenerate.extend(block.degenerate);
     }
     out
 }

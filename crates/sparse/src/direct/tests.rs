@@ -1,0 +1,67 @@
+use super::*;
+use crate::test_support::{dense_solve, grid_laplacian, mean_value_like, random_spd, rel_err};
+
+#[test]
+fn cholesky_matches_dense() {
+    for a in [grid_laplacian(7, 9), random_spd(50, 4, 0.5)] {
+        let n = a.n_rows();
+        let b1: Vec<f64> = (0..n).map(|i| (i as f64 * 0.7).cos()).collect();
+        let b2: Vec<f64> = (0..n).map(|i| (i % 3) as f64).collect();
+        let narrow = Factor::cholesky(&a).unwrap();
+        assert!(matches!(narrow, Factor::Cholesky32 { .. }));
+        for f in [narrow, Factor::cholesky_wide(&a).unwrap()] {
+            let (x, res) = f.solve(&a, &[b1.clone(), b2.clone()], 1e-12).unwrap();
+            assert!(rel_err(&x[0], &dense_solve(&a, &b1)) < 1e-10);
+            assert!(rel_err(&x[1], &dense_solve(&a, &b2)) < 1e-10);
+            assert!(res.iter().all(|&r| r < 1e-12));
+        }
+    }
+}
+
+#[test]
+fn small_systems_keep_the_smaller_predicted_factor() {
+    for a in [grid_laplacian(40, 40), grid_laplacian(300, 4), random_spd(300, 5, 0.5)] {
+        let col_ptr: Vec<u32> = a.row_offsets().iter().map(|&o| o as u32).collect();
+        let m = SymbolicSparseColMatRef::new_checked(
+            a.n_rows(),
+            a.n_rows(),
+            &col_ptr,
+            None,
+            a.col_indices(),
+        );
+        let amd =
+            symbolic_llt(m, Ordering::Amd, Supernodal::FaerChooses).unwrap().unwrap().len_val();
+        let perm = nested_dissection(a.row_offsets(), a.col_indices());
+        let nd = symbolic_llt(m, Ordering::Custom(&perm), Supernodal::FaerChooses)
+            .unwrap()
+            .unwrap()
+            .len_val();
+        let Factor::Cholesky32 { symbolic, .. } = Factor::cholesky(&a).unwrap() else {
+            panic!("expected a 32-bit Cholesky factor");
+        };
+        assert_eq!(symbolic.len_val(), amd.min(nd));
+    }
+}
+
+#[test]
+fn lu_matches_dense_on_nonsymmetric() {
+    let (a, b) = mean_value_like(80, 5);
+    let f = Factor::lu(&a).unwrap();
+    let (x, _) = f.solve(&a, std::slice::from_ref(&b), 1e-12).unwrap();
+    assert!(rel_err(&x[0], &dense_solve(&a, &b)) < 1e-10);
+}
+
+#[test]
+fn indefinite_cholesky_and_singular_lu_are_errors() {
+    let a = CsrMatrix::from_triplets(2, 2, &[0, 1], &[0, 1], &[1.0, -1.0]).unwrap();
+    assert!(matches!(Factor::cholesky(&a), Err(SparseError::NotPositiveDefinite { .. })));
+    // Structurally singular: row 1 is empty.
+    let s = CsrMatrix::from_triplets(2, 2, &[0, 0], &[0, 1], &[1.0, 1.0]).unwrap();
+    let r = Factor::lu(&s).and_then(|f| f.solve(&s, &[vec![1.0, 1.0]], 1e-10));
+    assert!(matches!(r, Err(SparseError::Singular { .. })), "{r:?}");
+    // Numerically singular: two equal rows.
+    let s = CsrMatrix::from_triplets(2, 2, &[0, 0, 1, 1], &[0, 1, 0, 1], &[1.0, 2.0, 1.0, 2.0])
+        .unwrap();
+    let r = Factor::lu(&s).and_then(|f| f.solve(&s, &[vec![1.0, 1.0]], 1e-10));
+    assert!(matches!(r, Err(SparseError::Singular { .. })), "{r:?}");
+}
