@@ -82,6 +82,7 @@ pub fn embed(
     let options = Options::new(py, name.as_str(), options)?;
     let method = self::method(py, name, &options)?;
     options.finish()?;
+    let mesh_arg = mesh;
     let shared = Arc::clone(&mesh.mesh);
     let result = crate::progress::run(py, progress, |report| {
         let mesh = GenusZeroMesh::new(shared).map_err(SphereError::from)?;
@@ -89,7 +90,8 @@ pub fn embed(
         Ok::<_, SphereError>((mesh, embedding))
     })?;
     let (mesh, embedding) = result.map_err(|e| sphere_error(py, e))?;
-    Ok(CoreSphereMap::new(mesh.shared_mesh(), embedding, mesh.reoriented_faces()))
+    let caller = Arc::clone(&mesh_arg.mesh);
+    Ok(CoreSphereMap::new(mesh.shared_mesh(), caller, embedding, mesh.reoriented_faces()))
 }
 
 /// improve(sphere_map, options: dict | None, progress) -> CoreSphereMap.
@@ -116,7 +118,12 @@ pub fn improve(
         Ok::<_, SphereError>((mesh, embedding))
     })?;
     let (mesh, embedding) = result.map_err(|e| sphere_error(py, e))?;
-    Ok(CoreSphereMap::new(mesh.shared_mesh(), embedding, sphere_map.reoriented()))
+    Ok(CoreSphereMap::new(
+        mesh.shared_mesh(),
+        sphere_map.caller_mesh(),
+        embedding,
+        sphere_map.reoriented(),
+    ))
 }
 
 /// from_points(mesh, points (n, 3) float64) -> CoreSphereMap.
@@ -131,6 +138,7 @@ pub fn from_points(
     points: PyReadonlyArrayDyn<'_, f64>,
 ) -> PyResult<CoreSphereMap> {
     let points = rows::<f64, 3>(py, &points, "points")?;
+    let caller = Arc::clone(&mesh.mesh);
     let shared = Arc::clone(&mesh.mesh);
     let result = crate::pool::detach(py, || {
         let mesh = GenusZeroMesh::new(shared).map_err(SphereError::from)?;
@@ -138,5 +146,5 @@ pub fn from_points(
         Ok::<_, SphereError>((mesh, embedding))
     })?;
     let (mesh, embedding) = result.map_err(|e| sphere_error(py, e))?;
-    Ok(CoreSphereMap::new(mesh.shared_mesh(), embedding, mesh.reoriented_faces()))
+    Ok(CoreSphereMap::new(mesh.shared_mesh(), caller, embedding, mesh.reoriented_faces()))
 }

@@ -77,6 +77,7 @@ pub mod symmetric_eigen;
 pub mod symmetry;
 pub mod theta_phi;
 pub mod validity;
+pub mod weight_bound;
 pub mod weight_matrix;
 
 pub use embed::{embed, improve_embedding, Details, Embedding, Method, MethodName, UnknownMethod};
