@@ -189,3 +189,49 @@ def test_cli_a_map_the_method_refuses_exits_1(tmp_path: Path, capsys: pytest.Cap
                      "-o", str(tmp_path / "x.ply")])
     assert code == 1
     assert "star-shaped" in capsys.readouterr().out
+
+
+# --- item 18: messages that name the real problem --------------------------
+
+
+def _ico() -> sp.Mesh:
+    return sp.datasets.make("icosphere", 42)
+
+
+@pytest.mark.parametrize("method", ["theta_phi", "radial", "relaxation", "gotsman", "alexa"])
+def test_all_vertices_at_one_point_is_called_degenerate(method: str) -> None:
+    ico = _ico()
+    mesh = sp.Mesh(np.zeros_like(ico.vertices), ico.faces)
+    with pytest.raises(sp.MeshError, match="degenerate: all 42 vertices are at one point"):
+        sp.embed(mesh, method=method)
+    problems = sp.check(mesh).problems
+    assert not any("orient fixes this" in p for p in problems), problems
+    assert any("encloses no volume" in p for p in problems), problems
+
+
+@pytest.mark.parametrize("scale,what", [(1e308, "too large"), (1e200, "too large"),
+                                        (1e-310, "too small"), (1e-200, "too small")])
+def test_overflowing_and_underflowing_coordinates_are_named(scale: float, what: str) -> None:
+    ico = _ico()
+    mesh = sp.Mesh(ico.vertices * scale, ico.faces)
+    for method in ["theta_phi", "radial", "relaxation"]:
+        with pytest.raises(sp.MeshError, match=what):
+            sp.embed(mesh, method=method)
+
+
+def test_scales_far_from_one_still_map() -> None:
+    ico = _ico()
+    for scale in [1e-50, 1e50]:
+        m = sp.embed(sp.Mesh(ico.vertices * scale, ico.faces), method="relaxation")
+        assert m.valid
+
+
+def test_a_nan_mesh_report_does_not_promise_that_orient_fixes_it() -> None:
+    ico = _ico()
+    V = ico.vertices.copy()
+    V[3] = np.nan
+    problems = sp.check((V, ico.faces)).problems
+    assert not any("orient fixes this" in p for p in problems), problems
+    assert any("orient cannot fix this" in p for p in problems), problems
+    with pytest.raises(sp.MeshError):
+        sp.orient((V, ico.faces))

@@ -56,6 +56,7 @@ pub mod from_points;
 pub mod gauss_legendre;
 pub mod gc_map;
 pub mod genus_zero;
+pub mod geometry_range;
 pub mod gotsman;
 pub mod h_map;
 pub mod harmonics;
