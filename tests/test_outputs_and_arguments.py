@@ -235,3 +235,24 @@ def test_a_nan_mesh_report_does_not_promise_that_orient_fixes_it() -> None:
     assert any("orient cannot fix this" in p for p in problems), problems
     with pytest.raises(sp.MeshError):
         sp.orient((V, ico.faces))
+
+
+# --- item 17: readers note what they cannot hold against a file -----------
+
+
+def test_loading_notes_a_cut_stl_and_trailing_data(tmp_path: Path) -> None:
+    V = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]])
+    F = [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]
+    facets = "".join("facet normal 0 0 0\n outer loop\n"
+                     + "".join(f"  vertex {x} {y} {z}\n" for x, y, z in V[f])
+                     + " endloop\nendfacet\n" for f in F)
+    stl = tmp_path / "a.stl"
+    stl.write_text("solid t\n" + facets)  # cut after a complete facet: no endsolid
+    assert any("no endsolid after the last of 4 facets" in n for n in sp.load(stl).notes)
+    stl.write_text("solid t\n" + facets + "endsolid t\n")
+    assert not any("endsolid" in n for n in sp.load(stl).notes)
+    off = tmp_path / "a.off"
+    sp.save(sp.datasets.make("icosphere", 42), off)
+    off.write_text(off.read_text() + "3 0 1 2\n")
+    notes = sp.load(off).notes
+    assert any("was ignored" in n for n in notes), notes
