@@ -84,7 +84,8 @@ pub fn embed(
     options.finish()?;
     let mesh_arg = mesh;
     let shared = Arc::clone(&mesh.mesh);
-    let result = crate::progress::run(py, progress, |report| {
+    // Detachable: Ctrl-C inside one long factorisation answers at once.
+    let result = crate::progress::run_detachable(py, progress, move |report| {
         let mesh = GenusZeroMesh::new(shared).map_err(SphereError::from)?;
         let embedding = core_embed(&mesh, &method, report)?;
         Ok::<_, SphereError>((mesh, embedding))
