@@ -102,6 +102,7 @@ class SphereMap:
         # that made it, details the core does not recompute); None when made here.
         self._stored_seconds: Optional[List[Tuple[str, float]]] = None
         self._stored_details: Dict[str, Any] = {}
+        self._diagonal_cache: Optional[float] = None
 
     @classmethod
     def _restored(cls, core: _core.CoreSphereMap, mesh: Mesh, *, seconds: List[Tuple[str, float]],
@@ -356,8 +357,7 @@ class SphereMap:
         if not isinstance(error_bound, bool):
             raise TypeError(f"error_bound must be True or False, got {error_bound!r}")
         faces, bary, xyz, error = self._core.to_surface(_float_rows(points, "points"))
-        vertices = self._mesh.vertices
-        diagonal = float(np.linalg.norm(np.ptp(vertices, axis=0))) if len(vertices) else 0.0
+        diagonal = self._diagonal()
         inaccurate = int(np.count_nonzero(~(error <= INACCURATE_POINT * diagonal)))
         if inaccurate:
             worst = float(np.max(error)) / diagonal if diagonal > 0 else float("inf")
@@ -368,6 +368,14 @@ class SphereMap:
         if error_bound:
             return faces, bary, xyz, _read_only(error)
         return faces, bary, xyz
+
+    def _diagonal(self) -> float:
+        """The mesh's bounding-box diagonal (computed once)."""
+        if self._diagonal_cache is None:
+            vertices = self._mesh.vertices
+            self._diagonal_cache = (float(np.linalg.norm(np.ptp(vertices, axis=0)))
+                                    if len(vertices) else 0.0)
+        return self._diagonal_cache
 
     def __repr__(self) -> str:
         return (f"{type(self).__name__}(method={self.method!r}, n_vertices={len(self.points)}, "
