@@ -432,6 +432,31 @@ mod tests {
     }
 
     #[test]
+    fn a_reversed_callers_corners_are_kept() {
+        let mesh = octahedron();
+        let reversed: Vec<[u32; 3]> = mesh.faces().iter().map(|&[a, b, c]| [c, b, a]).collect();
+        let plain = PointMap::gc(Arc::new(mesh.clone()), mesh.positions(), true, 0);
+        let theirs = plain.clone().in_corner_order_of(&reversed);
+        let w = [0.2, 0.3, 0.5];
+        for f in 0..8i64 {
+            let want = plain.to_sphere(&[f], &[w]).unwrap();
+            assert_eq!(theirs.to_sphere(&[f], &[[w[2], w[1], w[0]]]).unwrap(), want);
+            let back = theirs.to_surface(&want).unwrap();
+            let b = back.bary[0];
+            let x: Vec<f64> = (0..3)
+                .map(|i| {
+                    (0..3)
+                        .map(|k| {
+                            b[k] * mesh.positions()[reversed[back.faces[0] as usize][k] as usize][i]
+                        })
+                        .sum()
+                })
+                .collect();
+            assert!((0..3).all(|i| (x[i] - back.xyz[0][i]).abs() < 1e-15), "{x:?} {:?}", back.xyz);
+        }
+    }
+
+    #[test]
     fn bad_input_is_named_by_row() {
         let mesh = octahedron();
         let map = PointMap::gc(Arc::new(mesh.clone()), mesh.positions(), true, 0);
