@@ -113,7 +113,7 @@ pub fn improve(
     options.finish()?;
     let shared = sphere_map.shared_mesh();
     let start = sphere_map.embedding().clone();
-    let result = crate::progress::run(py, progress, |report| {
+    let result = crate::progress::run_detachable(py, progress, move |report| {
         let mesh = GenusZeroMesh::new(shared).map_err(SphereError::from)?;
         let embedding = improve_embedding(&mesh, &start, &params, report)?;
         Ok::<_, SphereError>((mesh, embedding))
