@@ -24,6 +24,8 @@ pub struct GcMap {
     points: Vec<[f64; 3]>,
     /// det[a, b, c] of every face (positive in a valid embedding).
     dets: Vec<f64>,
+    /// |v| of every point (1 up to rounding for a map's points).
+    lengths: Vec<f64>,
     locator: Bvh<3>,
 }
 
@@ -64,7 +66,14 @@ impl GcMap {
                 det3(a, b, c)
             })
             .collect();
-        GcMap { faces: faces.to_vec(), points: points.to_vec(), dets, locator: Bvh::new(&boxes) }
+        let lengths = points.iter().map(|&p| norm(p)).collect();
+        GcMap {
+            faces: faces.to_vec(),
+            points: points.to_vec(),
+            dets,
+            lengths,
+            locator: Bvh::new(&boxes),
+        }
     }
 
     /// h (3.3): the unit vector for weights `w` on face `f`.
@@ -92,13 +101,10 @@ impl GcMap {
     /// [`GcMap::to_sphere`] of `p` lies in it, and a bound on sum |w - w'|
     /// over the exact weights w' of every such point ([`ratio_weights`]).
     fn face_weights(&self, f: u32, p: [f64; 3]) -> FaceWeights {
-        let [a, b, c] = self.faces[f as usize].map(|v| self.points[v as usize]);
+        let face = self.faces[f as usize];
+        let [a, b, c] = face.map(|v| self.points[v as usize]);
         let crosses = [cross(b, c), cross(c, a), cross(a, b)];
-        let rows = [[p, b, c], [a, p, c], [a, b, p]];
         let d = crosses.map(|n| dot(p, n));
-        // det3 as dot(p, cross) is within 8 u of its permanent (a forward
-        // error bound of the six-product sum, with room to spare).
-        let eval_error = rows.map(|r| 8.0 * UNIT_ROUNDOFF * permanent(r));
         // to_sphere projects a point q of the flat triangle with an error of a
         // few u relative to |q|, and |q| = det[a, b, c] / (p . n) with n the sum
         // of the crosses, which is d's sum: so p stands for every unit vector
@@ -110,6 +116,25 @@ impl GcMap {
         let det = self.dets[f as usize];
         let q = if sum > 0.0 && sum < 3.0 { det / sum } else { det / 3.0 };
         let delta = 16.0 * UNIT_ROUNDOFF * (1.0 + 1.0 / q.max(f64::MIN_POSITIVE));
+        // Most candidates of the box tree are plainly outside: reject them on
+        // a cheap bound first (the permanent is at most the product of the
+        // rows' 1-norms, <= 3^1.5 times the product of their lengths, and
+        // |b x c| <= |b| |c|), before the exact bounds below.
+        let [la, lb, lc] = face.map(|v| self.lengths[v as usize]);
+        let lp = norm(p);
+        let pairs = [lb * lc, lc * la, la * lb];
+        if (0..3).any(|i| d[i] + (8.0 * UNIT_ROUNDOFF * 5.2 * lp + delta) * pairs[i] < 0.0) {
+            return FaceWeights {
+                w: d.map(|x| x / sum),
+                bound: f64::INFINITY,
+                contains: false,
+                near: false,
+            };
+        }
+        let rows = [[p, b, c], [a, p, c], [a, b, p]];
+        // det3 as dot(p, cross) is within 8 u of its permanent (a forward
+        // error bound of the six-product sum, with room to spare).
+        let eval_error = rows.map(|r| 8.0 * UNIT_ROUNDOFF * permanent(r));
         let e: [f64; 3] = std::array::from_fn(|i| eval_error[i] + delta * norm(crosses[i]));
         let near = (0..3).all(|i| d[i] + e[i] >= 0.0);
         let contains = near
