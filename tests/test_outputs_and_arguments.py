@@ -189,3 +189,70 @@ def test_cli_a_map_the_method_refuses_exits_1(tmp_path: Path, capsys: pytest.Cap
                      "-o", str(tmp_path / "x.ply")])
     assert code == 1
     assert "star-shaped" in capsys.readouterr().out
+
+
+# --- item 18: messages that name the real problem --------------------------
+
+
+def _ico() -> sp.Mesh:
+    return sp.datasets.make("icosphere", 42)
+
+
+@pytest.mark.parametrize("method", ["theta_phi", "radial", "relaxation", "gotsman", "alexa"])
+def test_all_vertices_at_one_point_is_called_degenerate(method: str) -> None:
+    ico = _ico()
+    mesh = sp.Mesh(np.zeros_like(ico.vertices), ico.faces)
+    with pytest.raises(sp.MeshError, match="degenerate: all 42 vertices are at one point"):
+        sp.embed(mesh, method=method)
+    problems = sp.check(mesh).problems
+    assert not any("orient fixes this" in p for p in problems), problems
+    assert any("encloses no volume" in p for p in problems), problems
+
+
+@pytest.mark.parametrize("scale,what", [(1e308, "too large"), (1e200, "too large"),
+                                        (1e-310, "too small"), (1e-200, "too small")])
+def test_overflowing_and_underflowing_coordinates_are_named(scale: float, what: str) -> None:
+    ico = _ico()
+    mesh = sp.Mesh(ico.vertices * scale, ico.faces)
+    for method in ["theta_phi", "radial", "relaxation"]:
+        with pytest.raises(sp.MeshError, match=what):
+            sp.embed(mesh, method=method)
+
+
+def test_scales_far_from_one_still_map() -> None:
+    ico = _ico()
+    for scale in [1e-50, 1e50]:
+        m = sp.embed(sp.Mesh(ico.vertices * scale, ico.faces), method="relaxation")
+        assert m.valid
+
+
+def test_a_nan_mesh_report_does_not_promise_that_orient_fixes_it() -> None:
+    ico = _ico()
+    V = ico.vertices.copy()
+    V[3] = np.nan
+    problems = sp.check((V, ico.faces)).problems
+    assert not any("orient fixes this" in p for p in problems), problems
+    assert any("orient cannot fix this" in p for p in problems), problems
+    with pytest.raises(sp.MeshError):
+        sp.orient((V, ico.faces))
+
+
+# --- item 17: readers note what they cannot hold against a file -----------
+
+
+def test_loading_notes_a_cut_stl_and_trailing_data(tmp_path: Path) -> None:
+    V = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]])
+    F = [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]
+    facets = "".join("facet normal 0 0 0\n outer loop\n"
+                     + "".join(f"  vertex {x} {y} {z}\n" for x, y, z in V[f])
+                     + " endloop\nendfacet\n" for f in F)
+    stl = tmp_path / "a.stl"
+    stl.write_text("solid t\n" + facets)  # cut after a complete facet: no endsolid
+    assert any("no endsolid after the last of 4 facets" in n for n in sp.load(stl).notes)
+    stl.write_text("solid t\n" + facets + "endsolid t\n")
+    assert not any("endsolid" in n for n in sp.load(stl).notes)
+    off = tmp_path / "a.off"
+    sp.save(sp.datasets.make("icosphere", 42), off)
+    off.write_text(off.read_text() + "3 0 1 2\n")
+    notes = sp.load(off).notes
+    assert any("was ignored" in n for n in notes), notes

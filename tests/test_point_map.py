@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import itertools
 import warnings
+from contextlib import nullcontext
 
 import numpy as np
 import pytest
@@ -134,7 +135,12 @@ def test_theta_phi_h_on_dataset_shapes(name: str, size: int) -> None:
     rng = np.random.default_rng(1)
     # The sphere round trip holds to rounding however thin the triangles are.
     points = sphere_samples(m, rng, 20000)
-    f, b, _ = m.to_surface(points)
+    # The tentacles' thinnest triangles (margin 3e-15) cannot place every
+    # sphere point on the surface to 1e-9 of its size: to_surface says so
+    # (issue 13, item 7).
+    thin = name == "tentacles"
+    with pytest.warns(sp.SpherifyWarning, match="nearly flat") if thin else nullcontext():
+        f, b, _ = m.to_surface(points)
     assert np.abs(m.to_sphere(f, b) - points).max() < TOL
     if name != "tentacles":
         assert_round_trips(m, mesh, 2)

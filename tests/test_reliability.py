@@ -257,3 +257,20 @@ def test_a_directory_is_still_an_is_a_directory_error(tmp_path: Path) -> None:
     folder.mkdir()
     with pytest.raises(IsADirectoryError):
         sp.load(folder)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("delay", [3.0, 4.0, 6.0])
+def test_ctrl_c_inside_one_long_factorisation_is_answered_at_once(delay: float) -> None:
+    """Theta-phi at a million vertices spends seconds inside one sparse
+    factorisation and solve, where no poll can happen: embed leaves that step
+    to finish in the background and raises at once (item 2; slow: the mesh
+    alone takes seconds to make)."""
+    err, seconds = interrupt("""
+        import spherify as sp
+        mesh = sp.datasets.bumpy_blob(n_vertices=1_000_000)
+        print("READY", flush=True)
+        sp.embed(mesh, method="theta_phi")
+    """, delay=delay, timeout=300)
+    assert_keyboard_interrupt(err, seconds)
+    assert seconds < 1.5, f"SIGINT answered after {seconds:.1f} s"

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import os
 import warnings
-from typing import Any, Dict, List, Optional, Tuple, Union
+from typing import Any, Dict, List, Literal, Optional, Tuple, Union, overload
 
 import numpy as np
 import numpy.typing as npt
@@ -25,6 +25,12 @@ from ._report import SphereReport
 #: few thousand units in the last place of collapsing, so the map can send
 #: distinct surface points to the same doubles (issue 13, item 8).
 THIN_MARGIN = 1e-12
+
+#: ``to_surface`` warns (:class:`SpherifyWarning`) when the error bound of
+#: some answer exceeds this fraction of the mesh's bounding-box diagonal: the
+#: sphere point then does not hold enough digits to say precisely where on the
+#: surface it came from (a nearly flat triangle of the map; issue 13, item 7).
+INACCURATE_POINT = 1e-9
 
 
 def warn_if_thin(m: "SphereMap", stacklevel: int = 3) -> None:
@@ -96,6 +102,7 @@ class SphereMap:
         # that made it, details the core does not recompute); None when made here.
         self._stored_seconds: Optional[List[Tuple[str, float]]] = None
         self._stored_details: Dict[str, Any] = {}
+        self._diagonal_cache: Optional[float] = None
 
     @classmethod
     def _restored(cls, core: _core.CoreSphereMap, mesh: Mesh, *, seconds: List[Tuple[str, float]],
@@ -265,11 +272,13 @@ class SphereMap:
         Parameters
         ----------
         face_ids : (k,) int
-            A face of ``mesh`` per point.
+            A face per point (the faces of ``mesh`` and of the caller's mesh
+            are the same, in the same order).
         bary : (k, 3) float
-            Barycentric weights on that face's corners (in the order of
-            ``mesh.faces``): finite, >= 0 and summing to 1 (within 1e-6; they
-            are rescaled).
+            Barycentric weights on that face's corners, in the order of the
+            faces given to :func:`spherify.embed` (``mesh.faces`` unless faces
+            were reoriented, see ``notes``: the reorientation stays inside):
+            finite, >= 0 and summing to 1 (within 1e-6; they are rescaled).
 
         Returns
         -------
@@ -287,26 +296,54 @@ class SphereMap:
             raise MeshError(f"face_ids must be integers, got dtype {ids.dtype}")
         return self._core.to_sphere(ids.astype(np.int64, copy=False), _float_rows(bary, "bary"))
 
-    def to_surface(self, points: npt.ArrayLike) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
+    @overload
+    def to_surface(self, points: npt.ArrayLike, *, error_bound: Literal[False] = ...
+                   ) -> Tuple[np.ndarray, np.ndarray, np.ndarray]: ...
+
+    @overload
+    def to_surface(self, points: npt.ArrayLike, *, error_bound: Literal[True]
+                   ) -> Tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]: ...
+
+    def to_surface(self, points: npt.ArrayLike, *, error_bound: bool = False
+                   ) -> Union[Tuple[np.ndarray, np.ndarray, np.ndarray],
+                              Tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]:
         """Map points of the unit sphere back to the surface: h^-1.
 
         Each point is located among the cells of the map (a box tree; O(log F)
-        per point, in parallel), then the inverse of :meth:`to_sphere` gives
-        the face and its barycentric weights. Points on an edge or a vertex
-        get one of the faces that share it.
+        per point, in parallel) with exact orientation predicates, so that a
+        certified map is inverted into the right cell however thin its
+        triangles are; then the inverse of :meth:`to_sphere` gives the face and
+        its barycentric weights. Points on an edge or a vertex get one of the
+        faces that share it.
+
+        Where a triangle of the map is nearly flat, the digits of a sphere
+        point cannot say precisely where on the surface it came from. Every
+        answer carries a bound on its error (``error_bound=True`` returns it);
+        when some bound exceeds :data:`INACCURATE_POINT` of the mesh's
+        bounding-box diagonal, a :class:`SpherifyWarning` gives their count.
 
         Parameters
         ----------
         points : (k, 3) float
             Unit vectors (norm within 1e-6 of 1; they are normalised).
+        error_bound : bool
+            Also return the error bounds.
 
         Returns
         -------
         face_ids : (k,) int64
+            Faces in the order of the mesh given to :func:`spherify.embed`.
         bary : (k, 3) float64
-            Barycentric weights on the face's corners, >= 0, summing to 1.
+            Barycentric weights on that face's corners, in the order the caller
+            gave them (a reorientation by ``embed`` stays inside), >= 0,
+            summing to 1.
         xyz : (k, 3) float64
             The surface points themselves.
+        error : (k,) float64, only with ``error_bound=True``
+            A bound on the distance from ``xyz`` to the exact preimage of every
+            sphere point within the rounding error of :meth:`to_sphere` of the
+            query (so it also bounds a round trip surface -> sphere ->
+            surface); ``inf`` where the point's digits cannot place it.
 
         Raises
         ------
@@ -317,7 +354,28 @@ class SphereMap:
         MeshError
             Wrong shape, or a point that is not a unit vector (the row is named).
         """
-        return self._core.to_surface(_float_rows(points, "points"))
+        if not isinstance(error_bound, bool):
+            raise TypeError(f"error_bound must be True or False, got {error_bound!r}")
+        faces, bary, xyz, error = self._core.to_surface(_float_rows(points, "points"))
+        diagonal = self._diagonal()
+        inaccurate = int(np.count_nonzero(~(error <= INACCURATE_POINT * diagonal)))
+        if inaccurate:
+            worst = float(np.max(error)) / diagonal if diagonal > 0 else float("inf")
+            warnings.warn(f"{inaccurate} of {len(error)} points lie where the map's triangles are "
+                          f"nearly flat: their surface points may be off by up to {worst:.2g} of "
+                          "the mesh size (to_surface(..., error_bound=True) gives each bound)",
+                          SpherifyWarning, stacklevel=2)
+        if error_bound:
+            return faces, bary, xyz, _read_only(error)
+        return faces, bary, xyz
+
+    def _diagonal(self) -> float:
+        """The mesh's bounding-box diagonal (computed once)."""
+        if self._diagonal_cache is None:
+            vertices = self._mesh.vertices
+            self._diagonal_cache = (float(np.linalg.norm(np.ptp(vertices, axis=0)))
+                                    if len(vertices) else 0.0)
+        return self._diagonal_cache
 
     def __repr__(self) -> str:
         return (f"{type(self).__name__}(method={self.method!r}, n_vertices={len(self.points)}, "

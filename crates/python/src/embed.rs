@@ -82,14 +82,17 @@ pub fn embed(
     let options = Options::new(py, name.as_str(), options)?;
     let method = self::method(py, name, &options)?;
     options.finish()?;
+    let mesh_arg = mesh;
     let shared = Arc::clone(&mesh.mesh);
-    let result = crate::progress::run(py, progress, |report| {
+    // Detachable: Ctrl-C inside one long factorisation answers at once.
+    let result = crate::progress::run_detachable(py, progress, move |report| {
         let mesh = GenusZeroMesh::new(shared).map_err(SphereError::from)?;
         let embedding = core_embed(&mesh, &method, report)?;
         Ok::<_, SphereError>((mesh, embedding))
     })?;
     let (mesh, embedding) = result.map_err(|e| sphere_error(py, e))?;
-    Ok(CoreSphereMap::new(mesh.shared_mesh(), embedding, mesh.reoriented_faces()))
+    let caller = Arc::clone(&mesh_arg.mesh);
+    Ok(CoreSphereMap::new(mesh.shared_mesh(), caller, embedding, mesh.reoriented_faces()))
 }
 
 /// improve(sphere_map, options: dict | None, progress) -> CoreSphereMap.
@@ -110,13 +113,18 @@ pub fn improve(
     options.finish()?;
     let shared = sphere_map.shared_mesh();
     let start = sphere_map.embedding().clone();
-    let result = crate::progress::run(py, progress, |report| {
+    let result = crate::progress::run_detachable(py, progress, move |report| {
         let mesh = GenusZeroMesh::new(shared).map_err(SphereError::from)?;
         let embedding = improve_embedding(&mesh, &start, &params, report)?;
         Ok::<_, SphereError>((mesh, embedding))
     })?;
     let (mesh, embedding) = result.map_err(|e| sphere_error(py, e))?;
-    Ok(CoreSphereMap::new(mesh.shared_mesh(), embedding, sphere_map.reoriented()))
+    Ok(CoreSphereMap::new(
+        mesh.shared_mesh(),
+        sphere_map.caller_mesh(),
+        embedding,
+        sphere_map.reoriented(),
+    ))
 }
 
 /// from_points(mesh, points (n, 3) float64) -> CoreSphereMap.
@@ -131,6 +139,7 @@ pub fn from_points(
     points: PyReadonlyArrayDyn<'_, f64>,
 ) -> PyResult<CoreSphereMap> {
     let points = rows::<f64, 3>(py, &points, "points")?;
+    let caller = Arc::clone(&mesh.mesh);
     let shared = Arc::clone(&mesh.mesh);
     let result = crate::pool::detach(py, || {
         let mesh = GenusZeroMesh::new(shared).map_err(SphereError::from)?;
@@ -138,5 +147,5 @@ pub fn from_points(
         Ok::<_, SphereError>((mesh, embedding))
     })?;
     let (mesh, embedding) = result.map_err(|e| sphere_error(py, e))?;
-    Ok(CoreSphereMap::new(mesh.shared_mesh(), embedding, mesh.reoriented_faces()))
+    Ok(CoreSphereMap::new(mesh.shared_mesh(), caller, embedding, mesh.reoriented_faces()))
 }

@@ -16,11 +16,15 @@
 //!   `progress(0, 0)` is such a poll: it reports nothing (the callable is not
 //!   called) and only answers whether to go on;
 //! * the work runs on this process's pool ([`crate::pool`]: safe after
-//!   `fork`), and a core call from inside the callable is refused.
+//!   `fork`), and a core call from inside the callable is refused;
+//! * [`run_detachable`] (used by `embed`) does not wait for work that is
+//!   inside a step that cannot poll (one sparse factorisation): after a stop
+//!   it returns within a few hundred milliseconds and the work ends on its
+//!   own thread at its next poll.
 
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::{Condvar, Mutex, MutexGuard};
-use std::time::Duration;
+use std::sync::{Arc, Condvar, Mutex, MutexGuard};
+use std::time::{Duration, Instant};
 
 use pyo3::prelude::*;
 
@@ -146,5 +150,93 @@ pub fn run<R: Send>(
     match raised {
         Some(err) => Err(err),
         None => Ok(result),
+    }
+}
+
+/// How long [`run_detachable`] waits for stopped work before it returns.
+const ABANDON_AFTER: Duration = Duration::from_millis(300);
+
+/// [`run`] for work that owns everything it uses (`'static`), so that a stop
+/// need not wait for it: a poll cannot happen inside one sparse factorisation
+/// or solve, which takes seconds at a million vertices. On Ctrl-C (or an
+/// exception from the callable) the work is asked to stop; if it has not
+/// ended within [`ABANDON_AFTER`], the call raises at once and the work runs
+/// on, in the background, until its next poll (the end of that step), and
+/// its result is dropped. Issue 13, item 2.
+pub fn run_detachable<R: Send + 'static>(
+    py: Python<'_>,
+    callback: Option<&Bound<'_, PyAny>>,
+    work: impl FnOnce(&(dyn Fn(usize, usize) -> bool + Sync)) -> R + Send + 'static,
+) -> PyResult<R> {
+    if let Some(c) = callback {
+        if !c.is_callable() {
+            return Err(mesh_error(
+                py,
+                format!(
+                    "progress must be None or a callable taking (done, total), got {}",
+                    c.get_type().name()?
+                ),
+            ));
+        }
+    }
+    let pool = crate::pool::get(py)?;
+    let state = Arc::new(State {
+        callback: callback.map(|c| c.clone().unbind()),
+        last: Mutex::new(0),
+        error: Mutex::new(None),
+        stop: AtomicBool::new(false),
+    });
+    let finished: Arc<(Mutex<Option<R>>, Condvar)> = Arc::new((Mutex::new(None), Condvar::new()));
+    let worker = {
+        let (state, finished) = (Arc::clone(&state), Arc::clone(&finished));
+        std::thread::Builder::new()
+            .name("spherify-call".to_string())
+            .spawn(move || {
+                let result = pool.install(|| work(&|done, total| state.report(done, total)));
+                *lock(&finished.0) = Some(result);
+                finished.1.notify_all();
+            })
+            .map_err(|e| mesh_error(py, format!("cannot start a worker thread: {e}")))?
+    };
+    let mut stopping: Option<Instant> = None;
+    let result = loop {
+        let result = py.detach(|| {
+            let slot = lock(&finished.0);
+            let (mut slot, _) = finished
+                .1
+                .wait_timeout_while(slot, Duration::from_millis(100), |r| r.is_none())
+                .unwrap_or_else(|poisoned| poisoned.into_inner());
+            slot.take()
+        });
+        if result.is_some() {
+            break result;
+        }
+        if worker.is_finished() {
+            // Finished without a result: the work panicked (a bug). Let the
+            // panic reach Python as it would have without this thread.
+            let joined = py.detach(|| worker.join());
+            if let Err(payload) = joined {
+                std::panic::resume_unwind(payload);
+            }
+            break lock(&finished.0).take();
+        }
+        if let Err(err) = py.check_signals() {
+            state.fail(err);
+        }
+        if state.stop.load(Ordering::SeqCst) {
+            let since = *stopping.get_or_insert_with(Instant::now);
+            if since.elapsed() >= ABANDON_AFTER {
+                // The work is inside a step that cannot poll: leave it.
+                break None;
+            }
+        }
+    };
+    let raised = lock(&state.error).take();
+    match (raised, result) {
+        (Some(err), _) => Err(err),
+        (None, Some(result)) => Ok(result),
+        (None, None) => {
+            Err(mesh_error(py, "internal error: the computation ended without a result"))
+        }
     }
 }

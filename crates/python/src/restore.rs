@@ -92,6 +92,7 @@ pub fn restore_map(
         }
     };
     let stored = StoredMap { method, points, iterations, status, message, theta_phi };
+    let caller = Arc::clone(&mesh.mesh);
     let shared = Arc::clone(&mesh.mesh);
     let restored = crate::pool::detach(py, || {
         let mesh = GenusZeroMesh::new(shared).map_err(|e| Failed::Mesh(e.into()))?;
@@ -102,5 +103,5 @@ pub fn restore_map(
         Failed::Mesh(err) => sphere_error(py, err),
         Failed::Parts(err) => mesh_error(py, err.to_string()),
     })?;
-    Ok(CoreSphereMap::new(mesh.shared_mesh(), embedding, mesh.reoriented_faces()))
+    Ok(CoreSphereMap::new(mesh.shared_mesh(), caller, embedding, mesh.reoriented_faces()))
 }

@@ -22,6 +22,9 @@ use crate::mesh::CoreMesh;
 pub struct CoreSphereMap {
     /// The oriented mesh the map belongs to.
     mesh: Arc<Mesh>,
+    /// The faces as the caller gave them (before orientation): `to_sphere`
+    /// and `to_surface` speak in their corner order.
+    caller: Arc<Mesh>,
     embedding: Embedding,
     reoriented_faces: usize,
     /// Built on first use (O(F log F)).
@@ -29,8 +32,20 @@ pub struct CoreSphereMap {
 }
 
 impl CoreSphereMap {
-    pub fn new(mesh: Arc<Mesh>, embedding: Embedding, reoriented_faces: usize) -> CoreSphereMap {
-        CoreSphereMap { mesh, embedding, reoriented_faces, point_map: OnceLock::new() }
+    /// `caller`: the mesh as the caller gave it (its faces' corner order is
+    /// the one the point map speaks); `mesh`: the same mesh oriented.
+    pub fn new(
+        mesh: Arc<Mesh>,
+        caller: Arc<Mesh>,
+        embedding: Embedding,
+        reoriented_faces: usize,
+    ) -> CoreSphereMap {
+        CoreSphereMap { mesh, caller, embedding, reoriented_faces, point_map: OnceLock::new() }
+    }
+
+    /// The mesh as the caller gave it, shared.
+    pub fn caller_mesh(&self) -> Arc<Mesh> {
+        Arc::clone(&self.caller)
     }
 
     /// The oriented mesh, shared.
@@ -55,8 +70,10 @@ impl CoreSphereMap {
         if let Some(map) = self.point_map.get() {
             return Ok(map);
         }
-        let built =
-            crate::pool::detach(py, || PointMap::new(Arc::clone(&self.mesh), &self.embedding))?;
+        let built = crate::pool::detach(py, || {
+            PointMap::new(Arc::clone(&self.mesh), &self.embedding)
+                .in_corner_order_of(self.caller.faces())
+        })?;
         Ok(self.point_map.get_or_init(|| built))
     }
 }
@@ -203,20 +220,30 @@ impl CoreSphereMap {
         Ok(to_numpy(py, &points))
     }
 
-    /// to_surface(points (k, 3) float64) -> (face_ids (k,) int64, bary (k, 3), xyz (k, 3)).
+    /// to_surface(points (k, 3) float64) -> (face_ids (k,) int64, bary (k, 3),
+    /// xyz (k, 3), error (k,) float64): faces and corners in the caller's
+    /// order; error bounds the distance of xyz from the exact preimage.
     #[allow(clippy::type_complexity)]
     fn to_surface<'py>(
         &self,
         py: Python<'py>,
         points: PyReadonlyArrayDyn<'_, f64>,
-    ) -> PyResult<(Bound<'py, PyArray1<i64>>, Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<f64>>)>
-    {
+    ) -> PyResult<(
+        Bound<'py, PyArray1<i64>>,
+        Bound<'py, PyArray2<f64>>,
+        Bound<'py, PyArray2<f64>>,
+        Bound<'py, PyArray1<f64>>,
+    )> {
         let points = rows::<f64, 3>(py, &points, "points")?;
         let map = self.point_map(py)?;
-        let (faces, bary, xyz) =
-            crate::progress::run(py, None, |go_on| map.to_surface_with(&points, go_on))?
-                .map_err(|e| point_map_error(py, e))?;
-        let faces: Vec<i64> = faces.into_iter().map(i64::from).collect();
-        Ok((faces.into_pyarray(py), to_numpy(py, &bary), to_numpy(py, &xyz)))
+        let out = crate::progress::run(py, None, |go_on| map.to_surface_with(&points, go_on))?
+            .map_err(|e| point_map_error(py, e))?;
+        let faces: Vec<i64> = out.faces.into_iter().map(i64::from).collect();
+        Ok((
+            faces.into_pyarray(py),
+            to_numpy(py, &out.bary),
+            to_numpy(py, &out.xyz),
+            out.error.into_pyarray(py),
+        ))
     }
 }

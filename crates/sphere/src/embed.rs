@@ -202,6 +202,7 @@ pub fn embed(
     method: &Method,
     progress: &(dyn Fn(usize, usize) -> bool + Sync),
 ) -> Result<Embedding, SphereError> {
+    crate::geometry_range::check_geometry(mesh)?;
     let (result, details) = match method {
         Method::Radial(center) => {
             let r = radial_map(mesh, *center)?;

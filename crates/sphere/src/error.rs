@@ -36,6 +36,10 @@ pub enum SphereError {
     /// A given point with no direction: not finite, or the zero vector.
     #[error("points row {row}: {point:?} has no direction (not finite, or zero)")]
     BadPoint { row: usize, point: [f64; 3] },
+    /// Coordinates no method can map in double precision: a degenerate mesh,
+    /// or one too large or too small ([`crate::geometry_range`]).
+    #[error("{message}")]
+    Geometry { message: String },
     /// A progress callback asked a long stage to stop.
     #[error("{stage} stopped by the progress callback after {done} of {total} steps")]
     Cancelled { stage: &'static str, done: usize, total: usize },

@@ -10,15 +10,22 @@
 //! flat triangle at the point with these weights). Both directions are only a
 //! bijection when the embedding is valid (3.4); callers check that first.
 
+use spherify_mesh::predicates::{det3_sign, Sign};
 use spherify_mesh::vec3::{cross, det3, dot, norm, scale};
 
 use crate::bvh::{Aabb, Bvh};
+use crate::h_map::clamp_weights;
+use crate::weight_bound::{ratio_weights, Candidates, UNIT_ROUNDOFF};
 
 /// The GC map of one embedding.
 #[derive(Debug, Clone)]
 pub struct GcMap {
     faces: Vec<[u32; 3]>,
     points: Vec<[f64; 3]>,
+    /// det[a, b, c] of every face (positive in a valid embedding).
+    dets: Vec<f64>,
+    /// |v| of every point (1 up to rounding for a map's points).
+    lengths: Vec<f64>,
     locator: Bvh<3>,
 }
 
@@ -52,7 +59,21 @@ impl GcMap {
     pub fn new(faces: &[[u32; 3]], points: &[[f64; 3]]) -> Self {
         let boxes: Vec<Aabb<3>> =
             faces.iter().map(|f| spherical_box(f.map(|v| points[v as usize]))).collect();
-        GcMap { faces: faces.to_vec(), points: points.to_vec(), locator: Bvh::new(&boxes) }
+        let dets = faces
+            .iter()
+            .map(|f| {
+                let [a, b, c] = f.map(|v| points[v as usize]);
+                det3(a, b, c)
+            })
+            .collect();
+        let lengths = points.iter().map(|&p| norm(p)).collect();
+        GcMap {
+            faces: faces.to_vec(),
+            points: points.to_vec(),
+            dets,
+            lengths,
+            locator: Bvh::new(&boxes),
+        }
     }
 
     /// h (3.3): the unit vector for weights `w` on face `f`.
@@ -74,39 +95,110 @@ impl GcMap {
         }
     }
 
-    /// The weights of `p` in face `f` and how far inside the face it lies
-    /// (the smallest weight; negative outside, NaN on the far side of the sphere).
-    fn face_weights(&self, f: u32, p: [f64; 3]) -> ([f64; 3], f64) {
-        let [a, b, c] = self.faces[f as usize].map(|v| self.points[v as usize]);
-        let w = [det3(p, b, c), det3(a, p, c), det3(a, b, p)];
-        let sum = w[0] + w[1] + w[2];
-        if sum.is_nan() || sum <= 0.0 {
-            return (w, f64::NAN);
+    /// The weights of `p` (a unit vector) in face `f`, with what point
+    /// location needs: whether the closed spherical triangle holds `p`
+    /// exactly, whether some point within the rounding error of
+    /// [`GcMap::to_sphere`] of `p` lies in it, and a bound on sum |w - w'|
+    /// over the exact weights w' of every such point ([`ratio_weights`]).
+    fn face_weights(&self, f: u32, p: [f64; 3]) -> FaceWeights {
+        let face = self.faces[f as usize];
+        let [a, b, c] = face.map(|v| self.points[v as usize]);
+        let crosses = [cross(b, c), cross(c, a), cross(a, b)];
+        let d = crosses.map(|n| dot(p, n));
+        // to_sphere projects a point q of the flat triangle with an error of a
+        // few u relative to |q|, and |q| = det[a, b, c] / (p . n) with n the sum
+        // of the crosses, which is d's sum: so p stands for every unit vector
+        // within delta of it, and a move by delta moves d_i by delta |cross_i|.
+        // Points of the cone have p . n >= det[a, b, c] and p . n <= |n| <= 3, so
+        // |q| >= det / 3 there: that bounds delta when the sum says nothing (p
+        // on the far side).
+        let sum = d[0] + d[1] + d[2];
+        let det = self.dets[f as usize];
+        let q = if sum > 0.0 && sum < 3.0 { det / sum } else { det / 3.0 };
+        let delta = 16.0 * UNIT_ROUNDOFF * (1.0 + 1.0 / q.max(f64::MIN_POSITIVE));
+        // Most candidates of the box tree are plainly outside: reject them on
+        // a cheap bound first (the permanent is at most the product of the
+        // rows' 1-norms, <= 3^1.5 times the product of their lengths, and
+        // |b x c| <= |b| |c|), before the exact bounds below.
+        let [la, lb, lc] = face.map(|v| self.lengths[v as usize]);
+        let lp = norm(p);
+        let pairs = [lb * lc, lc * la, la * lb];
+        if (0..3).any(|i| d[i] + (8.0 * UNIT_ROUNDOFF * 5.2 * lp + delta) * pairs[i] < 0.0) {
+            return FaceWeights {
+                w: d.map(|x| x / sum),
+                bound: f64::INFINITY,
+                contains: false,
+                near: false,
+            };
         }
-        let w = w.map(|x| x / sum);
-        (w, w[0].min(w[1]).min(w[2]))
+        let rows = [[p, b, c], [a, p, c], [a, b, p]];
+        // det3 as dot(p, cross) is within 8 u of its permanent (a forward
+        // error bound of the six-product sum, with room to spare).
+        let eval_error = rows.map(|r| 8.0 * UNIT_ROUNDOFF * permanent(r));
+        let e: [f64; 3] = std::array::from_fn(|i| eval_error[i] + delta * norm(crosses[i]));
+        let near = (0..3).all(|i| d[i] + e[i] >= 0.0);
+        let contains = near
+            && (0..3).all(|i| {
+                if d[i] > eval_error[i] {
+                    true
+                } else if d[i] < -eval_error[i] {
+                    false
+                } else {
+                    let [x, y, z] = rows[i];
+                    det3_sign(x, y, z) != Sign::Negative
+                }
+            });
+        let (w, bound) = ratio_weights(d, e);
+        FaceWeights { w, bound, contains, near }
     }
 
     /// h^-1 (3.3): the face and weights of the surface point mapped to the unit
-    /// vector `p`.
-    pub fn to_surface(&self, p: [f64; 3]) -> (u32, [f64; 3]) {
-        let consider = |f: u32, best: &mut Option<(u32, [f64; 3], f64)>| {
-            let (w, score) = self.face_weights(f, p);
-            if score.is_finite() && best.as_ref().is_none_or(|b| score > b.2) {
-                *best = Some((f, w, score));
-            }
+    /// vector `p`, and a bound on the distance of that surface point from the
+    /// exact preimage of every sphere point within the rounding error of
+    /// [`GcMap::to_sphere`] of `p` (`sizes[f]`: the longest edge of surface
+    /// face f). Infinite when the digits of `p` cannot say where it came from.
+    ///
+    /// Containment is decided with exact predicates (the signs of det[p, b, c],
+    /// det[a, p, c], det[a, b, p]): in a valid GC-embedding the closed
+    /// spherical triangles cover the sphere, so some face holds `p` exactly,
+    /// however thin the triangles are; among those the best conditioned one
+    /// answers. The bound is the worst over every face that a point within
+    /// the rounding error could lie in, since the preimage may be there.
+    pub fn to_surface(&self, p: [f64; 3], sizes: &[f64]) -> (u32, [f64; 3], f64) {
+        let mut found = Candidates::default();
+        let consider = |f: u32, found: &mut Candidates| {
+            let fw = self.face_weights(f, p);
+            let score = fw.w[0].min(fw.w[1]).min(fw.w[2]);
+            found.offer(f, fw.w, fw.bound * sizes[f as usize], fw.contains, fw.near, score);
         };
-        let mut best = None;
-        self.locator.for_each_containing(&p, 1e-12, |f| consider(f, &mut best));
-        if best.is_none() {
+        // The boxes are rounded outward by far less than this slack.
+        self.locator.for_each_containing(&p, 1e-10, |x| consider(x, &mut found));
+        if !found.found() {
             // The boxes cover the sphere, so this is a safety net only.
             for f in 0..self.faces.len() as u32 {
-                consider(f, &mut best);
+                consider(f, &mut found);
             }
         }
-        let (f, w, _) = best.unwrap_or((0, [1.0, 0.0, 0.0], 0.0));
-        (f, crate::h_map::clamp_weights(w))
+        let (f, w, bound) = found.answer();
+        (f, clamp_weights(w), bound)
     }
+}
+
+/// What [`GcMap::face_weights`] finds.
+struct FaceWeights {
+    w: [f64; 3],
+    bound: f64,
+    contains: bool,
+    near: bool,
+}
+
+/// The sum of the absolute values of the six products of det[x; y; z].
+fn permanent([x, y, z]: [[f64; 3]; 3]) -> f64 {
+    let ab = |v: [f64; 3]| v.map(f64::abs);
+    let (x, y, z) = (ab(x), ab(y), ab(z));
+    x[0] * (y[1] * z[2] + y[2] * z[1])
+        + x[1] * (y[0] * z[2] + y[2] * z[0])
+        + x[2] * (y[0] * z[1] + y[1] * z[0])
 }
 
 #[cfg(test)]
@@ -118,10 +210,12 @@ mod tests {
     fn octahedron_round_trips() {
         let mesh = octahedron();
         let map = GcMap::new(mesh.faces(), mesh.positions());
+        let sizes = [1.0; 8];
         for f in 0..8u32 {
             for w in [[0.2, 0.3, 0.5], [1.0, 0.0, 0.0], [0.0, 0.5, 0.5], [1.0 / 3.0; 3]] {
                 let p = map.to_sphere(f, w);
-                let (g, w2) = map.to_surface(p);
+                let (g, w2, bound) = map.to_surface(p, &sizes);
+                assert!(bound < 1e-13, "{bound}");
                 let back = map.to_sphere(g, w2);
                 let err = (0..3).map(|i| (back[i] - p[i]).abs()).fold(0.0, f64::max);
                 assert!(err < 1e-14, "face {f} {w:?}: {err}");

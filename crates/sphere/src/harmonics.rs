@@ -210,7 +210,7 @@ pub fn fit(
     let started = std::time::Instant::now();
     let grid = Grid::new(lmax, oversample)?;
     let points = grid.points();
-    let (_, _, xyz) = map.to_surface(&points)?;
+    let xyz = map.to_surface(&points)?.xyz;
     let sampled = started.elapsed().as_secs_f64();
     let coefficients = grid.analyse(&xyz);
     let seconds =

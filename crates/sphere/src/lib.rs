@@ -56,6 +56,7 @@ pub mod from_points;
 pub mod gauss_legendre;
 pub mod gc_map;
 pub mod genus_zero;
+pub mod geometry_range;
 pub mod gotsman;
 pub mod h_map;
 pub mod harmonics;
@@ -77,6 +78,7 @@ pub mod symmetric_eigen;
 pub mod symmetry;
 pub mod theta_phi;
 pub mod validity;
+pub mod weight_bound;
 pub mod weight_matrix;
 
 pub use embed::{embed, improve_embedding, Details, Embedding, Method, MethodName, UnknownMethod};

@@ -80,6 +80,45 @@ pub struct PointMap {
     inner: Inner,
     /// `Some(reason)` when h^-1 is not defined.
     not_bijective: Option<String>,
+    /// The longest edge of every face of `mesh`: turns a bound on the
+    /// weights' error into one on the surface point's.
+    sizes: Vec<f64>,
+    /// When the caller's faces were reoriented: `corners[f][k]` is the corner
+    /// of `mesh`'s face f that is corner k of the caller's face f.
+    corners: Option<Vec<[u8; 3]>>,
+}
+
+/// What [`PointMap::to_surface`] returns, one row per query point.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SurfacePoints {
+    /// The face holding the preimage (in the caller's face order).
+    pub faces: Vec<u32>,
+    /// Its barycentric weights on the caller's corners of that face.
+    pub bary: Vec<[f64; 3]>,
+    /// The surface point.
+    pub xyz: Vec<[f64; 3]>,
+    /// A bound on the distance from `xyz` to the exact preimage of every
+    /// sphere point within the rounding error of `to_sphere` of the query
+    /// (so it also bounds the error of a round trip surface -> sphere ->
+    /// surface); infinite when the query's digits cannot say where it came
+    /// from (a nearly flat triangle, issue 13 item 7).
+    pub error: Vec<f64>,
+}
+
+/// The longest edge of every face.
+fn face_sizes(mesh: &Mesh) -> Vec<f64> {
+    let x = mesh.positions();
+    mesh.faces()
+        .iter()
+        .map(|f| {
+            (0..3)
+                .map(|k| {
+                    let (a, b) = (x[f[k] as usize], x[f[(k + 1) % 3] as usize]);
+                    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+                })
+                .fold(0.0, f64::max)
+        })
+        .collect()
 }
 
 impl PointMap {
@@ -119,7 +158,8 @@ impl PointMap {
         } else {
             map.problem().map(str::to_string)
         };
-        PointMap { mesh, inner: Inner::ThetaPhi(map), not_bijective }
+        let sizes = face_sizes(&mesh);
+        PointMap { mesh, inner: Inner::ThetaPhi(map), not_bijective, sizes, corners: None }
     }
 
     /// The barycentric map of 3.3 for a GC-embedding; `valid` is its verdict
@@ -129,7 +169,58 @@ impl PointMap {
             format!("the points are not a valid GC-embedding ({flipped} faces fail the orientation test of thesis 3.4)")
         });
         let inner = Inner::Gc(GcMap::new(mesh.faces(), points));
-        PointMap { mesh, inner, not_bijective }
+        let sizes = face_sizes(&mesh);
+        PointMap { mesh, inner, not_bijective, sizes, corners: None }
+    }
+
+    /// The same map speaking in the caller's corner order: `caller_faces` are
+    /// the faces the caller gave before they were oriented (the same faces in
+    /// the same order, each possibly with its corners reversed), so that
+    /// weights given to `to_sphere` and returned by `to_surface` refer to the
+    /// caller's corners (issue 13, item 9). Faces that are not the same set
+    /// of corners as the oriented ones are left as they are. O(F).
+    pub fn in_corner_order_of(mut self, caller_faces: &[[u32; 3]]) -> PointMap {
+        let ours = self.mesh.faces();
+        if caller_faces.len() != ours.len() || caller_faces == ours {
+            return self;
+        }
+        let corners = caller_faces
+            .iter()
+            .zip(ours)
+            .map(|(theirs, mine)| {
+                let at = |v: u32| mine.iter().position(|&x| x == v);
+                match (at(theirs[0]), at(theirs[1]), at(theirs[2])) {
+                    (Some(a), Some(b), Some(c)) if a != b && b != c && a != c => {
+                        [a as u8, b as u8, c as u8]
+                    }
+                    _ => [0, 1, 2],
+                }
+            })
+            .collect();
+        self.corners = Some(corners);
+        self
+    }
+
+    /// Caller's weights -> weights on `mesh`'s corners of face f.
+    fn to_ours(&self, f: usize, w: [f64; 3]) -> [f64; 3] {
+        match &self.corners {
+            Some(c) => {
+                let mut out = [0.0; 3];
+                for k in 0..3 {
+                    out[c[f][k] as usize] = w[k];
+                }
+                out
+            }
+            None => w,
+        }
+    }
+
+    /// Weights on `mesh`'s corners of face f -> the caller's.
+    fn to_theirs(&self, f: usize, w: [f64; 3]) -> [f64; 3] {
+        match &self.corners {
+            Some(c) => std::array::from_fn(|k| w[c[f][k] as usize]),
+            None => w,
+        }
     }
 
     /// Why h^-1 is not defined, if it is not.
@@ -172,7 +263,7 @@ impl PointMap {
                     if face < 0 || face as usize >= n_faces {
                         return Err(PointMapError::FaceOutOfRange { row, face, n_faces });
                     }
-                    let w = checked_weights(row, w)?;
+                    let w = self.to_ours(face as usize, checked_weights(row, w)?);
                     Ok(match &self.inner {
                         Inner::ThetaPhi(m) => m.to_sphere(face as u32, w),
                         Inner::Gc(m) => m.to_sphere(face as u32, w),
@@ -182,28 +273,23 @@ impl PointMap {
         })
     }
 
-    /// h^-1: for every unit vector, the face, the barycentric weights on it
-    /// and the surface point.
-    #[allow(clippy::type_complexity)]
-    pub fn to_surface(
-        &self,
-        points: &[[f64; 3]],
-    ) -> Result<(Vec<u32>, Vec<[f64; 3]>, Vec<[f64; 3]>), PointMapError> {
+    /// h^-1: for every unit vector, the face, the barycentric weights on it,
+    /// the surface point and a bound on its error ([`SurfacePoints`]).
+    pub fn to_surface(&self, points: &[[f64; 3]]) -> Result<SurfacePoints, PointMapError> {
         self.to_surface_with(points, &|_, _| true)
     }
 
     /// [`PointMap::to_surface`], stopping with [`PointMapError::Cancelled`]
     /// when `progress(0, 0)`, polled between batches of points, says so.
-    #[allow(clippy::type_complexity)]
     pub fn to_surface_with(
         &self,
         points: &[[f64; 3]],
         progress: &(dyn Fn(usize, usize) -> bool + Sync),
-    ) -> Result<(Vec<u32>, Vec<[f64; 3]>, Vec<[f64; 3]>), PointMapError> {
+    ) -> Result<SurfacePoints, PointMapError> {
         if let Some(why) = &self.not_bijective {
             return Err(PointMapError::NotBijective(why.clone()));
         }
-        let located: Vec<(u32, [f64; 3])> = batched(points.len(), progress, |rows| {
+        let located: Vec<(u32, [f64; 3], f64)> = batched(points.len(), progress, |rows| {
             let start = rows.start;
             points[rows]
                 .par_iter()
@@ -214,17 +300,19 @@ impl PointMap {
                     if (norm - 1.0).abs().is_nan() || (norm - 1.0).abs() > NORM_TOLERANCE {
                         return Err(PointMapError::NotOnSphere { row, point: p, norm });
                     }
-                    let p = p.map(|x| x / norm);
                     Ok(match &self.inner {
-                        Inner::ThetaPhi(m) => m.to_surface(p),
-                        Inner::Gc(m) => m.to_surface(p),
+                        Inner::ThetaPhi(m) => m.to_surface(p.map(|x| x / norm), &self.sizes),
+                        // Containment is a sign of det[p, b, c], which scaling
+                        // p does not change: the point as given is located,
+                        // not its rounded normalisation.
+                        Inner::Gc(m) => m.to_surface(p, &self.sizes),
                     })
                 })
                 .collect::<Result<_, _>>()
         })?;
         let xyz = located
             .par_iter()
-            .map(|&(f, w)| {
+            .map(|&(f, w, _)| {
                 let face = self.mesh.faces()[f as usize];
                 let mut x = [0.0; 3];
                 for k in 0..3 {
@@ -236,8 +324,18 @@ impl PointMap {
                 x
             })
             .collect();
-        let (faces, weights) = located.into_iter().unzip();
-        Ok((faces, weights, xyz))
+        let mut out = SurfacePoints {
+            faces: Vec::with_capacity(located.len()),
+            bary: Vec::with_capacity(located.len()),
+            xyz,
+            error: Vec::with_capacity(located.len()),
+        };
+        for (f, w, error) in located {
+            out.faces.push(f);
+            out.bary.push(self.to_theirs(f as usize, w));
+            out.error.push(error);
+        }
+        Ok(out)
     }
 }
 
@@ -288,7 +386,9 @@ mod tests {
             bary.push([a, b, 1.0 - a - b]);
         }
         let sphere = map.to_sphere(&ids, &bary).unwrap();
-        let (_, _, xyz) = map.to_surface(&sphere).unwrap();
+        let back = map.to_surface(&sphere).unwrap();
+        assert!(back.error.iter().all(|&e| e < 1e-12), "{:?}", back.error);
+        let xyz = back.xyz;
         for (row, (&f, w)) in ids.iter().zip(&bary).enumerate() {
             let face = mesh.faces()[f as usize];
             let want: Vec<f64> = (0..3)
@@ -307,9 +407,9 @@ mod tests {
             })
             .collect();
         points.extend([[0.0, 0.0, 1.0], [0.0, 0.0, -1.0], [1.0, 0.0, 0.0], [0.6, 0.0, 0.8]]);
-        let (faces, weights, _) = map.to_surface(&points).unwrap();
-        let ids: Vec<i64> = faces.iter().map(|&f| f as i64).collect();
-        let back = map.to_sphere(&ids, &weights).unwrap();
+        let located = map.to_surface(&points).unwrap();
+        let ids: Vec<i64> = located.faces.iter().map(|&f| f as i64).collect();
+        let back = map.to_sphere(&ids, &located.bary).unwrap();
         for (p, q) in points.iter().zip(&back) {
             let err = (0..3).map(|i| (p[i] - q[i]).abs()).fold(0.0, f64::max);
             assert!(err < 1e-9, "{p:?} -> {q:?}");
@@ -329,6 +429,31 @@ mod tests {
         let mesh = octahedron();
         let map = PointMap::gc(Arc::new(mesh.clone()), mesh.positions(), true, 0);
         round_trip(&map, &mesh, 5);
+    }
+
+    #[test]
+    fn a_reversed_callers_corners_are_kept() {
+        let mesh = octahedron();
+        let reversed: Vec<[u32; 3]> = mesh.faces().iter().map(|&[a, b, c]| [c, b, a]).collect();
+        let plain = PointMap::gc(Arc::new(mesh.clone()), mesh.positions(), true, 0);
+        let theirs = plain.clone().in_corner_order_of(&reversed);
+        let w = [0.2, 0.3, 0.5];
+        for f in 0..8i64 {
+            let want = plain.to_sphere(&[f], &[w]).unwrap();
+            assert_eq!(theirs.to_sphere(&[f], &[[w[2], w[1], w[0]]]).unwrap(), want);
+            let back = theirs.to_surface(&want).unwrap();
+            let b = back.bary[0];
+            let x: Vec<f64> = (0..3)
+                .map(|i| {
+                    (0..3)
+                        .map(|k| {
+                            b[k] * mesh.positions()[reversed[back.faces[0] as usize][k] as usize][i]
+                        })
+                        .sum()
+                })
+                .collect();
+            assert!((0..3).all(|i| (x[i] - back.xyz[0][i]).abs() < 1e-15), "{x:?} {:?}", back.xyz);
+        }
     }
 
     #[test]

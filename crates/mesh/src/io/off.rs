@@ -104,7 +104,13 @@ pub(crate) fn read(bytes: &[u8], name: &str) -> Result<LoadedMesh, MeshError> {
         read_face(&mut rest, nv, &mut corners).map_err(|msg| line_error(name, number, msg))?;
         triangles.push(&corners);
     }
-    let notes = triangles.note().into_iter().collect();
+    let mut notes: Vec<String> = triangles.note().into_iter().collect();
+    if let Some((number, _)) = next_content(&mut lines) {
+        notes.push(format!(
+            "data after the {nv} vertices and {nf} faces the header declares (from line \
+             {number}) was ignored"
+        ));
+    }
     finish(name, positions, triangles.faces, VertexAttributes::default(), notes)
 }
 

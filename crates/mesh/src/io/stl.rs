@@ -92,11 +92,15 @@ fn read_ascii(bytes: &[u8], name: &str) -> Result<LoadedMesh, MeshError> {
     let mut triangles = Triangles::with_capacity(bytes.len() / 250);
     let mut corners = Vec::with_capacity(3);
     let mut corner_count = 0usize;
+    // Whether an endsolid follows the last facet: without it the file may
+    // have been cut short after a complete facet (issue 13, item 17).
+    let mut ended = false;
     let mut lines = Lines::new(bytes);
     for (number, line) in &mut lines {
         let mut rest = line;
         match next_token(&mut rest) {
-            None | Some(b"solid" | b"endsolid" | b"facet" | b"outer" | b"endfacet") => {}
+            Some(b"endsolid") => ended = true,
+            None | Some(b"solid" | b"facet" | b"outer" | b"endfacet") => {}
             Some(b"vertex") => {
                 let mut p = [0.0f32; 3];
                 for slot in &mut p {
@@ -126,6 +130,7 @@ fn read_ascii(bytes: &[u8], name: &str) -> Result<LoadedMesh, MeshError> {
                 corner_count += corners.len();
                 triangles.push(&corners);
                 corners.clear();
+                ended = false;
             }
             Some(other) => {
                 let msg = format!("unexpected {} in an ascii STL file", text::show(Some(other)));
@@ -138,6 +143,12 @@ fn read_ascii(bytes: &[u8], name: &str) -> Result<LoadedMesh, MeshError> {
     }
     let mut notes = vec![weld_note(corner_count, welder.positions.len())];
     notes.extend(triangles.note());
+    if !ended && !triangles.faces.is_empty() {
+        notes.push(format!(
+            "no endsolid after the last of {} facets: the file may have been cut short",
+            triangles.faces.len()
+        ));
+    }
     finish(name, welder.positions, triangles.faces, VertexAttributes::default(), notes)
 }
 

@@ -176,10 +176,29 @@ impl MeshReport {
                 self.inconsistent_edges.examples()
             ));
         } else if self.closed && self.consistently_oriented && !self.outward {
-            p.push(format!(
-                "the faces point inward (signed volume {:.6e}); orient fixes this",
-                self.signed_volume
-            ));
+            // orient decides "outward" by the sign of this volume: when it is
+            // not a number, or zero, there is nothing it could fix (issue 13,
+            // item 18).
+            if !self.signed_volume.is_finite() {
+                p.push(format!(
+                    "the faces' orientation cannot be decided: their signed volume is {} \
+                     (coordinates that are not finite, or so large that the volume \
+                     overflows); orient cannot fix this",
+                    self.signed_volume
+                ));
+            } else if self.signed_volume == 0.0 {
+                p.push(
+                    "the mesh encloses no volume (signed volume 0): it is degenerate, for \
+                     example all its vertices at one point or on one plane, and has no \
+                     outward side for orient to find"
+                        .to_string(),
+                );
+            } else {
+                p.push(format!(
+                    "the faces point inward (signed volume {:.6e}); orient fixes this",
+                    self.signed_volume
+                ));
+            }
         }
         self.problems = p;
     }

@@ -36,15 +36,14 @@
 
 mod fan_psi;
 mod fold;
+mod locate;
 mod pole_cell;
-
-use std::f64::consts::PI;
 
 use crate::bvh::{Aabb, Bvh};
 
 use fan_psi::assign_psi;
 pub use fold::{fold, unfold};
-use pole_cell::{convex, cross2, piece_weights, split_straight_angles, sub2, FlatPiece, PoleCell};
+use pole_cell::{convex, piece_weights, split_straight_angles, FlatPiece, PoleCell};
 
 /// A piece of the rectangle that point location can return.
 #[derive(Debug, Clone, Copy)]
@@ -75,17 +74,6 @@ pub struct ThetaPhiMap {
     pole_corners: [(u32, usize); 2],
     /// Why h2 is not one-to-one, when it is not.
     problem: Option<String>,
-}
-
-/// Barycentric weights of `p` in triangle (a, b, c), each computed from the
-/// sub-triangle opposite its corner, so a point near a corner keeps its digits.
-pub(crate) fn triangle_weights(p: [f64; 2], a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> [f64; 3] {
-    let area = cross2(sub2(b, a), sub2(c, a));
-    let wa = cross2(sub2(b, p), sub2(c, p)) / area;
-    let wb = cross2(sub2(c, p), sub2(a, p)) / area;
-    let wc = cross2(sub2(a, p), sub2(b, p)) / area;
-    let sum = wa + wb + wc;
-    [wa / sum, wb / sum, wc / sum]
 }
 
 impl ThetaPhiMap {
@@ -274,90 +262,41 @@ impl ThetaPhiMap {
             }
         }
     }
-
-    /// h^-1 (6.6.4): the face and barycentric weights of the surface point
-    /// mapped to the unit vector `p`.
-    pub fn to_surface(&self, p: [f64; 3]) -> (u32, [f64; 3]) {
-        let u = unfold(p);
-        for side in 0..2 {
-            let pole_line = if side == 0 { u[0] <= 0.0 } else { u[0] >= PI };
-            if pole_line {
-                let (f, c) = self.pole_corners[side];
-                let mut w = [0.0; 3];
-                w[c] = 1.0;
-                return (f, w);
-            }
-        }
-        self.locate(u)
-    }
-
-    /// h1^-1 h2^-1: the face and weights of the rectangle point `u`.
-    pub fn locate(&self, u: [f64; 2]) -> (u32, [f64; 3]) {
-        let u = [u[0].clamp(0.0, PI), u[1].clamp(0.0, 2.0 * PI)];
-        let consider = |r: u32, best: &mut Option<(u32, [f64; 3], f64)>| {
-            let (f, w, score) = self.region_weights(r, u);
-            if score.is_finite() && best.as_ref().is_none_or(|b| score > b.2) {
-                *best = Some((f, w, score));
-            }
-        };
-        let mut best = None;
-        self.locator.for_each_containing(&u, 1e-12, |r| consider(r, &mut best));
-        if best.is_none() {
-            // The cells tile the rectangle, so some box holds u; this is a
-            // safety net for non-finite weights, not a path taken in practice.
-            for r in 0..self.regions.len() as u32 {
-                consider(r, &mut best);
-            }
-        }
-        let (f, w, _) = best.unwrap_or((0, [1.0, 0.0, 0.0], 0.0));
-        (f, clamp_weights(w))
-    }
-
-    /// The face and barycentric weights of `u` in region `r`, and how far
-    /// inside the region `u` lies: the smallest of the region's own weights
-    /// (negative outside). For a pole cell these are (s_P, s_A, s_B), not the
-    /// face's weights, since a two-pole face has two cells.
-    fn region_weights(&self, r: u32, u: [f64; 2]) -> (u32, [f64; 3], f64) {
-        match self.regions[r as usize] {
-            Region::Triangle(f) => {
-                let [a, b, c] = self.faces[f as usize].map(|v| self.uv[v as usize]);
-                let w = triangle_weights(u, a, b, c);
-                (f, w, w[0].min(w[1]).min(w[2]))
-            }
-            Region::Pole(c) => {
-                let cell = &self.cells[c as usize];
-                let (lambda, mu) = cell.inverse(u);
-                let s = [1.0 - mu, lambda * mu, (1.0 - lambda) * mu];
-                let mut w = [0.0; 3];
-                w[cell.pole_corner] = s[0];
-                for ((wk, ak), bk) in w.iter_mut().zip(cell.a).zip(cell.b) {
-                    *wk += s[1] * ak + s[2] * bk;
-                }
-                (cell.face, w, s[0].min(s[1]).min(s[2]))
-            }
-            Region::Flat(k) => {
-                let flat = &self.flats[k as usize];
-                let [a, b, c] = flat.positions;
-                let t = triangle_weights(u, a, b, c);
-                let mut w = [0.0; 3];
-                for (corner, &tk) in flat.corners.iter().zip(&t) {
-                    for i in 0..3 {
-                        w[i] += tk * corner[i];
-                    }
-                }
-                (flat.face, w, t[0].min(t[1]).min(t[2]))
-            }
-        }
-    }
 }
 
 /// Rounding leaves weights a hair below zero on shared edges: clip and rescale.
+/// Weights of a cell so flat that their common denominator rounds to zero are
+/// infinite or NaN: the cell holds the point (exact predicates said so), but
+/// where in it is unknown, which the caller's error bound (infinite) says; an
+/// infinite weight then stands for its corner, a NaN for nothing.
 pub(crate) fn clamp_weights(w: [f64; 3]) -> [f64; 3] {
-    let c = w.map(|x| x.max(0.0));
+    let finite = w.iter().all(|x| x.is_finite());
+    let c = w.map(|x| {
+        if finite {
+            x.max(0.0)
+        } else if x == f64::INFINITY {
+            1.0
+        } else {
+            0.0
+        }
+    });
     let s = c[0] + c[1] + c[2];
-    if s > 0.0 {
+    if s > 0.0 && s.is_finite() {
         c.map(|x| x / s)
     } else {
         [1.0 / 3.0; 3]
+    }
+}
+
+#[cfg(test)]
+mod clamp_tests {
+    use super::clamp_weights;
+
+    #[test]
+    fn weights_of_a_collapsed_cell_are_still_weights() {
+        assert_eq!(clamp_weights([f64::INFINITY, 0.0, 0.0]), [1.0, 0.0, 0.0]);
+        assert_eq!(clamp_weights([f64::NAN, f64::NAN, f64::NAN]), [1.0 / 3.0; 3]);
+        assert_eq!(clamp_weights([f64::INFINITY, f64::NEG_INFINITY, f64::NAN]), [1.0, 0.0, 0.0]);
+        assert_eq!(clamp_weights([0.5, 0.5 + 1e-17, -1e-17]), [0.5 / 1.0, 0.5 / 1.0, 0.0]);
     }
 }

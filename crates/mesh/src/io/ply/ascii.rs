@@ -44,6 +44,12 @@ pub(super) fn read_body(
     for element in &header.elements {
         read_element(element, &mut tokens, out, name)?;
     }
+    if tokens.next().is_some() {
+        out.notes.push(format!(
+            "data after the elements the header declares (from line {}) was ignored",
+            tokens.line
+        ));
+    }
     Ok(())
 }
 

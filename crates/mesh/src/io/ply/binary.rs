@@ -63,6 +63,12 @@ pub(super) fn read_body(
     for element in &header.elements {
         read_element(element, bytes, &mut pos, big, out, name)?;
     }
+    if pos < bytes.len() {
+        out.notes.push(format!(
+            "{} bytes after the elements the header declares (from byte {pos}) were ignored",
+            bytes.len() - pos
+        ));
+    }
     Ok(())
 }
 

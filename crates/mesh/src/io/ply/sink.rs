@@ -14,6 +14,8 @@ pub(super) struct Sink {
     sphere: Vec<[f64; 3]>,
     uv: Vec<[f64; 2]>,
     pub(super) triangles: Triangles,
+    /// Notes from the body readers (data after the declared elements).
+    pub(super) notes: Vec<String>,
     corners: Vec<u32>,
 }
 
@@ -29,6 +31,7 @@ impl Sink {
             sphere: Vec::with_capacity(if layout.sphere { n } else { 0 }),
             uv: Vec::with_capacity(if layout.uv { n } else { 0 }),
             triangles: Triangles::with_capacity(nf as usize),
+            notes: Vec::new(),
             corners: Vec::with_capacity(8),
         }
     }
@@ -79,7 +82,8 @@ impl Sink {
             sphere: self.layout.sphere.then_some(self.sphere),
             uv: self.layout.uv.then_some(self.uv),
         };
-        let notes = self.triangles.note().into_iter().collect();
+        let mut notes: Vec<String> = self.triangles.note().into_iter().collect();
+        notes.extend(self.notes);
         finish(name, self.positions, self.triangles.faces, attributes, notes)
     }
 }
