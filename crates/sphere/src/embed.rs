@@ -244,7 +244,23 @@ pub fn improve_embedding(
     }
     let mut result = improve(mesh, &start.result.points, params, progress)?;
     result.message = format!("improved from {}: {}", start.method, result.message);
-    Ok(Embedding::certified(mesh, MethodName::Improve, result, Details::None))
+    let improved = Embedding::certified(mesh, MethodName::Improve, result, Details::None);
+    if improved.certificate.valid {
+        return Ok(improved);
+    }
+    // Flip-free moves cannot change the covering degree in exact arithmetic,
+    // but the area sum is rounded: on a start at the double-precision floor
+    // it could read otherwise. Never give back a map less valid than the start.
+    let mut kept = start.result.clone();
+    kept.message = format!(
+        "kept the {} map unchanged: the improved points did not pass the certificate ({} faces \
+         not positive, covering degree {})",
+        start.method,
+        improved.certificate.flipped_faces.len(),
+        improved.certificate.covering_degree
+    );
+    kept.iterations = 0;
+    Ok(Embedding::certified(mesh, MethodName::Improve, kept, Details::None))
 }
 
 #[cfg(test)]

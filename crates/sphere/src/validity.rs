@@ -63,7 +63,8 @@ pub fn check_sphere(faces: &[[u32; 3]], points: &[[f64; 3]]) -> SphereReport {
         .map(|&[a, b, c]| {
             let (pa, pb, pc) = (points[a as usize], points[b as usize], points[c as usize]);
             let (ua, ub, uc) = (unit[a as usize], unit[b as usize], unit[c as usize]);
-            (det3_sign(pa, pb, pc), (signed_area(ua, ub, uc), dot(cross(pa, pb), pc)))
+            let sign = det3_sign(pa, pb, pc);
+            (sign, (area_with_sign(ua, ub, uc, sign), dot(cross(pa, pb), pc)))
         })
         .unzip();
     let smallest = |values: &[f64]| values.iter().copied().fold(f64::INFINITY, f64::min);
@@ -102,6 +103,22 @@ pub fn check_sphere(faces: &[[u32; 3]], points: &[[f64; 3]]) -> SphereReport {
     report
 }
 
+/// [`signed_area`] with the sign of the determinant that the exact test
+/// found. On a face at the double-precision floor the rounded determinant can
+/// have the other sign, and then the rounded area is off by 4 pi: a tiny
+/// positive triangle whose corners lie almost on one great circle has area
+/// near 0 or near 2 pi, never near -2 pi. The area sum, and so the covering
+/// degree, must speak of the same triangles as the orientation test.
+fn area_with_sign(a: [f64; 3], b: [f64; 3], c: [f64; 3], sign: Sign) -> f64 {
+    let det = dot(cross(a, b), c);
+    let det = match sign {
+        Sign::Positive if det <= 0.0 => 0.0,
+        Sign::Negative if det >= 0.0 => -0.0,
+        _ => det,
+    };
+    2.0 * det.atan2(1.0 + dot(a, b) + dot(b, c) + dot(c, a))
+}
+
 /// Signed area of the spherical triangle of unit vectors a, b, c: positive when
 /// counter-clockwise seen from outside.
 pub fn signed_area(a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> f64 {
@@ -130,6 +147,70 @@ mod tests {
         assert!(r.area_error < 1e-12);
         // Each octant has area 4 pi / 8.
         assert!((signed_area(p[0], p[2], p[4]) - std::f64::consts::FRAC_PI_2).abs() < 1e-15);
+    }
+
+    #[test]
+    fn areas_take_the_exact_sign_so_a_double_covering_at_the_floor_is_caught() {
+        // A Gotsman map of a 7-vertex mesh (issue 13's point-map fuzzer, seed
+        // 20730) whose points come in near-coincident pairs: every face is
+        // positive in exact arithmetic, but face 8's rounded determinant is
+        // negative, and its rounded area read -2 pi where the exact sign says
+        // +2 pi. The sum then said "covers once" of a double covering.
+        let points: [[f64; 3]; 7] = [
+            [
+                f64::from_bits(0xbfc5caa255608fa7),
+                f64::from_bits(0x3f47371b7d2ce63e),
+                f64::from_bits(0xbfef88683ddb99e0),
+            ],
+            [
+                f64::from_bits(0x3fb117910af10634),
+                f64::from_bits(0x3feb4842511bbcba),
+                f64::from_bits(0xbfe09627e7ff433f),
+            ],
+            [
+                f64::from_bits(0xbfce566adad96041),
+                f64::from_bits(0xbfeb42748a3da8ce),
+                f64::from_bits(0xbfdde480abb6f8e0),
+            ],
+            [
+                f64::from_bits(0x3fc5caa25561ed7e),
+                f64::from_bits(0xbf47371b7581fc5f),
+                f64::from_bits(0x3fef88683ddb8b1e),
+            ],
+            [
+                f64::from_bits(0x3fce566adad8b191),
+                f64::from_bits(0x3feb42748a3f10de),
+                f64::from_bits(0x3fdde480abb203c9),
+            ],
+            [
+                f64::from_bits(0x3fc5caa25560ef15),
+                f64::from_bits(0xbf47371b7b157540),
+                f64::from_bits(0x3fef88683ddb95d9),
+            ],
+            [
+                f64::from_bits(0xbfce566adad820d9),
+                f64::from_bits(0xbfeb42748a403b35),
+                f64::from_bits(0xbfdde480abade846),
+            ],
+        ];
+        let faces: [[u32; 3]; 10] = [
+            [6, 4, 3],
+            [6, 0, 4],
+            [0, 3, 1],
+            [2, 3, 4],
+            [2, 4, 0],
+            [3, 2, 5],
+            [2, 1, 5],
+            [5, 1, 3],
+            [3, 0, 6],
+            [2, 0, 1],
+        ];
+        let r = check_sphere(&faces, &points);
+        assert_eq!((r.n_positive, r.n_negative, r.n_zero), (10, 0, 0));
+        assert_eq!(r.covering_degree, 2, "{r:?}");
+        assert!(!r.valid);
+        // Every positive face's area is in [0, 2 pi]: the margin is not negative.
+        assert!(r.min_area_ratio >= 0.0, "{r:?}");
     }
 
     #[test]
