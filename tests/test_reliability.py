@@ -274,3 +274,24 @@ def test_ctrl_c_inside_one_long_factorisation_is_answered_at_once(delay: float) 
     """, delay=delay, timeout=300)
     assert_keyboard_interrupt(err, seconds)
     assert seconds < 1.5, f"SIGINT answered after {seconds:.1f} s"
+
+
+@pytest.mark.slow
+def test_ctrl_c_inside_a_long_tutte_solve_is_answered_at_once() -> None:
+    """sp.tutte on a million-vertex disk spends seconds in one sparse
+    factorisation: it too leaves that step to finish in the background and
+    raises at once (item 2; slow: the mesh takes seconds to make)."""
+    err, seconds = interrupt("""
+        import numpy as np
+        import spherify as sp
+        k = 1000
+        i, j = np.meshgrid(np.arange(k), np.arange(k), indexing="ij")
+        V = np.c_[i.ravel(), j.ravel(), np.zeros(k * k)].astype(float)
+        a = (i[:-1, :-1] * k + j[:-1, :-1]).ravel()
+        F = np.r_[np.c_[a, a + k, a + 1], np.c_[a + 1, a + k, a + k + 1]]
+        mesh = sp.Mesh(V, F)
+        print("READY", flush=True)
+        sp.tutte(mesh)
+    """, delay=1.0, timeout=300)
+    assert_keyboard_interrupt(err, seconds)
+    assert seconds < 1.5, f"SIGINT answered after {seconds:.1f} s"

@@ -56,7 +56,10 @@ pub fn tutte<'py>(
             .map_err(|e: spherify_mesh::UnknownName| mesh_error(py, e.to_string()))?,
         solve: SolveParams { tol, max_iter, x0: None },
     };
-    let embedding = crate::pool::detach(py, || core_tutte::tutte(&mesh.mesh, &params))?
+    // Detachable: Ctrl-C inside one long factorisation (seconds at a million
+    // vertices) answers at once (issue 13, item 2).
+    let shared = std::sync::Arc::clone(&mesh.mesh);
+    let embedding = crate::progress::run_detachable(py, None, move |_| core_tutte::tutte(&shared, &params))?
         .map_err(|e| tutte_error(py, e))?;
     let info = PyDict::new(py);
     info.set_item("solver", embedding.info.solver.as_str())?;
