@@ -27,6 +27,7 @@ from __future__ import annotations
 import atexit
 import collections
 import concurrent.futures as cf
+import glob
 import multiprocessing
 import multiprocessing.connection
 import os
@@ -36,21 +37,28 @@ import subprocess
 import sys
 import threading
 import time
+from pathlib import Path
 from typing import Any, Deque, Dict, Iterator, List, Optional, Sequence
 
+from ._atomic import TEMP_MARK
 from ._batch_task import Task, failed_row, run_task
 from ._errors import SpherifyError
 
 #: Seconds a new worker may take to import spherify and say it is ready.
 START_LIMIT = 300.0
 
-_CHILD = "import sys; from spherify._batch_pool import child_main; child_main(int(sys.argv[1]))"
+#: The worker's command. It ignores SIGINT first thing, before the imports:
+#: Ctrl-C in a terminal reaches the whole process group, and the parent is
+#: the one that stops the batch cleanly (a worker killed by it while starting
+#: would look like a broken installation).
+_CHILD = ("import signal; signal.signal(signal.SIGINT, signal.SIG_IGN); import sys; "
+          "from spherify._batch_pool import child_main; child_main(int(sys.argv[1]))")
 
 
 def child_main(fd: int) -> None:
     """A worker: tasks in, rows out over the socket ``fd``, until None or
     until the parent goes away."""
-    signal.signal(signal.SIGINT, signal.SIG_IGN)  # the parent handles Ctrl-C
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # (again, for callers other than _CHILD)
     connection = multiprocessing.connection.Connection(fd)
     connection.send(("ready", os.getpid()))
     while True:
@@ -71,9 +79,11 @@ def _child_path() -> str:
 class Worker:
     """One worker process and its connection."""
 
-    def __init__(self) -> None:
+    def __init__(self, threads: Optional[int] = None) -> None:
         ours, theirs = socket.socketpair()
         env = dict(os.environ, PYTHONPATH=_child_path())
+        if threads is not None and "RAYON_NUM_THREADS" not in os.environ:
+            env["RAYON_NUM_THREADS"] = str(threads)  # the core's thread pool (crate::pool)
         try:
             self.process = subprocess.Popen(
                 [sys.executable, "-c", _CHILD, str(theirs.fileno())],
@@ -106,10 +116,17 @@ class Worker:
         return f"killed by signal {-code}" if code < 0 else f"exited with status {code}"
 
     def kill(self) -> None:
+        """Kill the worker; the temporary files it was writing for its mesh,
+        if any, go with it (a rerun would remove them anyway)."""
         if self.process.poll() is None:
             self.process.kill()
         self.process.wait()
         self.connection.close()
+        if self.task is not None:
+            for output in (Path(self.task.sphere), Path(self.task.spheremap)):
+                for leftover in output.parent.glob(f".{glob.escape(output.name)}{TEMP_MARK}"
+                                                   f"{self.process.pid}-*"):
+                    leftover.unlink(missing_ok=True)
 
     def stop(self) -> None:
         """Ask an idle worker to exit, then make sure it did."""
@@ -128,10 +145,14 @@ def _could_not_start(worker: Worker) -> SpherifyError:
 
 class LocalPool:
     """``workers`` worker processes, started at once (they import spherify
-    while the caller hashes its inputs)."""
+    while the caller hashes its inputs). The cores are shared among them:
+    each worker's core calls run on ``cores // workers`` threads (at least
+    one; ``RAYON_NUM_THREADS`` set by the caller wins), so that two workers
+    on two cores do not run four threads that take turns."""
 
     def __init__(self, workers: int) -> None:
-        self.workers: List[Worker] = [Worker() for _ in range(workers)]
+        self.threads = max(1, (os.cpu_count() or 1) // workers)
+        self.workers: List[Worker] = [Worker(self.threads) for _ in range(workers)]
 
     def rows(self, tasks: Sequence[Task], timeout: Optional[float]) -> Iterator[Dict[str, Any]]:
         """Rows as meshes finish; each worker watched for its timeout and
@@ -170,10 +191,10 @@ class LocalPool:
                                          f"{timeout:g} s; its worker was killed")
                         replace = True
                     if replace:
-                        w.task = None
                         w.kill()
+                        w.task = None
                         if queue:
-                            pool[i] = w = Worker()
+                            pool[i] = w = Worker(self.threads)
                         else:  # no mesh left for a new worker
                             gone.append(w)
                     elif w.ready and w.task is None and queue:
@@ -229,8 +250,10 @@ def run_task_within(task: Task, timeout: float) -> Dict[str, Any]:
                           "its process was killed")
     message = worker.receive()
     if message is None:
+        reason = worker.death()
+        worker.kill()
         return failed_row(task, "WorkerDied", f"the process mapping this mesh died "
-                          f"({worker.death()}; out of memory, or killed)")
+                          f"({reason}; out of memory, or killed)")
     worker.task = None
     with _IDLE_LOCK:
         _IDLE.append(worker)

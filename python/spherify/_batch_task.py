@@ -13,6 +13,7 @@ the mesh again rather than trusting the file (``_batch._reusable``).
 
 from __future__ import annotations
 
+import concurrent.futures as cf
 import hashlib
 import io
 import os
@@ -23,7 +24,7 @@ import traceback
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Dict, Optional, Tuple
+from typing import Any, Dict, List, Optional, Tuple
 
 import numpy as np
 
@@ -105,19 +106,28 @@ def peak_memory_mb(reset: bool) -> Optional[float]:
 
 # --- writing ------------------------------------------------------------------
 
-def write_unsynced(path: str, data: bytes) -> Tuple[int, str]:
-    """Write ``data`` to a temporary name beside ``path`` and rename it into
-    place (no fsync: see the module docstring). Returns the size and SHA-256."""
-    target = Path(path)
-    temporary = temporary_path(target)
-    try:
-        with open(temporary, "wb") as handle:
-            handle.write(data)
-        os.replace(temporary, target)
-    finally:
-        if temporary.exists():
-            temporary.unlink()
-    return len(data), hashlib.sha256(data).hexdigest()
+class Output:
+    """One output written under a temporary name beside its final one (no
+    fsync: see the module docstring), with its size and SHA-256; renamed into
+    place by :meth:`commit`, or removed by :meth:`discard`."""
+
+    def __init__(self, path: str, data: bytes) -> None:
+        self.target = Path(path)
+        self.temporary = temporary_path(self.target)
+        self.size, self.sha256 = len(data), hashlib.sha256(data).hexdigest()
+        try:
+            with open(self.temporary, "wb") as handle:
+                handle.write(data)
+        except BaseException:
+            self.discard()
+            raise
+
+    def commit(self) -> None:
+        os.replace(self.temporary, self.target)
+
+    def discard(self) -> None:
+        if self.temporary.exists():
+            self.temporary.unlink()
 
 
 def file_matches(path: str, size: Any, sha256: Any) -> bool:
@@ -133,6 +143,12 @@ def file_matches(path: str, size: Any, sha256: Any) -> bool:
 
 
 # --- one mesh -----------------------------------------------------------------
+
+def _timed(function: Any, *args: Any) -> Tuple[Any, float]:
+    start = time.perf_counter()
+    result = function(*args)
+    return result, round(time.perf_counter() - start, 6)
+
 
 def run_task(task: Task) -> Dict[str, Any]:
     """Map one mesh and write its outputs; never raises for the mesh's faults:
@@ -177,17 +193,32 @@ def run_task(task: Task) -> Dict[str, Any]:
                 row["tp_valid"] = m.tp_valid
                 certified = m.tp_valid
             row["certified"] = bool(certified)
-            q = quality(m.mesh, m.points)
-            row.update({k: float(q[k]) for k in QUALITY})
-            lap("quality")
+            # The measures (in the core, without the GIL) and the writing of
+            # the outputs run at the same time; the outputs are renamed into
+            # place once both are done, so a mesh whose row says "failed"
+            # leaves no output.
+            # (The encoding runs first: it takes the core's thread pool, which
+            # the measures then have to themselves.)
             sphere = _core.encode(Mesh(m.points, m.mesh.faces)._core, task.sphere)
-            buffer = io.BytesIO()
-            arrays: Dict[str, Any] = record(m)
-            np.savez(buffer, **arrays)
-            row["sphere_bytes"], row["sphere_sha256"] = write_unsynced(task.sphere, sphere)
-            row["spheremap_bytes"], row["spheremap_sha256"] = write_unsynced(
-                task.spheremap, buffer.getvalue())
-            lap("write")
+            with cf.ThreadPoolExecutor(1) as helper:
+                measuring = helper.submit(_timed, quality, m.mesh, m.points)
+                outputs: List[Output] = []
+                try:
+                    outputs.append(Output(task.sphere, sphere))
+                    buffer = io.BytesIO()
+                    arrays: Dict[str, Any] = record(m)
+                    np.savez(buffer, **arrays)
+                    outputs.append(Output(task.spheremap, buffer.getvalue()))
+                    lap("write")
+                    q, row["seconds_quality"] = measuring.result()
+                    row.update({k: float(q[k]) for k in QUALITY})
+                    for output in outputs:
+                        output.commit()
+                finally:
+                    for output in outputs:
+                        output.discard()
+            row["sphere_bytes"], row["sphere_sha256"] = outputs[0].size, outputs[0].sha256
+            row["spheremap_bytes"], row["spheremap_sha256"] = outputs[1].size, outputs[1].sha256
             row.update(status="done", sphere=task.sphere, spheremap=task.spheremap)
         row["warnings"] = "; ".join(str(w.message) for w in caught) or None
     except Exception as err:  # the mesh's fault, recorded in its row
