@@ -19,7 +19,9 @@ parent (as ``fork`` would), does not re-import the caller's ``__main__`` (as
 ``if __name__ == "__main__"`` guard), and can be started from a daemonic
 process (a Dask worker), where ``multiprocessing`` refuses to start
 children. It says when it is ready, so that its start-up (importing numpy and
-spherify) never counts against a mesh's timeout.
+spherify) never counts against a mesh's timeout. POSIX only (the socket is
+passed by file descriptor); on Windows creating a worker raises
+SpherifyError.
 """
 
 from __future__ import annotations
@@ -80,6 +82,9 @@ class Worker:
     """One worker process and its connection."""
 
     def __init__(self, threads: Optional[int] = None) -> None:
+        if os.name != "posix":
+            raise SpherifyError("sp.batch's worker processes need a POSIX system (Linux, macOS): "
+                                "they receive their end of a socket pair by file descriptor")
         ours, theirs = socket.socketpair()
         env = dict(os.environ, PYTHONPATH=_child_path())
         if threads is not None and "RAYON_NUM_THREADS" not in os.environ:
