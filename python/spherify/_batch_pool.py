@@ -179,12 +179,13 @@ class LocalPool:
                     replace = False
                     if w.connection in ready:
                         message = w.receive()
+                        if message is None and not w.ready:
+                            raise _could_not_start(w)
                         if message is None:
-                            if w.task is None:
-                                raise _could_not_start(w)
-                            row = failed_row(w.task, "WorkerDied",
-                                             f"the worker mapping this mesh died ({w.death()}; "
-                                             "out of memory, or killed)")
+                            if w.task is not None:  # (an idle one is just replaced)
+                                row = failed_row(w.task, "WorkerDied", "the worker mapping this "
+                                                 f"mesh died ({w.death()}; out of memory, or "
+                                                 "killed)")
                             replace = True
                         elif message[0] == "ready":
                             w.ready = True

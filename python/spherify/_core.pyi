@@ -7,7 +7,7 @@ import numpy.typing as npt
 
 from ._report import MeshReport, SphereReport
 
-__all__ = ["CoreMesh", "CoreSphereMap", "__version__", "boundary_loop", "check", "check_raw", "check_sphere", "choices", "dijkstra", "embed", "face_quality", "from_points", "harmonics_evaluate", "harmonics_fit", "improve", "load", "methods", "orient", "quality", "restore_map", "save", "shortest_path", "tutte", "write_atomic"]
+__all__ = ["CoreMesh", "CoreSphereMap", "__version__", "boundary_loop", "check", "check_raw", "check_sphere", "choices", "dijkstra", "embed", "encode", "face_quality", "from_points", "harmonics_evaluate", "harmonics_fit", "improve", "load", "methods", "orient", "quality", "restore_map", "save", "shortest_path", "tutte", "write_atomic"]
 
 __version__: str
 
