@@ -203,6 +203,7 @@ def run_task(task: Task) -> Dict[str, Any]:
             with cf.ThreadPoolExecutor(1) as helper:
                 measuring = helper.submit(_timed, quality, m.mesh, m.points)
                 outputs: List[Output] = []
+                committed = 0
                 try:
                     outputs.append(Output(task.sphere, sphere))
                     buffer = io.BytesIO()
@@ -214,6 +215,13 @@ def run_task(task: Task) -> Dict[str, Any]:
                     row.update({k: float(q[k]) for k in QUALITY})
                     for output in outputs:
                         output.commit()
+                        committed += 1
+                except BaseException:
+                    # Failed between the two renames (a full disk): the mesh
+                    # has a failed row, so it keeps no output at all.
+                    for output in outputs[:committed]:
+                        output.target.unlink(missing_ok=True)
+                    raise
                 finally:
                     for output in outputs:
                         output.discard()
