@@ -2,28 +2,59 @@
 
     python benches/batch.py [--meshes 1000] [--min 5000] [--max 50000] [--workers 1 2]
 
-Writes the meshes (PLY) to a temporary folder first (not timed), then times:
+Writes the meshes (PLY) to a temporary folder first (not timed), then times
+the phases below. The meshes are dealt into ``--rounds`` groups, and each
+round runs every phase on its group, starting with a different phase each
+round, so that the load of a shared machine falls on all phases alike (each
+batch phase pays its start-up once per round):
 
-* loop: ``sp.load`` + ``sp.embed`` per mesh in this process (the work alone);
-* batch with 1, 2, ... workers: the same meshes through ``sp.batch`` (spawned
-  pool; it also checks, measures quality, writes the sphere and the
-  ``.spheremap.npz`` and journals each mesh).
+* loop, embed: ``sp.load`` + ``sp.embed`` per mesh in this process (the work
+  the issue's overhead is measured against);
+* loop, embed + write: the same, plus ``sp.save`` of the sphere mesh and
+  ``m.save`` of the ``.spheremap.npz`` (the outputs the batch writes; both
+  synced to disk, as those functions do);
+* batch with 1, 2, ... workers: the same meshes through ``sp.batch`` (its
+  worker processes also measure quality, hash and journal each mesh).
 
-Prints meshes per second and the overhead of the one-worker batch over the loop.
+Prints meshes per second, the overhead of each batch over both loops, the
+speed-up over one worker, the batch's seconds per stage summed over the
+meshes, and the per-mesh peak memory of the workers. The load average is
+printed before each phase: the machine is shared.
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import tempfile
 import time
 from pathlib import Path
+from typing import Any, Dict, List
 
 import numpy as np
 
 import spherify as sp
 
 SHAPES = ["icosphere", "ellipsoid", "bumpy_blob", "helix_tube"]
+
+
+def load_average() -> str:
+    try:
+        return "load %.2f %.2f %.2f" % os.getloadavg()
+    except OSError:
+        return "load unknown"
+
+
+def cpu_seconds() -> float:
+    """User + system CPU time of this process and of its children that have
+    ended (the batch's workers are reaped when it returns): a measure of the
+    work done that the machine's load does not inflate, beside the wall time."""
+    import resource
+    total = 0.0
+    for who in (resource.RUSAGE_SELF, resource.RUSAGE_CHILDREN):
+        usage = resource.getrusage(who)
+        total += usage.ru_utime + usage.ru_stime
+    return total
 
 
 def main() -> None:
@@ -33,6 +64,8 @@ def main() -> None:
     parser.add_argument("--min", type=int, default=5000)
     parser.add_argument("--max", type=int, default=50000)
     parser.add_argument("--workers", type=int, nargs="+", default=[1, 2])
+    parser.add_argument("--rounds", type=int, default=4,
+                        help="split the meshes into this many rounds, each running every phase")
     args = parser.parse_args()
     rng = np.random.default_rng(0)
     with tempfile.TemporaryDirectory() as tmp:
@@ -44,19 +77,70 @@ def main() -> None:
             total_vertices += mesh.n_vertices
             sp.save(mesh, folder / f"m{i:05d}.ply")
         print(f"{args.meshes} meshes, {total_vertices} vertices in all "
-              f"({args.min}-{args.max} requested each)")
-        start = time.perf_counter()
-        for path in sorted(folder.iterdir()):
-            sp.embed(sp.load(path))
-        loop = time.perf_counter() - start
-        print(f"loop (load + embed):  {loop:8.2f} s  {args.meshes / loop:7.2f} meshes/s")
+              f"({args.min}-{args.max} requested each); {os.cpu_count()} cores", flush=True)
+        paths = sorted(folder.iterdir())
+        rounds = max(1, min(args.rounds, args.meshes))
+        phases = ["loop", "loop_write"] + [f"batch{w}" for w in args.workers]
+        wall = {p: 0.0 for p in phases}
+        cpu = {p: 0.0 for p in phases}
+        rows: Dict[str, List[Dict[str, Any]]] = {p: [] for p in phases}
+        for r in range(rounds):
+            group = paths[r::rounds]
+            # Each round runs every phase on its share of the meshes, starting
+            # with a different phase each time, so that a change in the
+            # machine's load falls on all phases alike.
+            order = phases[r % len(phases):] + phases[:r % len(phases)]
+            for phase in order:
+                print(f"round {r + 1}/{rounds}, {phase} [{load_average()}]", flush=True)
+                start, used = time.perf_counter(), cpu_seconds()
+                if phase == "loop":
+                    for path in group:
+                        sp.embed(sp.load(path))
+                elif phase == "loop_write":
+                    written = Path(tmp) / f"loop{r}"
+                    written.mkdir()
+                    for path in group:
+                        m = sp.embed(sp.load(path))
+                        sp.save(sp.Mesh(m.points, m.mesh.faces), written / f"{path.stem}.sphere.ply")
+                        m.save(written / f"{path.stem}.spheremap.npz")
+                else:
+                    workers = int(phase[5:])
+                    result = sp.batch(group, Path(tmp) / f"{phase}-{r}", workers=workers)
+                    rows[phase].extend(result.rows)
+                wall[phase] += time.perf_counter() - start
+                cpu[phase] += cpu_seconds() - used
+        print(f"[{load_average()}]")
+        n = args.meshes
+        print(f"loop, load + embed:          {wall['loop']:8.2f} s  {n / wall['loop']:7.2f} meshes/s"
+              f"  (CPU {cpu['loop']:.2f} s)")
+        print(f"loop, load + embed + write:  {wall['loop_write']:8.2f} s  "
+              f"{n / wall['loop_write']:7.2f} meshes/s  (CPU {cpu['loop_write']:.2f} s)")
+        first = None
         for workers in args.workers:
-            start = time.perf_counter()
-            result = sp.batch(folder, Path(tmp) / f"out{workers}", workers=workers)
-            seconds = time.perf_counter() - start
-            certified = result.counts["certified"]
-            print(f"batch, {workers} worker(s): {seconds:8.2f} s  {args.meshes / seconds:7.2f} "
-                  f"meshes/s  ({certified} certified; {seconds / loop - 1:+.1%} against the loop)")
+            phase = f"batch{workers}"
+            seconds, used, got = wall[phase], cpu[phase], rows[phase]
+            first = first or seconds
+            certified = sum(bool(row["certified"]) for row in got)
+            print(f"batch, {workers} worker(s):         {seconds:8.2f} s  {n / seconds:7.2f} "
+                  f"meshes/s  ({certified} certified; {seconds / wall['loop'] - 1:+.1%} against "
+                  f"load + embed, {seconds / wall['loop_write'] - 1:+.1%} against load + embed + "
+                  f"write; speed-up {first / seconds:.2f}x over the first)")
+            print(f"    CPU {used:.2f} s: {used / cpu['loop'] - 1:+.1%} against load + embed, "
+                  f"{used / cpu['loop_write'] - 1:+.1%} against load + embed + write")
+            stages: Dict[str, float] = {}
+            for row in got:
+                for key, value in row.items():
+                    if key.startswith("seconds_") and value is not None:
+                        stages[key] = stages.get(key, 0.0) + value
+            print("    stages (s, summed over meshes): "
+                  + ", ".join(f"{k[8:]} {v:.1f}" for k, v in stages.items()))
+            peaks = [row["peak_memory_mb"] for row in got if row["peak_memory_mb"] is not None]
+            sizes = [row["n_vertices"] for row in got if row["peak_memory_mb"] is not None]
+            if peaks:
+                big = int(np.argmax(sizes))
+                print(f"    peak memory per mesh (MB, the worker process): median "
+                      f"{np.median(peaks):.0f}, min {min(peaks):.0f}, max {max(peaks):.0f}; "
+                      f"largest mesh ({sizes[big]} vertices) {peaks[big]:.0f}")
 
 
 if __name__ == "__main__":

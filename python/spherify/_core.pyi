@@ -7,7 +7,7 @@ import numpy.typing as npt
 
 from ._report import MeshReport, SphereReport
 
-__all__ = ["CoreMesh", "CoreSphereMap", "__version__", "boundary_loop", "check", "check_raw", "check_sphere", "choices", "dijkstra", "embed", "face_quality", "from_points", "harmonics_evaluate", "harmonics_fit", "improve", "load", "methods", "orient", "quality", "restore_map", "save", "shortest_path", "tutte", "write_atomic"]
+__all__ = ["CoreMesh", "CoreSphereMap", "__version__", "boundary_loop", "check", "check_raw", "check_sphere", "choices", "dijkstra", "embed", "encode", "face_quality", "from_points", "harmonics_evaluate", "harmonics_fit", "improve", "load", "methods", "orient", "quality", "restore_map", "save", "shortest_path", "tutte", "write_atomic"]
 
 __version__: str
 
@@ -69,6 +69,14 @@ def save(
     stl_binary: bool = True,
 ) -> None: ...
 def write_atomic(path: str | PathLike[str], data: bytes) -> None: ...
+def encode(
+    mesh: CoreMesh,
+    path: str | PathLike[str],
+    sphere: Optional[npt.NDArray[np.float64]] = None,
+    uv: Optional[npt.NDArray[np.float64]] = None,
+    ply_encoding: str = "binary_little_endian",
+    stl_binary: bool = True,
+) -> bytes: ...
 def check(mesh: CoreMesh) -> MeshReport: ...
 def check_raw(vertices: npt.NDArray[np.float64], faces: npt.NDArray[np.int64]) -> MeshReport: ...
 def check_sphere(mesh: CoreMesh, points: npt.NDArray[np.float64]) -> SphereReport: ...

@@ -68,7 +68,9 @@ def quality(mesh: MeshLike, points: Any) -> Dict[str, Union[float, int]]:
         ``degenerate_faces``, ``n_faces`` : int
             A face is degenerate when its triangle on either side has twice its
             area at most 1e-12 times its longest edge squared (numerically
-            zero area, where angles and singular values are rounding noise).
+            zero area, where angles and singular values are rounding noise),
+            or its longest edge squared is below the smallest normal double
+            (about 1e-308).
             Degenerate faces are counted here and left out of every other
             measure, including the area totals used for normalising; no NaN or
             infinity is produced.

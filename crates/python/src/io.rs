@@ -2,7 +2,7 @@
 
 use numpy::PyReadonlyArrayDyn;
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
+use pyo3::types::{PyBytes, PyDict};
 use spherify_mesh::io::{self, PlyEncoding, VertexAttributes, WriteOptions};
 
 use crate::convert::{rows, to_numpy};
@@ -49,6 +49,37 @@ pub fn save(
     let options = WriteOptions { ply_encoding, stl_binary };
     crate::pool::detach(py, || io::write(&path, &mesh.mesh, &attributes, &options))?
         .map_err(|e| to_py(py, e))
+}
+
+/// encode(mesh, path, sphere=None, uv=None, ply_encoding="binary_little_endian",
+/// stl_binary=True) -> bytes: what `save` would write to `path` (the format
+/// from its name; the file is not touched), for callers that write the bytes
+/// themselves: the batch hashes its outputs as it writes them.
+#[pyfunction]
+#[pyo3(signature = (mesh, path, sphere=None, uv=None, ply_encoding="binary_little_endian", stl_binary=true))]
+pub fn encode<'py>(
+    py: Python<'py>,
+    mesh: &CoreMesh,
+    path: std::path::PathBuf,
+    sphere: Option<PyReadonlyArrayDyn<'_, f64>>,
+    uv: Option<PyReadonlyArrayDyn<'_, f64>>,
+    ply_encoding: &str,
+    stl_binary: bool,
+) -> PyResult<Bound<'py, PyBytes>> {
+    let ply_encoding: PlyEncoding = ply_encoding
+        .parse()
+        .map_err(|e: spherify_mesh::UnknownName| mesh_error(py, e.to_string()))?;
+    let attributes = VertexAttributes {
+        sphere: sphere.map(|a| rows::<f64, 3>(py, &a, "sphere")).transpose()?,
+        uv: uv.map(|a| rows::<f64, 2>(py, &a, "uv")).transpose()?,
+    };
+    let options = WriteOptions { ply_encoding, stl_binary };
+    let bytes = crate::pool::detach(py, || {
+        let format = io::format_from_path(&path)?;
+        io::write_bytes(&mesh.mesh, &attributes, format, &options, &path.display().to_string())
+    })?
+    .map_err(|e| to_py(py, e))?;
+    Ok(PyBytes::new(py, &bytes))
 }
 
 /// write_atomic(path, data: bytes): writes `data` with the mesh writer's

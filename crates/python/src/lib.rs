@@ -39,6 +39,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(io::load, m)?)?;
     m.add_function(wrap_pyfunction!(io::save, m)?)?;
     m.add_function(wrap_pyfunction!(io::write_atomic, m)?)?;
+    m.add_function(wrap_pyfunction!(io::encode, m)?)?;
     m.add_function(wrap_pyfunction!(validate::check, m)?)?;
     m.add_function(wrap_pyfunction!(validate::check_raw, m)?)?;
     m.add_function(wrap_pyfunction!(validate::orient, m)?)?;
