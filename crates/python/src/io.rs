@@ -15,7 +15,10 @@ pub fn load<'py>(
     py: Python<'py>,
     path: std::path::PathBuf,
 ) -> PyResult<(CoreMesh, Vec<String>, Bound<'py, PyDict>)> {
-    let loaded = crate::pool::detach(py, || io::read(&path))?.map_err(|e| to_py(py, e))?;
+    // Detachable: parsing a large text file takes seconds and cannot poll
+    // (issue 13, item 2); after Ctrl-C the parse finishes in the background.
+    let loaded = crate::progress::run_detachable(py, None, move |_| io::read(&path))?
+        .map_err(|e| to_py(py, e))?;
     let attributes = PyDict::new(py);
     if let Some(sphere) = &loaded.attributes.sphere {
         attributes.set_item("sphere", to_numpy(py, sphere))?;
