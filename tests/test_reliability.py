@@ -296,25 +296,3 @@ def test_ctrl_c_inside_a_long_tutte_solve_is_answered_at_once() -> None:
     assert_keyboard_interrupt(err, seconds)
     assert seconds < 1.5, f"SIGINT answered after {seconds:.1f} s"
 
-
-@pytest.mark.slow
-def test_ctrl_c_while_a_large_text_file_is_read_is_answered_at_once(tmp_path: Path) -> None:
-    """Parsing a text mesh of a million vertices takes seconds and cannot
-    poll: sp.load leaves the parse to finish in the background and raises at
-    once (item 2; slow: the file takes seconds to write)."""
-    k = 1000
-    i, j = np.meshgrid(np.arange(k), np.arange(k), indexing="ij")
-    V = np.c_[i.ravel(), j.ravel(), np.zeros(k * k)].astype(float)
-    a = (i[:-1, :-1] * k + j[:-1, :-1]).ravel()
-    F = np.r_[np.c_[a, a + k, a + 1], np.c_[a + 1, a + k, a + k + 1]] + 1
-    path = tmp_path / "grid.obj"
-    with open(path, "w") as out:
-        np.savetxt(out, V, fmt="v %.17g %.17g %.17g")
-        np.savetxt(out, F, fmt="f %d %d %d")
-    err, seconds = interrupt(f"""
-        import spherify as sp
-        print("READY", flush=True)
-        sp.load({str(path)!r})
-    """, delay=0.5, timeout=300)
-    assert_keyboard_interrupt(err, seconds)
-    assert seconds < 1.5, f"SIGINT answered after {seconds:.1f} s"
