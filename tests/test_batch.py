@@ -22,6 +22,7 @@ import pytest
 
 import spherify as sp
 from spherify import _batch as batch_module
+from spherify._batch_task import reset_peak_memory
 
 cli = pytest.importorskip("spherify.cli")
 
@@ -269,6 +270,14 @@ def test_a_worker_killed_during_one_mesh(tmp_path: Path) -> None:
     assert rows["a_quick.ply"]["certified"] and rows["c_quick.ply"]["certified"]
 
 
+def assert_only_the_slow_mesh_timed_out(rows: Any, elapsed: float) -> None:
+    named = by_name(rows)
+    assert named["b_slow.ply"]["error_type"] == "Timeout"
+    assert "its process was killed" in named["b_slow.ply"]["error"]
+    assert named["a_quick.ply"]["certified"] and named["c_quick.ply"]["certified"]
+    assert elapsed < 45, f"the timeout did not stop the mesh ({elapsed:.0f} s)"
+
+
 def test_a_timeout_holds_under_a_process_pool_executor(tmp_path: Path) -> None:
     # The executor cannot stop a task; the task stops itself: it maps its mesh
     # in a helper process that it kills at the timeout. Without that, the
@@ -280,11 +289,7 @@ def test_a_timeout_holds_under_a_process_pool_executor(tmp_path: Path) -> None:
         result = sp.batch(tmp_path / "in", tmp_path / "out", executor=pool, timeout=4.0,
                           poles="graph")
         elapsed = time.monotonic() - start
-    rows = by_name(result.rows)
-    assert rows["b_slow.ply"]["error_type"] == "Timeout"
-    assert "its process was killed" in rows["b_slow.ply"]["error"]
-    assert rows["a_quick.ply"]["certified"] and rows["c_quick.ply"]["certified"]
-    assert elapsed < 45, f"the timeout did not stop the mesh ({elapsed:.0f} s)"
+    assert_only_the_slow_mesh_timed_out(result.rows, elapsed)
     assert not list((tmp_path / "out").glob("b_slow*"))
 
 
@@ -298,23 +303,10 @@ def test_a_timeout_holds_on_a_dask_local_cluster(tmp_path: Path) -> None:
         result = sp.batch(tmp_path / "in", tmp_path / "out", executor=client, timeout=4.0,
                           poles="graph")
         elapsed = time.monotonic() - start
-    rows = by_name(result.rows)
-    assert rows["b_slow.ply"]["error_type"] == "Timeout"
-    assert "its process was killed" in rows["b_slow.ply"]["error"]
-    assert rows["a_quick.ply"]["certified"] and rows["c_quick.ply"]["certified"]
-    assert elapsed < 45, f"the timeout did not stop the mesh ({elapsed:.0f} s)"
+    assert_only_the_slow_mesh_timed_out(result.rows, elapsed)
 
 
-def clear_refs_works() -> bool:
-    try:
-        with open("/proc/self/clear_refs", "w") as handle:
-            handle.write("5")
-        return True
-    except OSError:
-        return False
-
-
-@pytest.mark.skipif(not clear_refs_works(), reason="per-mesh peaks need Linux's clear_refs")
+@pytest.mark.skipif(not reset_peak_memory(), reason="per-mesh peaks need Linux's clear_refs")
 def test_peak_memory_is_per_mesh(tmp_path: Path) -> None:
     # One worker maps a small, a large and a small mesh: the second small
     # one's peak is its own, not the large one's (a process-wide high-water

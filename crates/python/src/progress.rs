@@ -92,17 +92,7 @@ pub fn run<R: Send>(
     callback: Option<&Bound<'_, PyAny>>,
     work: impl FnOnce(&(dyn Fn(usize, usize) -> bool + Sync)) -> R + Send,
 ) -> PyResult<R> {
-    if let Some(c) = callback {
-        if !c.is_callable() {
-            return Err(mesh_error(
-                py,
-                format!(
-                    "progress must be None or a callable taking (done, total), got {}",
-                    c.get_type().name()?
-                ),
-            ));
-        }
-    }
+    check_callable(py, callback)?;
     let pool = crate::pool::get(py)?;
     let state = State {
         callback: callback.map(|c| c.clone().unbind()),
@@ -153,6 +143,20 @@ pub fn run<R: Send>(
     }
 }
 
+/// Refuses a progress argument that is neither None nor callable.
+fn check_callable(py: Python<'_>, callback: Option<&Bound<'_, PyAny>>) -> PyResult<()> {
+    match callback {
+        Some(c) if !c.is_callable() => Err(mesh_error(
+            py,
+            format!(
+                "progress must be None or a callable taking (done, total), got {}",
+                c.get_type().name()?
+            ),
+        )),
+        _ => Ok(()),
+    }
+}
+
 /// How long [`run_detachable`] waits for stopped work before it returns.
 const ABANDON_AFTER: Duration = Duration::from_millis(300);
 
@@ -168,17 +172,7 @@ pub fn run_detachable<R: Send + 'static>(
     callback: Option<&Bound<'_, PyAny>>,
     work: impl FnOnce(&(dyn Fn(usize, usize) -> bool + Sync)) -> R + Send + 'static,
 ) -> PyResult<R> {
-    if let Some(c) = callback {
-        if !c.is_callable() {
-            return Err(mesh_error(
-                py,
-                format!(
-                    "progress must be None or a callable taking (done, total), got {}",
-                    c.get_type().name()?
-                ),
-            ));
-        }
-    }
+    check_callable(py, callback)?;
     let pool = crate::pool::get(py)?;
     let state = Arc::new(State {
         callback: callback.map(|c| c.clone().unbind()),

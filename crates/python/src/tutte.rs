@@ -59,8 +59,9 @@ pub fn tutte<'py>(
     // Detachable: Ctrl-C inside one long factorisation (seconds at a million
     // vertices) answers at once (issue 13, item 2).
     let shared = std::sync::Arc::clone(&mesh.mesh);
-    let embedding = crate::progress::run_detachable(py, None, move |_| core_tutte::tutte(&shared, &params))?
-        .map_err(|e| tutte_error(py, e))?;
+    let embedding =
+        crate::progress::run_detachable(py, None, move |_| core_tutte::tutte(&shared, &params))?
+            .map_err(|e| tutte_error(py, e))?;
     let info = PyDict::new(py);
     info.set_item("solver", embedding.info.solver.as_str())?;
     info.set_item("iterations", embedding.info.iterations)?;
