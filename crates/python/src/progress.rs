@@ -47,7 +47,72 @@ fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
     m.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
 }
 
+/// Where the work leaves its result, and the condition the caller waits on.
+struct Slot<R> {
+    value: Mutex<Option<R>>,
+    ready: Condvar,
+}
+
+impl<R> Slot<R> {
+    fn new() -> Slot<R> {
+        Slot { value: Mutex::new(None), ready: Condvar::new() }
+    }
+
+    fn put(&self, result: R) {
+        *lock(&self.value) = Some(result);
+        self.ready.notify_all();
+    }
+
+    /// The result, waiting at most [`WAKE_EVERY`] for it (call without the GIL).
+    fn take_within_a_wake(&self) -> Option<R> {
+        let (mut value, _) = self
+            .ready
+            .wait_timeout_while(lock(&self.value), WAKE_EVERY, |r| r.is_none())
+            .unwrap_or_else(|poisoned| poisoned.into_inner());
+        value.take()
+    }
+
+    fn take(&self) -> Option<R> {
+        lock(&self.value).take()
+    }
+}
+
+/// How often the waiting caller wakes to let Python handle signals.
+const WAKE_EVERY: Duration = Duration::from_millis(100);
+
 impl State {
+    /// The state of one run, after refusing a progress argument that is
+    /// neither None nor callable.
+    fn new(py: Python<'_>, callback: Option<&Bound<'_, PyAny>>) -> PyResult<State> {
+        if let Some(c) = callback.filter(|c| !c.is_callable()) {
+            return Err(mesh_error(
+                py,
+                format!(
+                    "progress must be None or a callable taking (done, total), got {}",
+                    c.get_type().name()?
+                ),
+            ));
+        }
+        Ok(State {
+            callback: callback.map(|c| c.clone().unbind()),
+            last: Mutex::new(0),
+            error: Mutex::new(None),
+            stop: AtomicBool::new(false),
+        })
+    }
+
+    /// What the run gives back: the error the callable or a signal handler
+    /// raised, else the work's result.
+    fn finish<R>(&self, py: Python<'_>, result: Option<R>) -> PyResult<R> {
+        match (lock(&self.error).take(), result) {
+            (Some(err), _) => Err(err),
+            (None, Some(result)) => Ok(result),
+            (None, None) => {
+                Err(mesh_error(py, "internal error: the computation ended without a result"))
+            }
+        }
+    }
+
     fn fail(&self, err: PyErr) {
         let mut slot = lock(&self.error);
         if slot.is_none() {
@@ -92,32 +157,16 @@ pub fn run<R: Send>(
     callback: Option<&Bound<'_, PyAny>>,
     work: impl FnOnce(&(dyn Fn(usize, usize) -> bool + Sync)) -> R + Send,
 ) -> PyResult<R> {
-    check_callable(py, callback)?;
+    let state = State::new(py, callback)?;
     let pool = crate::pool::get(py)?;
-    let state = State {
-        callback: callback.map(|c| c.clone().unbind()),
-        last: Mutex::new(0),
-        error: Mutex::new(None),
-        stop: AtomicBool::new(false),
-    };
-    let finished: (Mutex<Option<R>>, Condvar) = (Mutex::new(None), Condvar::new());
+    let finished = Slot::new();
     let result = std::thread::scope(|scope| {
         let (state, finished, pool) = (&state, &finished, &pool);
         let worker = scope.spawn(move || {
-            let result = pool.install(|| work(&|done, total| state.report(done, total)));
-            *lock(&finished.0) = Some(result);
-            finished.1.notify_all();
+            finished.put(pool.install(|| work(&|done, total| state.report(done, total))));
         });
         loop {
-            let result = py.detach(|| {
-                let slot = lock(&finished.0);
-                let (mut slot, _) = finished
-                    .1
-                    .wait_timeout_while(slot, Duration::from_millis(100), |r| r.is_none())
-                    .unwrap_or_else(|poisoned| poisoned.into_inner());
-                slot.take()
-            });
-            if let Some(result) = result {
+            if let Some(result) = py.detach(|| finished.take_within_a_wake()) {
                 return Some(result);
             }
             if worker.is_finished() {
@@ -126,35 +175,14 @@ pub fn run<R: Send>(
                 if let Err(payload) = worker.join() {
                     std::panic::resume_unwind(payload);
                 }
-                return lock(&finished.0).take();
+                return finished.take();
             }
             if let Err(err) = py.check_signals() {
                 state.fail(err);
             }
         }
     });
-    let Some(result) = result else {
-        return Err(mesh_error(py, "internal error: the computation ended without a result"));
-    };
-    let raised = lock(&state.error).take();
-    match raised {
-        Some(err) => Err(err),
-        None => Ok(result),
-    }
-}
-
-/// Refuses a progress argument that is neither None nor callable.
-fn check_callable(py: Python<'_>, callback: Option<&Bound<'_, PyAny>>) -> PyResult<()> {
-    match callback {
-        Some(c) if !c.is_callable() => Err(mesh_error(
-            py,
-            format!(
-                "progress must be None or a callable taking (done, total), got {}",
-                c.get_type().name()?
-            ),
-        )),
-        _ => Ok(()),
-    }
+    state.finish(py, result)
 }
 
 /// How long [`run_detachable`] waits for stopped work before it returns.
@@ -172,36 +200,21 @@ pub fn run_detachable<R: Send + 'static>(
     callback: Option<&Bound<'_, PyAny>>,
     work: impl FnOnce(&(dyn Fn(usize, usize) -> bool + Sync)) -> R + Send + 'static,
 ) -> PyResult<R> {
-    check_callable(py, callback)?;
+    let state = Arc::new(State::new(py, callback)?);
     let pool = crate::pool::get(py)?;
-    let state = Arc::new(State {
-        callback: callback.map(|c| c.clone().unbind()),
-        last: Mutex::new(0),
-        error: Mutex::new(None),
-        stop: AtomicBool::new(false),
-    });
-    let finished: Arc<(Mutex<Option<R>>, Condvar)> = Arc::new((Mutex::new(None), Condvar::new()));
+    let finished: Arc<Slot<R>> = Arc::new(Slot::new());
     let worker = {
         let (state, finished) = (Arc::clone(&state), Arc::clone(&finished));
         std::thread::Builder::new()
             .name("spherify-call".to_string())
             .spawn(move || {
-                let result = pool.install(|| work(&|done, total| state.report(done, total)));
-                *lock(&finished.0) = Some(result);
-                finished.1.notify_all();
+                finished.put(pool.install(|| work(&|done, total| state.report(done, total))));
             })
             .map_err(|e| mesh_error(py, format!("cannot start a worker thread: {e}")))?
     };
     let mut stopping: Option<Instant> = None;
     let result = loop {
-        let result = py.detach(|| {
-            let slot = lock(&finished.0);
-            let (mut slot, _) = finished
-                .1
-                .wait_timeout_while(slot, Duration::from_millis(100), |r| r.is_none())
-                .unwrap_or_else(|poisoned| poisoned.into_inner());
-            slot.take()
-        });
+        let result = py.detach(|| finished.take_within_a_wake());
         if result.is_some() {
             break result;
         }
@@ -212,7 +225,7 @@ pub fn run_detachable<R: Send + 'static>(
             if let Err(payload) = joined {
                 std::panic::resume_unwind(payload);
             }
-            break lock(&finished.0).take();
+            break finished.take();
         }
         if let Err(err) = py.check_signals() {
             state.fail(err);
@@ -225,12 +238,5 @@ pub fn run_detachable<R: Send + 'static>(
             }
         }
     };
-    let raised = lock(&state.error).take();
-    match (raised, result) {
-        (Some(err), _) => Err(err),
-        (None, Some(result)) => Ok(result),
-        (None, None) => {
-            Err(mesh_error(py, "internal error: the computation ended without a result"))
-        }
-    }
+    state.finish(py, result)
 }
