@@ -339,17 +339,16 @@ pub struct Stopped;
 
 /// Whether every face `(p, r_j, r_j+1)` is positively oriented, exactly.
 pub fn positive_star(p: [f64; 3], ring: &[u32], points: &[[f64; 3]]) -> bool {
-    let m = ring.len();
-    (0..m).all(|j| {
-        let (a, b) = (points[ring[j] as usize], points[ring[(j + 1) % m] as usize]);
-        det3_sign(p, a, b) == Sign::Positive
-    })
+    all_positive(p, ring.len(), |j| points[ring[j] as usize])
 }
 
 /// [`positive_star`] with the ring's points given in order.
 fn positive_fan(p: [f64; 3], corners: &[[f64; 3]]) -> bool {
-    let m = corners.len();
-    (0..m).all(|j| det3_sign(p, corners[j], corners[(j + 1) % m]) == Sign::Positive)
+    all_positive(p, corners.len(), |j| corners[j])
+}
+
+fn all_positive(p: [f64; 3], m: usize, corner: impl Fn(usize) -> [f64; 3]) -> bool {
+    (0..m).all(|j| det3_sign(p, corner(j), corner((j + 1) % m)) == Sign::Positive)
 }
 
 /// An orthonormal basis of the plane orthogonal to the unit vector `p`.
