@@ -145,6 +145,8 @@ pub fn progressive(
         // may spoil the places found for the rest of the round: after one,
         // each place is tested again before it is used.
         let mut moved = false;
+        // The area scale for retries, measured once per round when needed.
+        let mut retry_scale: Option<f64> = None;
         for (c, q) in collapses.iter().zip(placed).rev() {
             let q = match q {
                 Some(q) if !moved || positive_star(q, &c.ring, &points) => Some(q),
@@ -155,7 +157,9 @@ pub fn progressive(
                 Some(q) => q,
                 None => {
                     moved = true;
-                    let k = problem.area_scale(&problem.stars(&rings.rings), &points);
+                    let k = *retry_scale.get_or_insert_with(|| {
+                        problem.area_scale(&problem.stars(&rings.rings), &points)
+                    });
                     retry_placement(&problem, k, &rings, &mut points, c).ok_or(
                         SphereError::Insertion { vertex: c.u as usize, neighbours: c.ring.len() },
                     )?

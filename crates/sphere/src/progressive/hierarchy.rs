@@ -117,9 +117,10 @@ pub fn decimate(
         .collect();
     // A fixed order of summation: the same weight on every thread count.
     let total_area: f64 = per_vertex.iter().map(|x| x.1).sum();
-    let n_faces: usize = mesh.rings.iter().map(Vec::len).sum();
+    // Each face is seen from its three corners, in the area sum too.
+    let n_corners: usize = mesh.rings.iter().map(Vec::len).sum();
     let mut quadrics: Vec<Quadric> = per_vertex.into_iter().map(|x| x.0).collect();
-    let length_weight = LENGTH_WEIGHT * total_area / n_faces.max(1) as f64;
+    let length_weight = LENGTH_WEIGHT * total_area / n_corners.max(1) as f64;
     let mut alive: Vec<u32> = (0..n as u32).collect();
     let mut locked = vec![u32::MAX; n];
     let mut hierarchy = Hierarchy::default();
