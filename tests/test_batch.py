@@ -148,6 +148,15 @@ sp.batch(sys.argv[1], sys.argv[2], workers=1)
 """
 
 
+def wait_for_rows(journal: Path, rows: int) -> None:
+    """Waits (up to two minutes) until a running batch's journal has ``rows`` rows."""
+    deadline = time.monotonic() + 120
+    while time.monotonic() < deadline:
+        if journal.exists() and len(batch_module.read_journal(journal)) >= rows:
+            return
+        time.sleep(0.05)
+
+
 def test_sigkill_in_the_middle_then_rerun_equals_an_uninterrupted_run(tmp_path: Path) -> None:
     make_inputs(tmp_path / "in", 12, sizes=(2000, 4000))
     whole, killed = tmp_path / "whole", tmp_path / "killed"
@@ -156,11 +165,7 @@ def test_sigkill_in_the_middle_then_rerun_equals_an_uninterrupted_run(tmp_path: 
     process = subprocess.Popen([sys.executable, "-c", KILL_SCRIPT, str(tmp_path / "in"), str(killed)],
                                env=env, start_new_session=True)
     journal = killed / "journal.jsonl"
-    deadline = time.monotonic() + 120
-    while time.monotonic() < deadline:
-        if journal.exists() and len(batch_module.read_journal(journal)) >= 3:
-            break
-        time.sleep(0.05)
+    wait_for_rows(journal, 3)
     os.killpg(process.pid, signal.SIGKILL)  # the batch and its workers
     process.wait()
     finished = len(batch_module.read_journal(journal))
@@ -192,11 +197,7 @@ def test_ctrl_c_stops_cleanly_and_a_rerun_resumes(tmp_path: Path,
                                start_new_session=True, stdout=subprocess.PIPE,
                                stderr=subprocess.PIPE, text=True)
     journal = out / "journal.jsonl"
-    deadline = time.monotonic() + 120
-    while time.monotonic() < deadline:
-        if journal.exists() and len(batch_module.read_journal(journal)) >= 3:
-            break
-        time.sleep(0.05)
+    wait_for_rows(journal, 3)
     os.killpg(process.pid, signal.SIGINT)
     _, err = process.communicate(timeout=60)
     finished = len(batch_module.read_journal(journal))
