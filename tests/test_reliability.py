@@ -260,7 +260,7 @@ def test_a_directory_is_still_an_is_a_directory_error(tmp_path: Path) -> None:
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("delay", [3.0, 4.0, 6.0])
+@pytest.mark.parametrize("delay", [1.5, 2.0])
 def test_ctrl_c_inside_one_long_factorisation_is_answered_at_once(delay: float) -> None:
     """Theta-phi at a million vertices spends seconds inside one sparse
     factorisation and solve, where no poll can happen: embed leaves that step
