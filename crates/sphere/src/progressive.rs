@@ -83,7 +83,9 @@ impl ProgressiveParams {
     /// 14.3 -> 11.8 degrees of mean angle distortion).
     pub fn for_energy(energy: Energy) -> ProgressiveParams {
         match energy {
-            Energy::Stretch => ProgressiveParams { energy, max_iter: 50, tolerance: 1e-5 },
+            Energy::Stretch | Energy::CoarseStretch => {
+                ProgressiveParams { energy, max_iter: 50, tolerance: 1e-5 }
+            }
             Energy::Conformal => ProgressiveParams { energy, max_iter: 100, tolerance: 1e-5 },
             Energy::Authalic => ProgressiveParams { energy, max_iter: 10, tolerance: 1e-3 },
             Energy::Isometric => ProgressiveParams { energy, max_iter: 5, tolerance: 1e-3 },
@@ -191,7 +193,10 @@ pub fn progressive(
         }
         if rings.n_alive as f64 >= LEVEL_GROWTH * optimised_at as f64 && rings.n_alive < n {
             optimised_at = rings.n_alive;
-            let at_level = problem.at_level(&rings.rings);
+            let at_level = Problem {
+                energy: params.energy.on_coarse_levels(),
+                ..problem.at_level(&rings.rings)
+            };
             let sweeps = (LEVEL_MOVES / rings.n_alive).clamp(LEVEL_SWEEPS, MAX_LEVEL_SWEEPS);
             let end = at_level
                 .optimise(&rings.rings, &mut points, sweeps, params.tolerance, &|_| !go_on())
