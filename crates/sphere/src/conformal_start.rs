@@ -66,15 +66,23 @@ pub enum NoStart {
     Solve(TutteError),
     /// The map was found but the exact test refuses it.
     NotValid(Box<SphereReport>),
+    /// `stop()` asked to stop between two steps.
+    Stopped,
 }
 
 /// The conformal start of `mesh`; `area_floor` is the area below which a
 /// surface triangle counts as that large (as in the energies), so that
-/// degenerate input triangles give finite weights.
+/// degenerate input triangles give finite weights. `stop()` is asked after
+/// each solve (a factorisation itself cannot be interrupted).
 ///
 /// # Errors
-/// [`NoStart`] when the solve fails or the map is not a valid GC-embedding.
-pub fn conformal_start(mesh: &GenusZeroMesh, area_floor: f64) -> Result<ConformalStart, NoStart> {
+/// [`NoStart`] when a solve fails, the map is not a valid GC-embedding, or
+/// `stop()` said so.
+pub fn conformal_start(
+    mesh: &GenusZeroMesh,
+    area_floor: f64,
+    stop: &(dyn Fn() -> bool + Sync),
+) -> Result<ConformalStart, NoStart> {
     let positions = mesh.positions();
     let faces = mesh.faces();
     let he = mesh.half_edges();
@@ -111,6 +119,9 @@ pub fn conformal_start(mesh: &GenusZeroMesh, area_floor: f64) -> Result<Conforma
             .map_err(|e| NoStart::Solve(e.into()))?;
     let mut uv = system.fixed_positions(&fixed);
     system.scatter(&mut uv, &solution);
+    if stop() {
+        return Err(NoStart::Stopped);
+    }
 
     // Step 2. Scale the plane (a Möbius transformation too) so that half the
     // vertices lie inside the unit circle around the area-weighted centre:
@@ -156,6 +167,9 @@ pub fn conformal_start(mesh: &GenusZeroMesh, area_floor: f64) -> Result<Conforma
     let (w, _) =
         embed_with_fixed(he, &weights, &w_fixed, SolverKind::Direct, &SolveParams::default())
             .map_err(NoStart::Solve)?;
+    if stop() {
+        return Err(NoStart::Stopped);
+    }
     let mut points: Vec<[f64; 3]> = (0..z.len())
         .into_par_iter()
         .map(|v| {

@@ -8,7 +8,7 @@ use spherify_mesh::Mesh;
 
 fn start_of(mesh: Mesh) -> (GenusZeroMesh, Result<ConformalStart, NoStart>) {
     let mesh = GenusZeroMesh::new(mesh).unwrap();
-    let start = conformal_start(&mesh, area_floor(&mesh));
+    let start = conformal_start(&mesh, area_floor(&mesh), &|| false);
     (mesh, start)
 }
 
@@ -81,6 +81,7 @@ fn a_long_capsule_is_refused_or_squeezed_below_the_barrier() {
     match start {
         Err(NoStart::NotValid(report)) => assert!(!report.valid),
         Err(NoStart::Solve(e)) => panic!("{e}"),
+        Err(NoStart::Stopped) => panic!("stopped"),
         Ok(start) => {
             let q = quality(mesh.mesh(), &start.points).unwrap();
             assert!(q.area_ratio_min < 1e-8, "{q:?}");

@@ -46,10 +46,12 @@ pub fn from_conformal_start(
     let total = 3 * n;
     let started = Instant::now();
     let floor = area_floor(mesh);
-    let start = match conformal_start(mesh, floor) {
+    let cancelled = |done: usize| SphereError::Cancelled { stage: "conformal start", done, total };
+    let start = match conformal_start(mesh, floor, &|| !progress(0, 0)) {
         Ok(start) => start,
         Err(why) => {
             let reason = match why {
+                NoStart::Stopped => return Err(cancelled(0)),
                 NoStart::Solve(e) => format!("its planar solve failed ({e})"),
                 NoStart::NotValid(r) => format!(
                     "it is not a valid GC-embedding ({} faces not positive)",
@@ -60,7 +62,7 @@ pub fn from_conformal_start(
         }
     };
     if !(progress(0, 0) && progress(n, total)) {
-        return Err(SphereError::Cancelled { stage: "conformal start", done: n, total });
+        return Err(cancelled(n));
     }
     let rings = rings_of(mesh);
     let problem = Problem { energy: params.energy, surface: mesh.positions(), area_floor: floor };
@@ -152,7 +154,7 @@ mod tests {
         assert!(report.valid && report.min_area_ratio > 1e-3, "{report:?}");
         // The sweeps only lower the energy from the start, and with it the
         // angle distortion.
-        let start = conformal_start(&mesh, area_floor(&mesh)).unwrap();
+        let start = conformal_start(&mesh, area_floor(&mesh), &|| false).unwrap();
         let before = quality(mesh.mesh(), &start.points).unwrap().angle_mean_deg;
         let after = quality(mesh.mesh(), &map.points).unwrap().angle_mean_deg;
         assert!(after <= before && after < 3.0, "{before} -> {after}");
