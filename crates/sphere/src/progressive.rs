@@ -244,7 +244,7 @@ pub fn progressive(
 }
 
 /// Surface triangles below a millionth of the mean area count as that large.
-pub fn area_floor(mesh: &GenusZeroMesh) -> f64 {
+pub(crate) fn area_floor(mesh: &GenusZeroMesh) -> f64 {
     let p = mesh.positions();
     let total: f64 = mesh
         .faces()
@@ -260,7 +260,7 @@ pub fn area_floor(mesh: &GenusZeroMesh) -> f64 {
 }
 
 /// The neighbour lists of `mesh`, counter-clockwise seen from outside.
-pub fn rings_of(mesh: &GenusZeroMesh) -> Vec<Vec<u32>> {
+pub(crate) fn rings_of(mesh: &GenusZeroMesh) -> Vec<Vec<u32>> {
     RingMesh::from_faces(mesh.n_vertices(), mesh.faces()).rings
 }
 
