@@ -16,6 +16,8 @@
 //! * [`gotsman`]: Gotsman, Gu and Sheffer's system solved by Newton's method (5.1, eq. 5.10).
 //! * [`dogleg`]: the dogleg trust region of that Newton iteration.
 //! * [`progressive`]: progressive meshes with exact insertion and flip-free optimisation (9.3.3).
+//! * [`conformal_start`]: a certified global conformal map, the conformal energy's start.
+//! * [`mobius_centring`]: the Möbius transformation that balances a map's area.
 //! * [`distortion_energy`]: the isometric, conformal, authalic and stretch energies it lowers.
 //! * [`flip_free`]: vertex moves that keep every face positive (9.3.2).
 //! * [`improve`]: those moves started from any valid map (9.3.2).
@@ -45,6 +47,7 @@
 
 pub mod alexa;
 pub mod bvh;
+pub mod conformal_start;
 pub mod cut_path;
 pub mod distortion_energy;
 pub mod dogleg;
@@ -66,6 +69,7 @@ pub mod kernel;
 pub mod legendre;
 pub mod lp;
 pub mod metrics;
+pub mod mobius_centring;
 pub mod point_map;
 pub mod pole_fans;
 pub mod poles;

@@ -15,11 +15,16 @@
 //! 4. Whenever the mesh has grown by [`LEVEL_GROWTH`], and at the end, lower
 //!    the distortion [`Energy`] with flip-free moves ([`crate::flip_free`]).
 //!
+//! For the conformal energy, a certified global conformal map replaces steps
+//! 1-3 where no face of it lies inside the energy's barrier
+//! ([`conformal`]); otherwise the method runs as above.
+//!
 //! Every state the method passes through is a valid GC-embedding of the
 //! current mesh: the tetrahedron is one, an insertion into the kernel keeps
 //! one (the new faces tile the old fan), and a move keeps one (all faces stay
 //! positive along the straight path, so the covering degree cannot jump).
 
+mod conformal;
 mod hierarchy;
 mod placement;
 mod ring_mesh;
@@ -109,12 +114,22 @@ pub fn progressive(
     progress: &(dyn Fn(usize, usize) -> bool + Sync),
 ) -> Result<SphereEmbedding, SphereError> {
     check_tolerance(params.tolerance)?;
+    let mut not_used = None;
+    if params.energy == Energy::Conformal {
+        match conformal::from_conformal_start(mesh, params, progress)? {
+            Ok(map) => return Ok(map),
+            Err(why) => not_used = Some(why),
+        }
+    }
     let n = mesh.n_vertices();
     let total = 3 * n;
     let positions = mesh.positions();
     let cancelled =
         |stage: &'static str, done: usize| SphereError::Cancelled { stage, done, total };
     let mut seconds = Vec::new();
+    if let Some(why) = &not_used {
+        seconds.push(("conformal start", why.seconds));
+    }
 
     let started = Instant::now();
     let mut rings = RingMesh::from_faces(n, mesh.faces());
@@ -226,6 +241,10 @@ pub fn progressive(
         end.energy,
         end.last_change
     );
+    let message = match not_used {
+        Some(why) => format!("{message}; the global conformal start was not used: {}", why.reason),
+        None => message,
+    };
     Ok(SphereEmbedding { points, iterations: end.sweeps, status, message, seconds })
 }
 
