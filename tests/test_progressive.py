@@ -48,27 +48,25 @@ def test_valid_and_far_from_the_floor_on_the_datasets(name: str, energy: str) ->
     assert_certified(m, mesh)
 
 
-@settings(max_examples=200, deadline=None)
+# Thousands of random genus-0 meshes in CI's profile (issue 10): 500 of up to
+# 300 vertices and 50 of 300-2,000 per energy, non-star-shaped and sliver-rich
+# ones included. The conformal energy may start from a global conformal map,
+# used only when the exact test certifies it: slivers and folds must fall back.
+@pytest.mark.parametrize("energy", ENERGIES)
+@settings(max_examples=500, deadline=None)
 @given(surface=mg.surfaces(max_vertices=300))
-def test_valid_on_random_genus0_meshes(surface: mg.Surface) -> None:
+def test_every_energy_is_valid_on_random_genus0_meshes(energy: str, surface: mg.Surface) -> None:
     mesh = sp.Mesh(surface.V, surface.F)
-    assert_certified(sp.embed(mesh, "progressive"), mesh)
+    assert_certified(sp.embed(mesh, "progressive", energy=energy), mesh)
 
 
-@settings(max_examples=25, deadline=None)
+@pytest.mark.parametrize("energy", ENERGIES)
+@settings(max_examples=50, deadline=None)
 @given(surface=mg.surfaces(min_vertices=300, max_vertices=2000))
-def test_valid_on_larger_random_genus0_meshes(surface: mg.Surface) -> None:
+def test_every_energy_is_valid_on_larger_random_genus0_meshes(energy: str,
+                                                              surface: mg.Surface) -> None:
     mesh = sp.Mesh(surface.V, surface.F)
-    assert_certified(sp.embed(mesh, "progressive"), mesh)
-
-
-@settings(max_examples=100, deadline=None)
-@given(surface=mg.surfaces(max_vertices=300))
-def test_conformal_valid_on_random_genus0_meshes(surface: mg.Surface) -> None:
-    # The conformal energy may start from a global conformal map, used only
-    # when the exact test certifies it: slivers and folds must fall back.
-    mesh = sp.Mesh(surface.V, surface.F)
-    assert_certified(sp.embed(mesh, "progressive", energy="conformal"), mesh)
+    assert_certified(sp.embed(mesh, "progressive", energy=energy), mesh)
 
 
 def test_conformal_starts_from_the_global_map_where_no_limb_is_squeezed() -> None:
