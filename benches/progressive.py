@@ -141,6 +141,9 @@ def main() -> None:
     ap.add_argument("--sizes", default="2000,20000,200000")
     ap.add_argument("--large", default="1000000", help="sizes of the last table (every shape)")
     ap.add_argument("--energies", default="isometric,conformal,authalic,stretch")
+    ap.add_argument("--shape-energies", default="isometric",
+                    help="energies of the generated-shape tables (comma-separated)")
+    ap.add_argument("--no-corpus", action="store_true", help="skip the corpus table")
     ap.add_argument("--small", action="store_true")
     args = ap.parse_args()
     energies = args.energies.split(",")
@@ -192,20 +195,24 @@ def main() -> None:
                                for s in ("tentacles", "bumpy_blob")],
               lambda s: s["shape"])
     else:
-        if (SHARED / "MANIFEST.json").is_file():
+        if (SHARED / "MANIFEST.json").is_file() and not args.no_corpus:
             entries = [e for e in json.loads((SHARED / "MANIFEST.json").read_text())
                        if not e["path"].startswith("invalid/")]
             table("The corpus (../shared/meshes), every energy",
                   [{"file": str(SHARED / e["path"]), "energy": en, "name": e["name"], "lapy": True}
                    for e in entries for en in energies], lambda s: s["name"])
         sizes = [int(x) for x in args.sizes.split(",") if x]
-        table("Generated shapes (spherify.datasets), isometric",
-              [{"shape": s, "n": n, "energy": "isometric"} for n in sizes for s in SHAPES],
+        shape_energies = args.shape_energies.split(",")
+        named = ", ".join(shape_energies)
+        table(f"Generated shapes (spherify.datasets), {named}",
+              [{"shape": s, "n": n, "energy": en}
+               for en in shape_energies for n in sizes for s in SHAPES],
               lambda s: s["shape"])
         large = [int(x) for x in args.large.split(",") if x]
         if large:
-            table("Large shapes, isometric",
-                  [{"shape": s, "n": n, "energy": "isometric"} for n in large for s in SHAPES],
+            table(f"Large shapes, {named}",
+                  [{"shape": s, "n": n, "energy": en}
+                   for en in shape_energies for n in large for s in SHAPES],
                   lambda s: s["shape"])
     if lapy_rows:
         lines.extend(["## Conformal energy against LaPy", "",
