@@ -279,11 +279,12 @@ def batch(paths: Union[PathLike, Iterable[PathLike]], out_dir: PathLike, executo
     BatchResult
         ``rows``: one dict per mesh, in input order, with the keys of
         :data:`COLUMNS`. ``peak_memory_mb`` is the peak resident memory of
-        the process that mapped the mesh while it read and mapped it
-        (interpreter and libraries included, some 60 MB; in the local pool,
-        with the previous mesh's outputs being written meanwhile): on Linux
-        its high-water mark is reset at the start of each mesh
-        (``/proc/self/clear_refs``);
+        the process that mapped the mesh while it did (interpreter and
+        libraries included, some 60 MB): on Linux its high-water mark is
+        reset at the start of each mesh (``/proc/self/clear_refs``; in the
+        local pool, whose workers write one mesh while they map the next,
+        again once the previous mesh is written, and read when the map
+        ends, so that it holds neither mesh's writing);
         elsewhere it is the process's peak so far, an upper bound, and None
         on Windows. Under a threaded executor (Dask's default) without
         ``timeout``, meshes mapped at the same time in one process share

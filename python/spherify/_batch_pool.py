@@ -49,7 +49,7 @@ from typing import Any, Deque, Dict, Iterator, List, Optional, Sequence, Set, Tu
 
 from ._atomic import TEMP_MARK
 from ._batch_task import (Mapped, Task, failed_row, finish_task, map_task, peak_memory_mb,
-                          release_free_memory, reset_peak_memory, run_task)
+                          reset_peak_memory, run_task)
 from ._errors import SpherifyError
 
 #: Seconds a new worker may take to import spherify and say it is ready.
@@ -87,8 +87,10 @@ def child_main(fd: int) -> None:
         row = finish_task(box.pop())
         # The mesh's arrays are freed now (the box held the last reference):
         # the high-water mark starts again for the mesh being mapped, so
-        # that its peak does not hold this one's writing.
-        release_free_memory()
+        # that its peak does not hold this one's writing. (What the C
+        # library keeps of the freed memory stays resident: handing it back
+        # with malloc_trim made the next map fault its pages in again, some
+        # 15 ms of CPU per mesh.)
         reset_peak_memory()
         try:
             send(("row", row))

@@ -84,21 +84,6 @@ def reset_peak_memory() -> bool:
         return False
 
 
-def release_free_memory() -> None:
-    """Hands the memory this process has freed back to the system (glibc's
-    ``malloc_trim``; nothing elsewhere). A worker's second thread allocates
-    from an arena of its own, which glibc keeps at its high-water mark: without
-    this, a mesh written on that thread would stay in the worker's resident
-    memory, and in the next mesh's peak. Some microseconds."""
-    if not sys.platform.startswith("linux"):
-        return
-    try:
-        import ctypes
-        ctypes.CDLL("libc.so.6").malloc_trim(0)
-    except (OSError, AttributeError):  # another C library (musl)
-        pass
-
-
 def peak_memory_mb(reset: bool) -> Optional[float]:
     """The peak resident memory (MB) of this process since :func:`reset_peak_memory`
     when ``reset`` (it succeeded): VmHWM from /proc/self/status. Otherwise the
