@@ -1,6 +1,6 @@
 """sp.batch against sp.embed in a loop, on generated meshes (issue 12, part 5).
 
-    python benches/batch.py [--meshes 1000] [--min 5000] [--max 50000] [--workers 1 2]
+    python benches/batch.py [--meshes 1000] [--min 5000] [--max 50000] [--workers 1 2] [--cores]
 
 Writes the meshes (PLY) to a temporary folder first (not timed), then times
 the phases below. The meshes are dealt into ``--rounds`` groups, and each
@@ -14,7 +14,14 @@ batch phase pays its start-up once per round):
   ``m.save`` of the ``.spheremap.npz`` (the outputs the batch writes; both
   synced to disk, as those functions do);
 * batch with 1, 2, ... workers: the same meshes through ``sp.batch`` (its
-  worker processes also measure quality, hash and journal each mesh).
+  worker processes also measure quality, hash and journal each mesh);
+* with ``--cores`` (Linux), the speed-up with the cores measured honestly:
+  ``loop, 1 core`` (the loop in a child process pinned to one core, its core
+  calls on one thread; timed inside the child, without its start-up) and
+  ``batch, 1 worker on 1 core`` (``sp.batch`` with this process pinned to one
+  core while it starts its worker, which inherits that). Each batch is then
+  also compared with the batch of 1 worker on 1 core: the speed-up the cores
+  give, where "1 worker" on all cores already uses them all part of the time.
 
 Prints meshes per second, the overhead of each batch over both loops, the
 speed-up over one worker, the batch's seconds per stage summed over the
@@ -26,10 +33,12 @@ from __future__ import annotations
 
 import argparse
 import os
+import subprocess
+import sys
 import tempfile
 import time
 from pathlib import Path
-from typing import Any, Dict, List
+from typing import Any, Dict, List, Optional, Set
 
 import numpy as np
 
@@ -57,6 +66,36 @@ def cpu_seconds() -> float:
     return total
 
 
+LOOP_ONE_CORE = """
+import sys, time, spherify as sp
+paths = sys.argv[1:]
+start = time.perf_counter()
+for path in paths:
+    sp.embed(sp.load(path))
+print(time.perf_counter() - start)
+"""
+
+
+def pinned_to_one_core() -> Set[int]:
+    """Pins this thread (and the processes it starts) to its first usable
+    core; returns the cores to restore."""
+    cores = os.sched_getaffinity(0)
+    os.sched_setaffinity(0, {min(cores)})
+    return cores
+
+
+def loop_on_one_core(paths: List[Path]) -> float:
+    """Seconds of the load + embed loop in a child pinned to one core."""
+    cores = pinned_to_one_core()
+    try:
+        env = dict(os.environ, RAYON_NUM_THREADS="1")
+        done = subprocess.run([sys.executable, "-c", LOOP_ONE_CORE, *map(str, paths)], env=env,
+                              check=True, capture_output=True, text=True)
+    finally:
+        os.sched_setaffinity(0, cores)
+    return float(done.stdout.split()[-1])
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -66,7 +105,11 @@ def main() -> None:
     parser.add_argument("--workers", type=int, nargs="+", default=[1, 2])
     parser.add_argument("--rounds", type=int, default=4,
                         help="split the meshes into this many rounds, each running every phase")
+    parser.add_argument("--cores", action="store_true",
+                        help="add the loop and a 1-worker batch pinned to one core (Linux)")
     args = parser.parse_args()
+    if args.cores and not hasattr(os, "sched_setaffinity"):
+        parser.error("--cores needs os.sched_setaffinity (Linux)")
     rng = np.random.default_rng(0)
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp) / "in"
@@ -81,6 +124,8 @@ def main() -> None:
         paths = sorted(folder.iterdir())
         rounds = max(1, min(args.rounds, args.meshes))
         phases = ["loop", "loop_write"] + [f"batch{w}" for w in args.workers]
+        if args.cores:
+            phases += ["loop_core1", "batch1_core1"]
         wall = {p: 0.0 for p in phases}
         cpu = {p: 0.0 for p in phases}
         rows: Dict[str, List[Dict[str, Any]]] = {p: [] for p in phases}
@@ -93,7 +138,17 @@ def main() -> None:
             for phase in order:
                 print(f"round {r + 1}/{rounds}, {phase} [{load_average()}]", flush=True)
                 start, used = time.perf_counter(), cpu_seconds()
-                if phase == "loop":
+                inner: Optional[float] = None
+                if phase == "loop_core1":
+                    inner = loop_on_one_core(group)
+                elif phase == "batch1_core1":
+                    cores = pinned_to_one_core()
+                    try:
+                        result = sp.batch(group, Path(tmp) / f"{phase}-{r}", workers=1)
+                    finally:
+                        os.sched_setaffinity(0, cores)
+                    rows[phase].extend(result.rows)
+                elif phase == "loop":
                     for path in group:
                         sp.embed(sp.load(path))
                 elif phase == "loop_write":
@@ -107,7 +162,7 @@ def main() -> None:
                     workers = int(phase[5:])
                     result = sp.batch(group, Path(tmp) / f"{phase}-{r}", workers=workers)
                     rows[phase].extend(result.rows)
-                wall[phase] += time.perf_counter() - start
+                wall[phase] += time.perf_counter() - start if inner is None else inner
                 cpu[phase] += cpu_seconds() - used
         print(f"[{load_average()}]")
         n = args.meshes
@@ -115,18 +170,27 @@ def main() -> None:
               f"  (CPU {cpu['loop']:.2f} s)")
         print(f"loop, load + embed + write:  {wall['loop_write']:8.2f} s  "
               f"{n / wall['loop_write']:7.2f} meshes/s  (CPU {cpu['loop_write']:.2f} s)")
+        if args.cores:
+            one = wall["loop_core1"]
+            print(f"loop, 1 core (in a child):   {one:8.2f} s  {n / one:7.2f} meshes/s  "
+                  f"(CPU {cpu['loop_core1']:.2f} s, the child's start-up included)")
         first = None
-        for workers in args.workers:
-            phase = f"batch{workers}"
+        for phase in [f"batch{w}" for w in args.workers] + (["batch1_core1"] if args.cores else []):
+            workers = 1 if phase == "batch1_core1" else int(phase[5:])
             seconds, used, got = wall[phase], cpu[phase], rows[phase]
             first = first or seconds
             certified = sum(bool(row["certified"]) for row in got)
-            print(f"batch, {workers} worker(s):         {seconds:8.2f} s  {n / seconds:7.2f} "
+            label = "1 worker on 1 core:" if phase == "batch1_core1" else f"{workers} worker(s):   "
+            print(f"batch, {label}      {seconds:8.2f} s  {n / seconds:7.2f} "
                   f"meshes/s  ({certified} certified; {seconds / wall['loop'] - 1:+.1%} against "
                   f"load + embed, {seconds / wall['loop_write'] - 1:+.1%} against load + embed + "
                   f"write; speed-up {first / seconds:.2f}x over the first)")
             print(f"    CPU {used:.2f} s: {used / cpu['loop'] - 1:+.1%} against load + embed, "
                   f"{used / cpu['loop_write'] - 1:+.1%} against load + embed + write")
+            if args.cores:
+                print(f"    against the loop on 1 core {seconds / wall['loop_core1'] - 1:+.1%}; "
+                      f"speed-up over 1 worker on 1 core "
+                      f"{wall['batch1_core1'] / seconds:.2f}x")
             stages: Dict[str, float] = {}
             for row in got:
                 for key, value in row.items():

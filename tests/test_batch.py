@@ -271,6 +271,76 @@ def test_a_worker_killed_during_one_mesh(tmp_path: Path) -> None:
     assert rows["a_quick.ply"]["certified"] and rows["c_quick.ply"]["certified"]
 
 
+def kill_while_b_is_written(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+                            kills: int) -> Tuple[Dict[str, Dict[str, Any]], List[str], List[str]]:
+    """Maps a, b (80k vertices: some 50 ms of measuring and writing, against
+    well under 1 ms from a give to the kill), c, d with one worker, killed as
+    soon as it is given a mesh while b is still being written, up to
+    ``kills`` times: rows by name, the meshes given in order, and those being
+    mapped at each kill."""
+    from spherify import _batch_pool
+    folder = tmp_path / "in"
+    folder.mkdir()
+    for name, n in [("a.ply", 1000), ("b.ply", 80000), ("c.ply", 1000), ("d.ply", 1000)]:
+        sp.save(sp.datasets.make("ellipsoid", n), folder / name)
+    give = _batch_pool.Worker.give
+    given: List[str] = []
+    killed: List[str] = []
+
+    def give_then_kill(worker: Any, task: Any) -> None:
+        give(worker, task)
+        given.append(Path(task.input).name)
+        held = [Path(t.input).name for t, _ in worker.tasks]
+        if len(killed) < kills and len(held) == 2 and held[0] == "b.ply":
+            os.kill(worker.process.pid, signal.SIGKILL)
+            killed.append(held[1])
+
+    monkeypatch.setattr(_batch_pool.Worker, "give", give_then_kill)
+    rows = by_name(sp.batch(folder, tmp_path / "out", workers=1).rows)
+    monkeypatch.undo()
+    return rows, given, killed
+
+
+def test_a_worker_killed_while_it_writes_one_mesh_and_maps_the_next(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    # A worker writes one mesh while it maps the next. Killed while it writes
+    # b and maps c: c, the mesh it was mapping, is recorded as the cause; b
+    # goes back to the queue and is done by the next worker; a rerun redoes
+    # c alone and gives what an uninterrupted run gives.
+    rows, given, killed = kill_while_b_is_written(tmp_path, monkeypatch, kills=1)
+    out = tmp_path / "out"
+    assert killed == ["c.ply"]
+    assert rows["c.ply"]["error_type"] == "WorkerDied" and "signal 9" in rows["c.ply"]["error"]
+    assert all(rows[name]["certified"] for name in ("a.ply", "b.ply", "d.ply")), rows
+    assert sorted(given) == ["a.ply", "b.ply", "b.ply", "c.ply", "d.ply"]  # b twice
+    journal = batch_module.read_journal(out / "journal.jsonl")
+    assert sorted(Path(r["input"]).name for r in journal) == ["a.ply", "b.ply", "c.ply", "d.ply"]
+    assert not [p for p in out.iterdir() if p.name.startswith(".")]  # no temporaries
+    rerun = sp.batch(tmp_path / "in", out, workers=1)
+    assert rerun.skipped == 3 and rerun.all_certified
+    whole = sp.batch(tmp_path / "in", tmp_path / "whole", workers=1)
+    assert outputs(out) == outputs(tmp_path / "whole")
+    where = {"sphere", "spheremap"}  # (paths into out and whole)
+    assert ([{k: v for k, v in stable(r).items() if k not in where} for r in rerun.rows]
+            == [{k: v for k, v in stable(r).items() if k not in where} for r in whole.rows])
+
+
+def test_a_mesh_whose_worker_is_lost_twice_while_it_is_written_fails(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    # The second time b's worker is lost while b is written, b is recorded
+    # as failed rather than queued again (a mesh whose writing killed every
+    # worker would otherwise loop); the batch ends and a rerun does the rest.
+    rows, given, killed = kill_while_b_is_written(tmp_path, monkeypatch, kills=2)
+    assert killed == ["c.ply", "d.ply"] and given.count("b.ply") == 2
+    assert rows["a.ply"]["certified"]
+    for name in killed:
+        assert rows[name]["error_type"] == "WorkerDied" and "signal 9" in rows[name]["error"]
+    assert rows["b.ply"]["error_type"] == "WorkerDied"
+    assert "a second worker holding this mesh was lost" in rows["b.ply"]["error"]
+    rerun = sp.batch(tmp_path / "in", tmp_path / "out", workers=1)
+    assert rerun.skipped == 1 and rerun.all_certified
+
+
 def assert_only_the_slow_mesh_timed_out(rows: Any, elapsed: float) -> None:
     named = by_name(rows)
     assert named["b_slow.ply"]["error_type"] == "Timeout"
@@ -308,10 +378,16 @@ def test_a_timeout_holds_on_a_dask_local_cluster(tmp_path: Path) -> None:
 
 
 @pytest.mark.skipif(not reset_peak_memory(), reason="per-mesh peaks need Linux's clear_refs")
-def test_peak_memory_is_per_mesh(tmp_path: Path) -> None:
+def test_peak_memory_is_per_mesh(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     # One worker maps a small, a large and a small mesh: the second small
     # one's peak is its own, not the large one's (a process-wide high-water
-    # mark would report the large one's again).
+    # mark would report the large one's again). glibc keeps freed memory
+    # resident and would add some 60 MB of the large mesh's to the next
+    # one's figure; the worker inherits a small trim threshold so that what
+    # is measured is the reset. (A Dask LocalCluster sets the same in
+    # os.environ, so that this test passed after the Dask tests and failed
+    # alone.)
+    monkeypatch.setenv("MALLOC_TRIM_THRESHOLD_", "65536")
     folder = tmp_path / "in"
     folder.mkdir()
     for name, n in [("a.ply", 500), ("b.ply", 80000), ("c.ply", 500)]:

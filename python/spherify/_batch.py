@@ -50,7 +50,7 @@ from pathlib import Path
 from typing import Any, Dict, Iterable, Iterator, List, Optional, Sequence, Union
 
 from ._atomic import is_temporary, write_atomically
-from ._batch_pool import LocalPool, executor_rows
+from ._batch_pool import LocalPool, executor_rows, usable_cores
 from ._batch_task import COLUMNS, QUALITY, Task, file_matches, run_task
 from ._errors import MeshError
 
@@ -258,9 +258,11 @@ def batch(paths: Union[PathLike, Iterable[PathLike]], out_dir: PathLike, executo
         ``<name>-<hash>.spheremap.npz``, ``journal.jsonl`` and ``summary.csv``.
     executor : None, concurrent.futures.Executor or dask.distributed.Client
         None: a local pool of ``workers`` processes (default: the number of
-        cores), each a fresh interpreter whose core calls run on
-        ``cores // workers`` threads; it enforces ``timeout`` by killing the
-        worker. An executor gets one task per mesh; with ``timeout`` each
+        cores this process may use), each a fresh interpreter whose core
+        calls run on ``cores // workers`` threads and which writes one mesh's
+        outputs while it maps the next; it enforces ``timeout`` by killing
+        the worker (another mesh the worker held goes back to the queue).
+        An executor gets one task per mesh; with ``timeout`` each
         task maps its mesh in a helper process it kills at the timeout
         (helpers are kept for the executor worker's next tasks).
     method, **options
@@ -279,7 +281,10 @@ def batch(paths: Union[PathLike, Iterable[PathLike]], out_dir: PathLike, executo
         :data:`COLUMNS`. ``peak_memory_mb`` is the peak resident memory of
         the process that mapped the mesh while it did (interpreter and
         libraries included, some 60 MB): on Linux its high-water mark is
-        reset at the start of each mesh (``/proc/self/clear_refs``);
+        reset at the start of each mesh (``/proc/self/clear_refs``; in the
+        local pool, whose workers write one mesh while they map the next,
+        again once the previous mesh is written, and read when the map
+        ends, so that it holds neither mesh's writing);
         elsewhere it is the process's peak so far, an upper bound, and None
         on Windows. Under a threaded executor (Dask's default) without
         ``timeout``, meshes mapped at the same time in one process share
@@ -326,7 +331,7 @@ def batch(paths: Union[PathLike, Iterable[PathLike]], out_dir: PathLike, executo
         executor = client
     # The local workers start now and import spherify while the inputs are
     # hashed and the journal read.
-    pool = (LocalPool(min(workers or os.cpu_count() or 1, len(inputs)))
+    pool = (LocalPool(min(workers or usable_cores(), len(inputs)))
             if executor is None and inputs else None)
     interrupted = False
     bar = _Progress(len(inputs), progress)

@@ -2,9 +2,14 @@
 watched for their timeout and their death.
 
 * :class:`LocalPool`: ``sp.batch``'s default, ``workers`` child processes of
-  this one. A mesh that runs past ``timeout`` has its worker killed and is
-  recorded as timed out; a worker that dies (out of memory, SIGKILL) has its
-  mesh recorded with the signal; a new worker takes its place.
+  this one. Each worker writes one mesh's outputs on a thread while it maps
+  the next (:func:`child_main`), so it holds at most two meshes. A mesh that
+  runs past ``timeout`` has its worker killed and is recorded as timed out; a
+  worker that dies (out of memory, SIGKILL) has the mesh it was mapping
+  recorded with the signal (the maps are where memory peaks); a new worker
+  takes its place. The other mesh the worker held, if any, is not at fault:
+  it goes back to the queue, once (a second loss records it as failed, so
+  that a mesh whose writing kills workers cannot loop).
 * :func:`executor_rows`: any ``concurrent.futures.Executor`` (or a Dask
   client's). With a timeout, each task is :func:`run_task_within`: the
   executor's worker hands the mesh to a helper process of its own and kills
@@ -40,10 +45,11 @@ import sys
 import threading
 import time
 from pathlib import Path
-from typing import Any, Deque, Dict, Iterator, List, Optional, Sequence
+from typing import Any, Deque, Dict, Iterator, List, Optional, Sequence, Set, Tuple
 
 from ._atomic import TEMP_MARK
-from ._batch_task import Task, failed_row, run_task
+from ._batch_task import (Mapped, Task, failed_row, finish_task, map_task, peak_memory_mb,
+                          reset_peak_memory, run_task)
 from ._errors import SpherifyError
 
 #: Seconds a new worker may take to import spherify and say it is ready.
@@ -59,18 +65,60 @@ _CHILD = ("import signal; signal.signal(signal.SIGINT, signal.SIG_IGN); import s
 
 def child_main(fd: int) -> None:
     """A worker: tasks in, rows out over the socket ``fd``, until None or
-    until the parent goes away."""
+    until the parent goes away.
+
+    Each mesh is mapped on the main thread (:func:`map_task`), then written on
+    a second thread (:func:`finish_task`) while the next mesh is read and
+    mapped: the map's core calls and the writing's measures, hashes and file
+    writes all release the GIL, and the writing mostly waits for the disk or
+    uses a core the map leaves idle. Messages: ``("mapped", input)`` when a
+    mesh is mapped and the previous one written (the parent may then send the
+    next task: at most two meshes are in a worker), ``("row", row)`` once its
+    outputs are renamed into place (or it failed)."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # (again, for callers other than _CHILD)
     connection = multiprocessing.connection.Connection(fd)
-    connection.send(("ready", os.getpid()))
-    while True:
+    lock = threading.Lock()
+
+    def send(message: Tuple[str, Any]) -> None:
+        with lock:  # the two threads send whole messages, one at a time
+            connection.send(message)
+
+    def finish(box: List[Mapped]) -> None:
+        row = finish_task(box.pop())
+        # The mesh's arrays are freed now (the box held the last reference):
+        # the high-water mark starts again for the mesh being mapped, so
+        # that its peak does not hold this one's writing. (What the C
+        # library keeps of the freed memory stays resident: handing it back
+        # with malloc_trim made the next map fault its pages in again, some
+        # 15 ms of CPU per mesh.)
+        reset_peak_memory()
         try:
-            task = connection.recv()
-        except (EOFError, OSError):
-            return
-        if task is None:
-            return
-        connection.send(("row", run_task(task)))
+            send(("row", row))
+        except OSError:  # the parent went away: the main thread sees it next
+            pass
+
+    send(("ready", os.getpid()))
+    writer = cf.ThreadPoolExecutor(1, thread_name_prefix="spherify-writer")
+    writing: Optional["cf.Future[None]"] = None
+    try:
+        while True:
+            try:
+                task = connection.recv()
+            except (EOFError, OSError):
+                return
+            if task is None:
+                return
+            mapped = map_task(task)
+            if writing is not None:
+                writing.result()  # one mesh written at a time
+            # The peak since this mesh began, or since the previous one's
+            # outputs were written if that came later (``finish``).
+            mapped.row["peak_memory_mb"] = peak_memory_mb(mapped.reset)
+            send(("mapped", task.input))
+            writing = writer.submit(finish, [mapped])
+            del mapped  # (the writer's box holds it, and frees it when done)
+    finally:
+        writer.shutdown(wait=True)  # the last mesh's outputs and row
 
 
 def _child_path() -> str:
@@ -97,12 +145,29 @@ class Worker:
             theirs.close()
         self.connection = multiprocessing.connection.Connection(ours.detach())
         self.ready = False
-        self.task: Optional[Task] = None
-        self.started = 0.0
+        #: The meshes it holds, oldest first, with when each was given: at
+        #: most one being written and one being mapped (``mapping``).
+        self.tasks: List[Tuple[Task, float]] = []
+        self.mapping: Optional[Task] = None
 
     def give(self, task: Task) -> None:
-        self.task, self.started = task, time.monotonic()
+        self.tasks.append((task, time.monotonic()))
+        self.mapping = task
         self.connection.send(task)
+
+    def can_take(self) -> bool:
+        """Whether it is ready for another mesh: started, its last one
+        mapped, and at most one being written."""
+        return self.ready and self.mapping is None and len(self.tasks) < 2
+
+    def finished(self, name: str) -> None:
+        """A row came for the input ``name``."""
+        self.tasks = [(t, s) for t, s in self.tasks if t.input != name]
+
+    def late(self, timeout: float) -> Optional[Task]:
+        """A mesh it holds that has run past ``timeout`` seconds, if any."""
+        now = time.monotonic()
+        return next((t for t, s in self.tasks if now - s >= timeout), None)
 
     def receive(self) -> Optional[Any]:
         """The next message, or None when the worker died (its end closed)."""
@@ -127,8 +192,8 @@ class Worker:
             self.process.kill()
         self.process.wait()
         self.connection.close()
-        if self.task is not None:
-            for output in (Path(self.task.sphere), Path(self.task.spheremap)):
+        for task, _ in self.tasks:
+            for output in (Path(task.sphere), Path(task.spheremap)):
                 for leftover in output.parent.glob(f".{glob.escape(output.name)}{TEMP_MARK}"
                                                    f"{self.process.pid}-*"):
                     leftover.unlink(missing_ok=True)
@@ -148,72 +213,100 @@ def _could_not_start(worker: Worker) -> SpherifyError:
                          f"is on stderr above): the command was {sys.executable} -c {_CHILD!r}")
 
 
+def usable_cores() -> int:
+    """The cores this process may run on: its CPU affinity where the system
+    has one (``taskset``, a container's cpuset), else the machine's count."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except (AttributeError, OSError):  # no sched_getaffinity (macOS)
+        return os.cpu_count() or 1
+
+
 class LocalPool:
     """``workers`` worker processes, started at once (they import spherify
     while the caller hashes its inputs). The cores are shared among them:
     each worker's core calls run on ``cores // workers`` threads (at least
     one; ``RAYON_NUM_THREADS`` set by the caller wins), so that two workers
-    on two cores do not run four threads that take turns."""
+    on two cores do not run four threads that take turns. The cores are those
+    this process may use (:func:`usable_cores`), which the workers inherit."""
 
     def __init__(self, workers: int) -> None:
-        self.threads = max(1, (os.cpu_count() or 1) // workers)
+        self.threads = max(1, usable_cores() // workers)
         self.workers: List[Worker] = [Worker(self.threads) for _ in range(workers)]
 
     def rows(self, tasks: Sequence[Task], timeout: Optional[float]) -> Iterator[Dict[str, Any]]:
         """Rows as meshes finish; each worker watched for its timeout and
         its death. Closing the generator stops the workers."""
         queue: Deque[Task] = collections.deque(tasks)
+        requeued: Set[str] = set()
         pool = self.workers
+
+        def lose(w: Worker, blamed: Task, error_type: str, error: str) -> List[Dict[str, Any]]:
+            """Rows for a worker that is lost: ``blamed`` failed; the other
+            mesh it held goes back to the queue, or fails if it did once."""
+            rows = [failed_row(blamed, error_type, error)]
+            for task, _ in w.tasks:
+                if task is blamed:
+                    continue
+                if task.input in requeued:
+                    rows.append(failed_row(task, "WorkerDied", "a second worker holding this "
+                                           f"mesh was lost while it held another ({error})"))
+                else:
+                    requeued.add(task.input)
+                    queue.appendleft(task)
+            return rows
+
         try:
-            while queue or any(w.task is not None for w in pool):
+            while queue or any(w.tasks for w in pool):
                 wait_for: Optional[float] = None
-                busy = [w for w in pool if w.task is not None]
-                if timeout is not None and busy:
-                    now = time.monotonic()
-                    wait_for = max(0.0, min(w.started + timeout - now for w in busy))
+                started = [s for w in pool for _, s in w.tasks]
+                if timeout is not None and started:
+                    wait_for = max(0.0, min(started) + timeout - time.monotonic())
                 ready = multiprocessing.connection.wait([w.connection for w in pool],
                                                         timeout=wait_for)
                 gone: List[Worker] = []
                 for i, w in enumerate(list(pool)):
-                    row: Optional[Dict[str, Any]] = None
+                    rows: List[Dict[str, Any]] = []
                     replace = False
+                    late = None if timeout is None else w.late(timeout)
                     if w.connection in ready:
                         message = w.receive()
                         if message is None and not w.ready:
                             raise _could_not_start(w)
                         if message is None:
-                            if w.task is not None:  # (an idle one is just replaced)
-                                row = failed_row(w.task, "WorkerDied", "the worker mapping this "
-                                                 f"mesh died ({w.death()}; out of memory, or "
-                                                 "killed)")
+                            if w.tasks:  # (an idle one is just replaced)
+                                blamed = w.mapping or w.tasks[0][0]
+                                rows = lose(w, blamed, "WorkerDied", "the worker mapping this "
+                                            f"mesh died ({w.death()}; out of memory, or killed)")
                             replace = True
                         elif message[0] == "ready":
                             w.ready = True
+                        elif message[0] == "mapped":
+                            w.mapping = None
                         else:
-                            row, w.task = message[1], None
-                    elif (timeout is not None and w.task is not None
-                          and time.monotonic() - w.started >= timeout):
-                        row = failed_row(w.task, "Timeout", f"ran past the timeout of "
-                                         f"{timeout:g} s; its worker was killed")
+                            rows.append(message[1])
+                            w.finished(message[1]["input"])
+                    elif late is not None:
+                        rows = lose(w, late, "Timeout", f"ran past the timeout of {timeout:g} s; "
+                                    "its worker was killed")
                         replace = True
                     if replace:
                         w.kill()
-                        w.task = None
+                        w.tasks, w.mapping = [], None
                         if queue:
                             pool[i] = w = Worker(self.threads)
                         else:  # no mesh left for a new worker
                             gone.append(w)
-                    elif w.ready and w.task is None and queue:
+                    elif w.can_take() and queue:
                         w.give(queue.popleft())  # before the caller journals the row
-                    if row is not None:
-                        yield row
+                    yield from rows
                 pool[:] = [w for w in pool if w not in gone]
         finally:
             self.close()
 
     def close(self) -> None:
         for w in self.workers:
-            if w.ready and w.task is None and w.process.poll() is None:
+            if w.ready and not w.tasks and w.process.poll() is None:
                 w.stop()
             else:
                 w.kill()
@@ -250,17 +343,22 @@ def run_task_within(task: Task, timeout: float) -> Dict[str, Any]:
             return failed_row(task, "WorkerDied", f"the helper process to map this mesh "
                               f"could not start ({worker.death()})")
     worker.give(task)
-    if not multiprocessing.connection.wait([worker.connection], timeout=timeout):
-        worker.kill()
-        return failed_row(task, "Timeout", f"ran past the timeout of {timeout:g} s; "
-                          "its process was killed")
-    message = worker.receive()
-    if message is None:
-        reason = worker.death()
-        worker.kill()
-        return failed_row(task, "WorkerDied", f"the process mapping this mesh died "
-                          f"({reason}; out of memory, or killed)")
-    worker.task = None
+    deadline = time.monotonic() + timeout
+    while True:  # ("mapped", ...) comes first, then ("row", ...)
+        left = deadline - time.monotonic()
+        if left <= 0 or not multiprocessing.connection.wait([worker.connection], timeout=left):
+            worker.kill()
+            return failed_row(task, "Timeout", f"ran past the timeout of {timeout:g} s; "
+                              "its process was killed")
+        message = worker.receive()
+        if message is None:
+            reason = worker.death()
+            worker.kill()
+            return failed_row(task, "WorkerDied", f"the process mapping this mesh died "
+                              f"({reason}; out of memory, or killed)")
+        if message[0] == "row":
+            break
+    worker.tasks, worker.mapping = [], None
     with _IDLE_LOCK:
         _IDLE.append(worker)
     row: Dict[str, Any] = message[1]

@@ -1,7 +1,9 @@
 """One mesh of a batch (:func:`run_task`): read, map (the core validates and
 orients on the way, and certifies), measure, write, and the summary row that
 says what happened. Runs in a worker; what travels is a :class:`Task` (paths
-and options) in and a row (a dict of plain values) out.
+and options) in and a row (a dict of plain values) out. The work comes in two
+halves, :func:`map_task` and :func:`finish_task` (measure and write), so that
+a worker of the local pool can write one mesh while it maps the next.
 
 The outputs are written under temporary names and renamed into place, without
 an ``fsync``: a killed worker cannot leave a half-written file under a final
@@ -150,55 +152,94 @@ def _timed(function: Any, *args: Any) -> Tuple[Any, float]:
     return result, round(time.perf_counter() - start, 6)
 
 
-def run_task(task: Task) -> Dict[str, Any]:
-    """Map one mesh and write its outputs; never raises for the mesh's faults:
-    the row says what went wrong. Runs in a worker."""
-    from . import _core
+def _fault(row: Dict[str, Any], err: BaseException) -> None:
+    """Records in ``row`` an error that is the mesh's fault; re-raises Ctrl-C
+    and SystemExit, which are not."""
+    if isinstance(err, (KeyboardInterrupt, SystemExit)):
+        raise err
+    if isinstance(err, Exception):
+        row.update(error_type=type(err).__name__, error=str(err))
+    else:  # a Rust panic (PanicException) is a BaseException
+        row.update(error_type=type(err).__name__,
+                   error=f"{err} ({traceback.format_exc(limit=1).strip()})")
+
+
+@dataclass
+class Mapped:
+    """A mesh between :func:`map_task` and :func:`finish_task`: its row so
+    far, and its map when it has one."""
+    task: Task
+    row: Dict[str, Any]
+    map: Any
+    #: Seconds spent on the mesh so far (reading, mapping, certifying).
+    seconds: float
+    #: Whether the process's memory high-water mark was reset for this mesh.
+    reset: bool
+
+
+def map_task(task: Task) -> Mapped:
+    """The first half of :func:`run_task`: read, map and certify (the core
+    validates and orients on the way); never raises for the mesh's faults.
+    The row's ``peak_memory_mb`` is left for the caller to read once it
+    knows which work the figure covers (``run_task``, ``child_main``)."""
     from ._embed import embed
-    from ._mesh import Mesh, load
-    from ._persist import record
-    from ._quality import quality
+    from ._mesh import load
     from ._spheremap import ThetaPhiMap
 
     reset = reset_peak_memory()
     row: Dict[str, Any] = {key: None for key in COLUMNS}
     row.update(input=task.input, sha256=task.sha256, method=task.method,
                options_hash=task.options_hash, status="failed", certified=False)
-    clock = time.perf_counter()
-    start = clock
-
-    def lap(stage: str) -> None:
-        nonlocal clock
-        now = time.perf_counter()
-        row[f"seconds_{stage}"] = round(now - clock, 6)
-        clock = now
-
+    start = time.perf_counter()
+    m = None
     try:
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
             mesh = load(task.input)
             row.update(n_vertices=mesh.n_vertices, n_faces=mesh.n_faces)
-            lap("read")
+            row["seconds_read"] = round(time.perf_counter() - start, 6)
             # embed validates (a TopologyError carries the MeshReport), orients
             # and certifies in the core: no separate sp.check.
             m = embed(mesh, task.method, **task.options)
-            seconds = m.seconds
-            clock = time.perf_counter()
-            row["seconds_map"] = round(clock - start - row["seconds_read"]
-                                       - seconds.get("certify", 0.0), 6)
-            row["seconds_certify"] = round(seconds.get("certify", 0.0), 6)
+            certify = m.seconds.get("certify", 0.0)
+            row["seconds_map"] = round(time.perf_counter() - start - row["seconds_read"]
+                                       - certify, 6)
+            row["seconds_certify"] = round(certify, 6)
             row.update(valid=m.valid, flipped=m.flipped, margin=float(m.margin))
             certified = m.valid
             if isinstance(m, ThetaPhiMap):
                 row["tp_valid"] = m.tp_valid
                 certified = m.tp_valid
             row["certified"] = bool(certified)
+        row["warnings"] = "; ".join(str(w.message) for w in caught) or None
+    except BaseException as err:
+        _fault(row, err)
+        m = None
+    return Mapped(task=task, row=row, map=m, seconds=time.perf_counter() - start, reset=reset)
+
+
+def finish_task(mapped: Mapped) -> Dict[str, Any]:
+    """The second half of :func:`run_task`: measure the map, write the sphere
+    mesh and the ``.spheremap.npz`` under temporary names, rename them into
+    place, and complete the row; never raises for the mesh's faults. Only
+    core calls that release the GIL and file writes: a worker runs it on a
+    thread of its own while it maps its next mesh."""
+    from . import _core
+    from ._mesh import Mesh
+    from ._persist import record
+    from ._quality import quality
+
+    row, m, task = mapped.row, mapped.map, mapped.task
+    start = time.perf_counter()
+    if m is not None:
+        try:
             # The measures (in the core, without the GIL) and the writing of
             # the outputs run at the same time; the outputs are renamed into
             # place once both are done, so a mesh whose row says "failed"
             # leaves no output.
             # (The encoding runs first: it takes the core's thread pool, which
             # the measures then have to themselves.)
+            clock = time.perf_counter()
             sphere = _core.encode(Mesh(m.points, m.mesh.faces)._core, task.sphere)
             with cf.ThreadPoolExecutor(1) as helper:
                 measuring = helper.submit(_timed, quality, m.mesh, m.points)
@@ -210,7 +251,7 @@ def run_task(task: Task) -> Dict[str, Any]:
                     arrays: Dict[str, Any] = record(m)
                     np.savez(buffer, **arrays)
                     outputs.append(Output(task.spheremap, buffer.getvalue()))
-                    lap("write")
+                    row["seconds_write"] = round(time.perf_counter() - clock, 6)
                     q, row["seconds_quality"] = measuring.result()
                     row.update({k: float(q[k]) for k in QUALITY})
                     for output in outputs:
@@ -228,14 +269,18 @@ def run_task(task: Task) -> Dict[str, Any]:
             row["sphere_bytes"], row["sphere_sha256"] = outputs[0].size, outputs[0].sha256
             row["spheremap_bytes"], row["spheremap_sha256"] = outputs[1].size, outputs[1].sha256
             row.update(status="done", sphere=task.sphere, spheremap=task.spheremap)
-        row["warnings"] = "; ".join(str(w.message) for w in caught) or None
-    except Exception as err:  # the mesh's fault, recorded in its row
-        row.update(error_type=type(err).__name__, error=str(err))
-    except BaseException as err:  # a Rust panic (PanicException) is a BaseException
-        if isinstance(err, (KeyboardInterrupt, SystemExit)):
-            raise
-        row.update(error_type=type(err).__name__,
-                   error=f"{err} ({traceback.format_exc(limit=1).strip()})")
-    row["seconds_total"] = round(time.perf_counter() - start, 6)
-    row["peak_memory_mb"] = peak_memory_mb(reset)
+        except BaseException as err:
+            _fault(row, err)
+    row["seconds_total"] = round(mapped.seconds + time.perf_counter() - start, 6)
+    return row
+
+
+def run_task(task: Task) -> Dict[str, Any]:
+    """Map one mesh and write its outputs (:func:`map_task`, then
+    :func:`finish_task`); never raises for the mesh's faults: the row says
+    what went wrong. Runs in a worker. The row's peak memory is the
+    process's over both halves."""
+    mapped = map_task(task)
+    row = finish_task(mapped)
+    row["peak_memory_mb"] = peak_memory_mb(mapped.reset)
     return row

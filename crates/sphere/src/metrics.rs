@@ -239,8 +239,8 @@ fn every_face_stats(
 /// Angles, areas and singular values of one face; `None` when degenerate.
 /// `p` is the triangle on the sphere (chords), `q` the one on the mesh.
 fn face_stats(p: [[f64; 3]; 3], q: [[f64; 3]; 3]) -> Option<FaceStats> {
-    let (ap, area_p) = flat_triangle(p)?;
-    let (aq, area_q) = flat_triangle(q)?;
+    let (sine_p, cosines_p, area_p) = flat_triangle(p)?;
+    let (sine_q, cosines_q, area_q) = flat_triangle(q)?;
     // Each triangle in its own plane, corner 0 at the origin and edge 01 on
     // the first axis: corner 1 at (l, 0), corner 2 at (s, h) with h > 0.
     // Then T = Q P^-1 is upper triangular, [[a, b], [0, d]].
@@ -260,17 +260,20 @@ fn face_stats(p: [[f64; 3]; 3], q: [[f64; 3]; 3]) -> Option<FaceStats> {
     // sigma2 = det / sigma1 avoids the cancellation in m - r.
     let sigma1 = 0.5 * (a + d).hypot(b) + 0.5 * (a - d).hypot(b);
     let sigma2 = a * d / sigma1;
-    // |angle_q - angle_p| at corner k with one atan2 instead of two: with
+    // angle_q - angle_p at corner k with one atan2 instead of two: with
     // (s, c) proportional to (sin, cos) of each angle (positive factors),
     // sin(q - p) ~ s_q c_p - c_q s_p and cos(q - p) ~ c_q c_p + s_q s_p, and
     // the difference lies in (-pi, pi), where atan2 is exact to rounding.
     // The atans were most of the cost of `quality` (a batch measures every map).
-    let degrees = |k: usize| {
-        let ((sp, cp), (sq, cq)) = (ap[k], aq[k]);
-        (sq * cp - cq * sp).atan2(cq * cp + sq * sp).abs().to_degrees()
+    let change = |k: usize| {
+        let (cp, cq) = (cosines_p[k], cosines_q[k]);
+        (sine_q * cp - cq * sine_p).atan2(cq * cp + sine_q * sine_p)
     };
+    // Both triangles' angles sum to pi, so the three changes sum to 0: the
+    // third is -(d0 + d1), to rounding, without a third atan2.
+    let (d0, d1) = (change(0), change(1));
     let stats = FaceStats {
-        angle_diff: [degrees(0), degrees(1), degrees(2)],
+        angle_diff: [d0.abs().to_degrees(), d1.abs().to_degrees(), (d0 + d1).abs().to_degrees()],
         area_p,
         area_q,
         sigma1,
@@ -279,11 +282,12 @@ fn face_stats(p: [[f64; 3]; 3], q: [[f64; 3]; 3]) -> Option<FaceStats> {
     [sigma1, sigma2].iter().all(|x| x.is_finite() && *x > 0.0).then_some(stats)
 }
 
-/// Each corner's angle as a (sine, cosine) pair scaled by the same positive
-/// factor (|cross|, dot of its two edges over the longest edge squared, so
-/// at most 1 whatever the mesh's units), and twice the area of a flat
+/// The corners' angles as sine and cosines scaled by one positive factor
+/// (|cross| and dot of each corner's two edges over the longest edge squared,
+/// so at most 1 whatever the mesh's units; |cross| is twice the area at
+/// every corner, so one sine serves all three), and twice the area of a flat
 /// triangle; `None` when it is degenerate (see [`DEGENERATE_RELATIVE`]).
-fn flat_triangle(t: [[f64; 3]; 3]) -> Option<([(f64, f64); 3], f64)> {
+fn flat_triangle(t: [[f64; 3]; 3]) -> Option<(f64, [f64; 3], f64)> {
     let e = [sub(t[1], t[0]), sub(t[2], t[1]), sub(t[0], t[2])];
     let twice_area = norm(cross(e[0], e[1]));
     let longest = e.iter().map(|&x| dot(x, x)).fold(0.0, f64::max);
@@ -297,12 +301,11 @@ fn flat_triangle(t: [[f64; 3]; 3]) -> Option<([(f64, f64); 3], f64)> {
     {
         return None;
     }
-    // Corner k lies between the edge leaving it and the reversed edge arriving.
-    let angle = |out: [f64; 3], into: [f64; 3]| {
-        let back = [-into[0], -into[1], -into[2]];
-        (norm(cross(out, back)) * unit, dot(out, back) * unit)
-    };
-    Some(([angle(e[0], e[2]), angle(e[1], e[0]), angle(e[2], e[1])], twice_area))
+    // Corner k lies between the edge leaving it and the reversed edge
+    // arriving: its cosine is -(out . into).
+    let cosine = |out: [f64; 3], into: [f64; 3]| -dot(out, into) * unit;
+    let cosines = [cosine(e[0], e[2]), cosine(e[1], e[0]), cosine(e[2], e[1])];
+    Some((twice_area * unit, cosines, twice_area))
 }
 
 /// Coefficient of variation (population standard deviation / mean) of the
@@ -400,6 +403,40 @@ mod tests {
         let total: f64 = areas.iter().sum();
         let l2 = (f.stretch.iter().zip(&areas).map(|(s, a)| s * s * a).sum::<f64>() / total).sqrt();
         assert!(close(l2, q.stretch_l2), "{l2} vs {}", q.stretch_l2);
+    }
+
+    #[test]
+    fn angle_changes_match_the_corner_angles_measured_apart() {
+        // Each corner's angle on both sides from acos of its unit edges, in
+        // 3D: the mean and max change match quality's (one sine per triangle,
+        // the third change from the other two) to rounding.
+        let mesh = spherify_mesh::solids::octasphere(3);
+        let points: Vec<[f64; 3]> = mesh
+            .positions()
+            .iter()
+            .map(|p| [p[0] + 0.3 * p[1] * p[1], 2.0 * p[1] - 0.2 * p[2], p[2] + 0.4 * p[0] * p[1]])
+            .collect();
+        let corner = |t: &[[f64; 3]], k: usize| {
+            let (u, v) = (sub(t[(k + 1) % 3], t[k]), sub(t[(k + 2) % 3], t[k]));
+            (dot(u, v) / (norm(u) * norm(v))).clamp(-1.0, 1.0).acos().to_degrees()
+        };
+        let (mut sum, mut max, mut count) = (0.0, 0.0f64, 0.0);
+        for &[a, b, c] in mesh.faces() {
+            let pick = |x: &[[f64; 3]]| [x[a as usize], x[b as usize], x[c as usize]];
+            let (p, q) = (pick(&points), pick(mesh.positions()));
+            for k in 0..3 {
+                let d = (corner(&p, k) - corner(&q, k)).abs();
+                sum += d;
+                max = max.max(d);
+                count += 1.0;
+            }
+        }
+        let q = quality(&mesh, &points).unwrap();
+        assert_eq!(q.degenerate_faces, 0);
+        let mean = sum / count;
+        assert!((q.angle_mean_deg - mean).abs() < 1e-9, "{} vs {mean}", q.angle_mean_deg);
+        assert!((q.angle_max_deg - max).abs() < 1e-9, "{} vs {max}", q.angle_max_deg);
+        assert!(max > 5.0, "the warp should change angles: {max}");
     }
 
     #[test]
