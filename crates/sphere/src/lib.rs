@@ -17,6 +17,7 @@
 //! * [`dogleg`]: the dogleg trust region of that Newton iteration.
 //! * [`progressive`]: progressive meshes with exact insertion and flip-free optimisation (9.3.3).
 //! * [`distortion_energy`]: the isometric, conformal, authalic and stretch energies it lowers.
+//! * [`authalic_newton`]: global Gauss-Newton steps towards equal areas for the authalic energy.
 //! * [`flip_free`]: vertex moves that keep every face positive (9.3.2).
 //! * [`improve`]: those moves started from any valid map (9.3.2).
 //! * [`theta_phi`]: the theta-phi method, a bijection for every genus-0 mesh (ch. 6).
@@ -44,6 +45,7 @@
 //! * [`gauss_legendre`]: its quadrature nodes in cos(theta).
 
 pub mod alexa;
+pub mod authalic_newton;
 pub mod bvh;
 pub mod cut_path;
 pub mod distortion_energy;
