@@ -312,34 +312,55 @@ fn direction(
             (idx, ja, jq)
         })
         .collect();
-    let mut rhs = vec![0.0; 2 * n];
-    let mut diag = vec![0.0; 2 * n];
-    let mut triplets = (Vec::new(), Vec::new(), Vec::new());
-    triplets.0.reserve(36 * faces.len() + 2 * n);
-    triplets.1.reserve(36 * faces.len() + 2 * n);
-    triplets.2.reserve(36 * faces.len() + 2 * n);
-    for ((idx, ja, jq), &(area, sliver)) in rows.iter().zip(&res) {
-        let area = area.clamp(-RESIDUAL_CLAMP, RESIDUAL_CLAMP);
-        let sliver = SLIVER_WEIGHT * sliver;
-        for a in 0..6 {
-            rhs[idx[a] as usize] -= ja[a] * area + jq[a] * sliver;
-            diag[idx[a] as usize] += ja[a] * ja[a] + jq[a] * jq[a];
-            for b in 0..6 {
-                triplets.0.push(idx[a]);
-                triplets.1.push(idx[b]);
-                triplets.2.push(ja[a] * ja[b] + jq[a] * jq[b]);
-            }
+    // The faces at each vertex, with the vertex's corner: the matrix is built
+    // row by row in parallel, without a triplet list (which at 36 entries
+    // per face was most of the memory).
+    let mut start = vec![0usize; n + 1];
+    for face in faces {
+        for &v in face {
+            start[v as usize + 1] += 1;
         }
     }
-    // Marquardt's scaling, plus a trace-relative shift that keeps the matrix
-    // positive definite where a vertex's faces do not constrain it.
-    let mean_diag = diag.iter().sum::<f64>() / diag.len().max(1) as f64;
-    for (i, d) in diag.iter().enumerate() {
-        triplets.0.push(i as u32);
-        triplets.1.push(i as u32);
-        triplets.2.push(lambda * d + 1e-9 * mean_diag);
+    for v in 0..n {
+        start[v + 1] += start[v];
     }
-    let h = CsrMatrix::from_triplets(2 * n, 2 * n, &triplets.0, &triplets.1, &triplets.2)?;
+    let mut fill = start.clone();
+    let mut corners = vec![(0u32, 0usize); 3 * faces.len()];
+    for (f, face) in faces.iter().enumerate() {
+        for (i, &v) in face.iter().enumerate() {
+            corners[fill[v as usize]] = (f as u32, i);
+            fill[v as usize] += 1;
+        }
+    }
+    // Unknown r is component r % 2 of vertex r / 2; at a face's corner i it
+    // is the face's local unknown 2 i + r % 2.
+    let at = |r: usize| {
+        corners[start[r / 2]..start[r / 2 + 1]]
+            .iter()
+            .map(move |&(f, i)| (f as usize, 2 * i + r % 2))
+    };
+    let diag: Vec<f64> = (0..2 * n)
+        .into_par_iter()
+        .map(|r| {
+            at(r).map(|(f, a)| rows[f].1[a] * rows[f].1[a] + rows[f].2[a] * rows[f].2[a]).sum()
+        })
+        .collect();
+    // Marquardt's scaling, plus a trace-relative shift that keeps the matrix
+    // positive definite where a vertex's faces hardly constrain it.
+    let mean_diag = diag.iter().sum::<f64>() / diag.len().max(1) as f64;
+    let (h, rhs) = CsrMatrix::from_rows(2 * n, 2 * n, |r, entries| {
+        let mut b = 0.0;
+        for (f, a) in at(r) {
+            let (idx, ja, jq) = &rows[f];
+            let area = res[f].0.clamp(-RESIDUAL_CLAMP, RESIDUAL_CLAMP);
+            b -= ja[a] * area + jq[a] * SLIVER_WEIGHT * res[f].1;
+            for k in 0..6 {
+                entries.push((idx[k], ja[a] * ja[k] + jq[a] * jq[k]));
+            }
+        }
+        entries.push((r as u32, lambda * diag[r] + 1e-9 * mean_diag));
+        b
+    })?;
     let x = Factorization::new(&h)?.solve(&h, &[rhs])?.remove(0);
     Ok((0..n)
         .map(|v| {
