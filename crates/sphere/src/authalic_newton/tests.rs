@@ -123,3 +123,22 @@ fn a_level_of_rings_is_the_same_problem_numbered_densely() {
     let (a, b) = (mean_abs_log_area(&mesh, &direct), mean_abs_log_area(&mesh, &padded[1..]));
     assert!((a - b).abs() < 1e-6, "{a} vs {b}");
 }
+
+#[test]
+fn the_steps_give_the_same_bits_on_every_thread_count() {
+    let mesh = GenusZeroMesh::new(capsule(8, 40, 10.0)).unwrap();
+    let start = map(&mesh, Energy::Isometric);
+    let floor = area_floor(&mesh);
+    let run = |threads: usize| {
+        let mut points = start.clone();
+        rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap().install(|| {
+            authalic_newton(mesh.faces(), mesh.positions(), floor, &mut points, 10, &|| false)
+                .unwrap()
+        });
+        points
+    };
+    let one = run(1);
+    assert_ne!(one, start);
+    assert_eq!(one, run(2));
+    assert_eq!(one, run(3));
+}
