@@ -56,8 +56,10 @@ const MAX_LEVEL_SWEEPS: usize = 100;
 pub const LEVEL_AREA_FLOOR: f64 = 1e-2;
 /// Global authalic steps ([`crate::authalic_newton`]) on each level of at
 /// least [`AUTHALIC_LEVEL_MIN`] vertices, so that limbs get their area while
-/// the mesh is coarse and a step is cheap (measured on human_man: mean
-/// |log area ratio| 0.087 after 10 final steps alone, 0.036 with these).
+/// the mesh is coarse and a step is cheap (measured with 15 final steps,
+/// mean |log area ratio| on chord triangles without and with these: human_man
+/// 0.058 and 0.036, scorpion 0.347 and 0.154; mean angle distortion 43.7 and
+/// 40.0, 51.3 and 52.2 degrees).
 const AUTHALIC_LEVEL_STEPS: usize = 10;
 const AUTHALIC_LEVEL_MIN: usize = 64;
 /// Most global authalic steps at the end: [`AUTHALIC_FINAL_WORK`] face-steps,
