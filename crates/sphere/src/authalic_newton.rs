@@ -419,7 +419,9 @@ fn trial(faces: &[[u32; 3]], points: &[[f64; 3]], u: &[[f64; 3]], t: f64) -> Opt
             }
         }
         if !changed {
-            // Every failing face is back at its start, where it passed.
+            // Not reached from a valid start: a face whose three corners are
+            // back at their start is the start's face, which passes. Refuse
+            // the step rather than loop.
             return None;
         }
     }
