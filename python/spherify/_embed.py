@@ -104,8 +104,10 @@ def embed(mesh: MeshLike, method: str = "theta_phi", *, progress: Any = None,
         ``"isometric"`` (default; symmetric Dirichlet), ``"conformal"``
         (MIPS with a barrier below an area ratio of 1e-5: an exactly
         conformal map of a limbed shape cannot be stored in doubles),
-        ``"authalic"`` (area plus a small angle term) or ``"stretch"``
-        (Sander's L2 stretch, as Praun and Hoppe).
+        ``"authalic"`` (area plus a small angle term, followed by global
+        Gauss-Newton steps towards equal spherical areas on each level and at
+        the end; ``max_iter`` and ``tol`` do not bound those) or
+        ``"stretch"`` (Sander's L2 stretch, as Praun and Hoppe).
     max_iter : int
         Sweeps of the final optimisation (default 5; 10 for ``"authalic"``, 50
         for ``"stretch"``, 100 for ``"conformal"``).

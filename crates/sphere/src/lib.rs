@@ -19,6 +19,7 @@
 //! * [`conformal_start`]: a certified global conformal map, the conformal energy's start.
 //! * [`mobius_centring`]: the Möbius transformation that balances a map's area.
 //! * [`distortion_energy`]: the isometric, conformal, authalic and stretch energies it lowers.
+//! * [`authalic_newton`]: global Gauss-Newton steps towards equal areas for the authalic energy.
 //! * [`flip_free`]: vertex moves that keep every face positive (9.3.2).
 //! * [`improve`]: those moves started from any valid map (9.3.2).
 //! * [`theta_phi`]: the theta-phi method, a bijection for every genus-0 mesh (ch. 6).
@@ -46,6 +47,7 @@
 //! * [`gauss_legendre`]: its quadrature nodes in cos(theta).
 
 pub mod alexa;
+pub mod authalic_newton;
 pub mod bvh;
 pub mod conformal_start;
 pub mod cut_path;

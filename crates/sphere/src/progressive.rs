@@ -14,6 +14,8 @@
 //!    vertex takes one flip-free move towards lower energy.
 //! 4. Whenever the mesh has grown by [`LEVEL_GROWTH`], and at the end, lower
 //!    the distortion [`Energy`] with flip-free moves ([`crate::flip_free`]).
+//!    For the authalic energy, global steps towards equal areas follow
+//!    ([`crate::authalic_newton`]): the local moves alone stall on limbs.
 //!
 //! For the conformal energy, a certified global conformal map replaces steps
 //! 1-3 where no face of it lies inside the energy's barrier
@@ -35,6 +37,7 @@ use rayon::prelude::*;
 use spherify_mesh::predicates::{det3_sign, Sign};
 use spherify_mesh::vec3::triangle_area;
 
+use crate::authalic_newton::{authalic_newton, authalic_newton_rings, AuthalicSteps};
 use crate::distortion_energy::Energy;
 use crate::embedding::{normalize, SphereEmbedding, Status};
 use crate::error::SphereError;
@@ -56,6 +59,18 @@ const MAX_LEVEL_SWEEPS: usize = 100;
 /// the decimation make a face with almost no area, which an isometric map
 /// would copy onto the sphere.
 pub const LEVEL_AREA_FLOOR: f64 = 1e-2;
+/// Global authalic steps ([`crate::authalic_newton`]) on each level of at
+/// least [`AUTHALIC_LEVEL_MIN`] vertices, so that limbs get their area while
+/// the mesh is coarse and a step is cheap (measured with 15 final steps,
+/// mean |log area ratio| on chord triangles without and with these: human_man
+/// 0.058 and 0.036, scorpion 0.347 and 0.154; mean angle distortion 43.7 and
+/// 40.0, 51.3 and 52.2 degrees).
+const AUTHALIC_LEVEL_STEPS: usize = 10;
+const AUTHALIC_LEVEL_MIN: usize = 64;
+/// Most global authalic steps at the end: [`AUTHALIC_FINAL_WORK`] face-steps,
+/// within these bounds (small meshes converge slowly, and their steps are cheap).
+const AUTHALIC_FINAL_STEPS: (usize, usize) = (15, 100);
+const AUTHALIC_FINAL_WORK: usize = 100_000;
 /// Rounds of moving a failed vertex's neighbourhood before giving up on it.
 const INSERTION_RETRIES: usize = 4;
 
@@ -216,6 +231,17 @@ pub fn progressive(
             let end = at_level
                 .optimise(&rings.rings, &mut points, sweeps, params.tolerance, &|_| !go_on())
                 .map_err(|_| cancelled("insertion", done))?;
+            if params.energy == Energy::Authalic && rings.n_alive >= AUTHALIC_LEVEL_MIN {
+                authalic_newton_rings(
+                    &rings.rings,
+                    positions,
+                    at_level.area_floor,
+                    &mut points,
+                    AUTHALIC_LEVEL_STEPS,
+                    &|| !go_on(),
+                )
+                .map_err(|_| cancelled("insertion", done))?;
+            }
             level = Some((at_level, end.scale));
         }
     }
@@ -228,10 +254,21 @@ pub fn progressive(
         .optimise(&rings.rings, &mut points, params.max_iter, params.tolerance, &stop)
         .map_err(|_| cancelled("optimisation", 2 * n))?;
     seconds.push(("optimisation", started.elapsed().as_secs_f64()));
+    let mut authalic: Option<AuthalicSteps> = None;
+    if params.energy == Energy::Authalic {
+        let started = Instant::now();
+        let steps = (AUTHALIC_FINAL_WORK / mesh.n_faces().max(1))
+            .clamp(AUTHALIC_FINAL_STEPS.0, AUTHALIC_FINAL_STEPS.1);
+        let floor = problem.area_floor;
+        let run = authalic_newton(mesh.faces(), positions, floor, &mut points, steps, &|| !go_on())
+            .map_err(|_| cancelled("optimisation", 2 * n))?;
+        authalic = Some(run);
+        seconds.push(("authalic steps", started.elapsed().as_secs_f64()));
+    }
     progress(total, total);
 
     let status = if end.converged { Status::Converged } else { Status::MaxIterations };
-    let message = format!(
+    let mut message = format!(
         "{} collapses in {} rounds undone; {} final sweeps of the {} energy, {:.4} per unit area \
          (last relative change {:.1e})",
         hierarchy.collapses.len(),
@@ -241,10 +278,18 @@ pub fn progressive(
         end.energy,
         end.last_change
     );
-    let message = match not_used {
-        Some(why) => format!("{message}; the global conformal start was not used: {}", why.reason),
-        None => message,
-    };
+    if let Some(run) = authalic {
+        message.push_str(&format!(
+            "; {} global authalic steps took the mean |log area ratio| from {:.3} to {:.3}",
+            run.steps, run.start, run.end
+        ));
+        if let Some(why) = run.solve_failed {
+            message.push_str(&format!(" (stopped: {why})"));
+        }
+    }
+    if let Some(why) = not_used {
+        message.push_str(&format!("; the global conformal start was not used: {}", why.reason));
+    }
     Ok(SphereEmbedding { points, iterations: end.sweeps, status, message, seconds })
 }
 
