@@ -14,18 +14,19 @@
 //! the least-squares problem of the face areas directly (Levenberg 1944,
 //! Marquardt 1963).
 //!
-//! Residuals, per face f with surface share s_f:
-//! * r_f = log(E_f / (sum E) / s_f), E_f the spherical triangle's area
-//!   (Van Oosterom and Strackee: E = 2 atan2(det, 1 + a.b + b.c + c.a)). It
-//!   is the area of the face's true image under the map of thesis 3.3, and
-//!   it vanishes with det[a, b, c], so log E is a barrier against a flip.
-//! * q_f = min(0, log(E_f / C_f) + [`SLIVER_SLACK`]), C_f the chord
-//!   triangle's area: zero for every triangle small on the sphere, negative
-//!   for a sliver along a great circle, whose spherical area is small and
-//!   chord area large. Without it the iteration trades area for such slivers,
-//!   which `sp.quality` (measured on chord triangles) sees as wrong areas.
+//! The residual of face f with surface share s_f is r_f = log(E_f / (sum E)
+//! / s_f), E_f the spherical triangle's area (Van Oosterom and Strackee:
+//! E = 2 atan2(det, 1 + a.b + b.c + c.a)). It is the area of the face's true
+//! image under the map of thesis 3.3 (issue 10 defines the area ratio with
+//! it), and it vanishes with det[a, b, c], so log E is a barrier against a
+//! flip. The chord triangle's area, which `sp.quality` measures, agrees for
+//! triangles small on the sphere; for a long sliver along a great circle it
+//! is far larger. A second residual that kept such slivers out was tried
+//! (the face's spherical over chord area): on the three coarse corpus meshes
+//! (112-502 vertices), whose triangles are large on the sphere, the
+//! iteration then stopped at 0.10-0.17 instead of 0.03-0.08.
 //!
-//! A step: linearise both in the tangent plane of every vertex (two
+//! A step: linearise r in the tangent plane of every vertex (two
 //! unknowns per vertex), solve (J^T J + lambda diag(J^T J)) x = -J^T r with
 //! sparse Cholesky, move every vertex along its tangent x and normalise.
 //! Each r_f is clamped to [-[`RESIDUAL_CLAMP`], +[`RESIDUAL_CLAMP`]] in the
@@ -58,12 +59,6 @@ use crate::validity::check_sphere;
 pub const AREA_FLOOR: f64 = 1e-10;
 /// Largest log area change one step aims at for a face (see module docs).
 pub const RESIDUAL_CLAMP: f64 = 0.5;
-/// A face counts as a sliver when its spherical area is below exp(-0.05),
-/// about 95%, of its chord area: a triangle whose circumcircle is 18 degrees
-/// wide. Smaller ones never see the sliver term.
-pub const SLIVER_SLACK: f64 = 0.05;
-/// Weight of the sliver residual against the area residual.
-pub const SLIVER_WEIGHT: f64 = 1.0;
 /// The iteration stops when a step lowers neither the sum of squared
 /// residuals nor the mean |log area ratio| by this fraction. Both: a few
 /// faces far from their area can hold the sum still while the mean falls
@@ -233,28 +228,22 @@ fn spherical_area(a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> f64 {
     2.0 * det3(a, b, c).atan2(1.0 + dot(a, b) + dot(b, c) + dot(c, a))
 }
 
-/// The two residuals of every face (see the module docs).
-fn residuals(faces: &[[u32; 3]], points: &[[f64; 3]], target: &[f64]) -> Vec<(f64, f64)> {
-    let areas: Vec<(f64, f64)> = faces
+/// The residual of every face (see the module docs).
+fn residuals(faces: &[[u32; 3]], points: &[[f64; 3]], target: &[f64]) -> Vec<f64> {
+    let areas: Vec<f64> = faces
         .par_iter()
         .map(|&f| {
             let [a, b, c] = f.map(|v| points[v as usize]);
-            (spherical_area(a, b, c), 0.5 * norm(cross(sub(b, a), sub(c, a))))
+            spherical_area(a, b, c)
         })
         .collect();
-    let total: f64 = areas.iter().map(|x| x.0).sum();
-    areas
-        .iter()
-        .zip(target)
-        .map(|(&(e, c), &s)| ((e / (total * s)).ln(), ((e / c).ln() + SLIVER_SLACK).min(0.0)))
-        .collect()
+    let total: f64 = areas.iter().sum();
+    areas.iter().zip(target).map(|(&e, &s)| (e / (total * s)).ln()).collect()
 }
 
-/// Half the weighted sum of squared residuals; infinite when one is not finite.
+/// Half the sum of squared residuals; infinite when one is not finite.
 fn merit(faces: &[[u32; 3]], points: &[[f64; 3]], target: &[f64]) -> f64 {
-    let w2 = SLIVER_WEIGHT * SLIVER_WEIGHT;
-    let m: f64 =
-        residuals(faces, points, target).iter().map(|r| 0.5 * (r.0 * r.0 + w2 * r.1 * r.1)).sum();
+    let m: f64 = residuals(faces, points, target).iter().map(|r| 0.5 * r * r).sum();
     if m.is_nan() {
         f64::INFINITY
     } else {
@@ -264,7 +253,7 @@ fn merit(faces: &[[u32; 3]], points: &[[f64; 3]], target: &[f64]) -> f64 {
 
 /// Mean |log(sphere share / surface share)| over the faces.
 fn mean_abs_log(faces: &[[u32; 3]], points: &[[f64; 3]], target: &[f64]) -> f64 {
-    let sum: f64 = residuals(faces, points, target).iter().map(|r| r.0.abs()).sum();
+    let sum: f64 = residuals(faces, points, target).iter().map(|r| r.abs()).sum();
     sum / faces.len().max(1) as f64
 }
 
@@ -278,17 +267,13 @@ fn direction(
     let n = points.len();
     let res = residuals(faces, points, target);
     let basis: Vec<([f64; 3], [f64; 3])> = points.par_iter().map(|&p| tangent_basis(p)).collect();
-    // Per face: the six unknowns it touches and the gradients of its two
-    // residuals with respect to them.
-    let rows: Vec<([u32; 6], [f64; 6], [f64; 6])> = faces
+    // Per face: the six unknowns it touches and the gradient of its
+    // residual with respect to them.
+    let rows: Vec<([u32; 6], [f64; 6])> = faces
         .par_iter()
-        .zip(&res)
-        .map(|(&face, &(_, sliver))| {
+        .map(|&face| {
             let p = face.map(|v| points[v as usize]);
-            let normal = cross(sub(p[1], p[0]), sub(p[2], p[0]));
-            let double_chord = norm(normal);
-            let unit = scale(normal, 1.0 / double_chord);
-            let (mut idx, mut ja, mut jq) = ([0u32; 6], [0.0; 6], [0.0; 6]);
+            let (mut idx, mut ja) = ([0u32; 6], [0.0; 6]);
             for i in 0..3 {
                 let (a, b, c) = (p[i], p[(i + 1) % 3], p[(i + 2) % 3]);
                 // E = 2 atan2(N, D), N = det[a, b, c], D = 1 + a.b + b.c + c.a:
@@ -299,17 +284,13 @@ fn direction(
                     sub(scale(cross(b, c), den), scale(add(b, c), num)),
                     2.0 / ((num * num + den * den) * e),
                 );
-                // d(chord area)/da = n x (c - b) / 2.
-                let grad_c = scale(cross(unit, sub(c, b)), 1.0 / double_chord);
-                let grad_q = if sliver < 0.0 { sub(grad_e, grad_c) } else { [0.0; 3] };
                 let (e1, e2) = basis[face[i] as usize];
                 for (k, e_k) in [e1, e2].into_iter().enumerate() {
                     idx[2 * i + k] = 2 * face[i] + k as u32;
                     ja[2 * i + k] = dot(grad_e, e_k);
-                    jq[2 * i + k] = SLIVER_WEIGHT * dot(grad_q, e_k);
                 }
             }
-            (idx, ja, jq)
+            (idx, ja)
         })
         .collect();
     // The faces at each vertex, with the vertex's corner: the matrix is built
@@ -341,9 +322,7 @@ fn direction(
     };
     let diag: Vec<f64> = (0..2 * n)
         .into_par_iter()
-        .map(|r| {
-            at(r).map(|(f, a)| rows[f].1[a] * rows[f].1[a] + rows[f].2[a] * rows[f].2[a]).sum()
-        })
+        .map(|r| at(r).map(|(f, a)| rows[f].1[a] * rows[f].1[a]).sum())
         .collect();
     // Marquardt's scaling, plus a trace-relative shift that keeps the matrix
     // positive definite where a vertex's faces hardly constrain it.
@@ -351,11 +330,10 @@ fn direction(
     let (h, rhs) = CsrMatrix::from_rows(2 * n, 2 * n, |r, entries| {
         let mut b = 0.0;
         for (f, a) in at(r) {
-            let (idx, ja, jq) = &rows[f];
-            let area = res[f].0.clamp(-RESIDUAL_CLAMP, RESIDUAL_CLAMP);
-            b -= ja[a] * area + jq[a] * SLIVER_WEIGHT * res[f].1;
+            let (idx, ja) = &rows[f];
+            b -= ja[a] * res[f].clamp(-RESIDUAL_CLAMP, RESIDUAL_CLAMP);
             for k in 0..6 {
-                entries.push((idx[k], ja[a] * ja[k] + jq[a] * jq[k]));
+                entries.push((idx[k], ja[a] * ja[k]));
             }
         }
         entries.push((r as u32, lambda * diag[r] + 1e-9 * mean_diag));
