@@ -39,7 +39,7 @@ def corpus_or(name: str, fallback: Callable[[], sp.Mesh], small: bool) -> sp.Mes
 def certified_map(mesh: sp.Mesh) -> sp.SphereMap:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", sp.SpherifyWarning)
-        m = sp.embed(mesh)
+        m = sp.embed(mesh, "theta_phi")
     assert isinstance(m, sp.ThetaPhiMap) and m.tp_valid, "the theta-phi map is not certified"
     return m
 

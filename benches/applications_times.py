@@ -4,7 +4,7 @@ table in docs/applications.md.
     python benches/applications_times.py [--sizes 100000 1000000]
 
 Each size uses the bumpy blob of spherify.datasets; its map is theta-phi
-(the default of sp.embed) where that is affordable, else the blob's own
+(``method="theta_phi"``) where that is affordable, else the blob's own
 geodesic sphere (a certified map made elsewhere, SphereMap.from_points), as
 the table says. Prints one markdown row per size. Wall-clock seconds on
 whatever machine runs it; the first to_surface of a map builds its point
@@ -27,7 +27,7 @@ def blob_map(n: int, embed: bool) -> sp.SphereMap:
     if embed:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", sp.SpherifyWarning)
-            return sp.embed(mesh)
+            return sp.embed(mesh, "theta_phi")
     # The blob is a geodesic sphere pushed along its normals: its own sphere
     # is a valid map.
     sphere = sp.datasets.make("icosphere", n)

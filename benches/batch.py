@@ -150,12 +150,12 @@ def main() -> None:
                     rows[phase].extend(result.rows)
                 elif phase == "loop":
                     for path in group:
-                        sp.embed(sp.load(path))
+                        sp.embed(sp.load(path), "theta_phi")
                 elif phase == "loop_write":
                     written = Path(tmp) / f"loop{r}"
                     written.mkdir()
                     for path in group:
-                        m = sp.embed(sp.load(path))
+                        m = sp.embed(sp.load(path), "theta_phi")
                         sp.save(sp.Mesh(m.points, m.mesh.faces), written / f"{path.stem}.sphere.ply")
                         m.save(written / f"{path.stem}.spheremap.npz")
                 else:

@@ -156,8 +156,8 @@ def main() -> None:
                                   for label, name, n in LARGE_SHAPES if n <= args.large_max]
 
     add("\n## Pole selection (cf. Table 7.4)\n")
-    add("Seconds of the pole stage of `sp.embed(mesh, poles=...)` for each pole choice "
-        "(thesis 6.2.1-6.2.3; the symmetry method of 6.2.5 is not implemented yet).\n")
+    add("Seconds of the pole stage of `sp.embed(mesh, 'theta_phi', poles=...)` for each pole "
+        "choice (thesis 6.2.1-6.2.3; the symmetry method of 6.2.5 is not implemented yet).\n")
     add("| mesh | V | fast_graph s | physical s | graph s |")
     add("|---|---:|---:|---:|---:|")
     for label, mesh in timing_meshes:
@@ -174,7 +174,7 @@ def main() -> None:
                 continue
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore", sp.SpherifyWarning)
-                m = sp.embed(mesh, poles=poles)
+                m = sp.embed(mesh, "theta_phi", poles=poles)
             cells.append(f"{m.seconds.get('poles', 0.0):.3f}")
         add("| " + " | ".join(cells) + " |")
 
@@ -184,7 +184,7 @@ def main() -> None:
     for label, mesh in timing_meshes:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", sp.SpherifyWarning)
-            m = sp.embed(mesh)
+            m = sp.embed(mesh, "theta_phi")
         s = m.seconds
         add(f"| {label} | {mesh.n_vertices} | {s.get('poles', 0):.3f} | {s.get('cut', 0):.3f} | "
             f"{embed_seconds(s):.3f} | {s.get('fold', 0):.3f} | "
@@ -207,7 +207,7 @@ def main() -> None:
                                    ("fast_graph", "mean_value")]:
                 with warnings.catch_warnings():
                     warnings.simplefilter("ignore", sp.SpherifyWarning)
-                    m = sp.embed(mesh, poles=poles, weights=weights)
+                    m = sp.embed(mesh, "theta_phi", poles=poles, weights=weights)
                 bad = len(m.details["tp_flipped_faces"]) + len(m.details["tp_degenerate_faces"])
                 cells.append(str(bad))
             add("| " + " | ".join(cells) + " |")

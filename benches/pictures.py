@@ -45,7 +45,7 @@ def main() -> None:
     for name, mesh in cases:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", sp.SpherifyWarning)
-            m = sp.embed(mesh)
+            m = sp.embed(mesh, "theta_phi")
         fig = plt.figure(figsize=(12, 6))
         draw_mesh(fig.add_subplot(1, 2, 1, projection="3d"), m.mesh, m,
                   f"{name}: poles and cut path ({len(m.cut_path)} vertices)")

@@ -27,7 +27,7 @@ def main() -> None:
     print("|---|---:|---:|---:|---:|---:|---:|")
     for shape in args.shapes.split(","):
         mesh = sp.datasets.make(shape, args.vertices)
-        m = sp.embed(mesh)
+        m = sp.embed(mesh, "theta_phi")
         V, F = mesh.vertices, mesh.faces
         faces = rng.integers(0, len(F), args.points)
         bary = rng.dirichlet([1, 1, 1], args.points)

@@ -41,7 +41,7 @@ def pole_seconds(mesh: sp.Mesh, **options: object) -> Tuple[float, sp.SphereMap]
     for _ in range(3):
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", sp.SpherifyWarning)
-            m = sp.embed(mesh, **options)
+            m = sp.embed(mesh, "theta_phi", **options)
         best, result = min(best, m.seconds["poles"]), m
     assert result is not None
     return best, result

@@ -21,7 +21,7 @@ def uncertified_theta_phi() -> sp.ThetaPhiMap:
     mesh = sp.datasets.tentacles(n_vertices=6000)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", sp.SpherifyWarning)
-        m = sp.embed(mesh)
+        m = sp.embed(mesh, method="theta_phi")
     assert isinstance(m, sp.ThetaPhiMap)
     assert not m.tp_valid, "tentacles at 6,000 vertices was expected to be uncertified"
     return m
@@ -88,7 +88,7 @@ def test_a_certified_map_answers() -> None:
 
 
 def test_theta_phi_arrays_are_named_and_only_on_theta_phi_maps() -> None:
-    m = sp.embed(sp.datasets.icosphere(1))
+    m = sp.embed(sp.datasets.icosphere(1), method="theta_phi")
     assert isinstance(m, sp.ThetaPhiMap)
     np.testing.assert_array_equal(m._core.theta_phi_array("theta_phi"), m.theta_phi)
     with pytest.raises(sp.MeshError, match="no theta-phi array"):

@@ -5,6 +5,7 @@ repair, 2 for unreadable input or bad arguments."""
 from __future__ import annotations
 
 from pathlib import Path
+from typing import List
 
 import numpy as np
 import pytest
@@ -133,7 +134,8 @@ def test_orient_requires_an_output(tmp_path: Path, capsys: pytest.CaptureFixture
 
 def test_map_writes_the_sphere_and_the_npz(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     out = tmp_path / "sphere.ply"
-    code = cli.main(["map", "--dataset", "helix_tube", "--n-vertices", "500", "-o", str(out)])
+    code = cli.main(["map", "--dataset", "helix_tube", "--n-vertices", "500", "--method", "theta_phi",
+                     "-o", str(out)])
     text = capsys.readouterr().out
     assert code == 0, text
     assert "certified flip-free" in text and "GC-embedding" in text
@@ -144,6 +146,56 @@ def test_map_writes_the_sphere_and_the_npz(tmp_path: Path, capsys: pytest.Captur
     np.testing.assert_array_equal(data["points"], sphere.vertices)
     assert data["theta_phi"].shape[1] == 2
     assert data["poles"].shape == (2,) and data["cut_path"][0] == data["poles"][0]
+
+
+def test_map_defaults_to_the_progressive_isometric_map(tmp_path: Path,
+                                                       capsys: pytest.CaptureFixture[str]) -> None:
+    out = tmp_path / "sphere.ply"
+    code = cli.main(["map", "--dataset", "helix_tube", "--n-vertices", "500", "-o", str(out)])
+    text = capsys.readouterr().out
+    assert code == 0, text
+    assert "method: progressive" in text and "GC-embedding (minor-arc edges): valid, 0 faces" in text
+    assert "theta-phi" not in text and "poles:" not in text
+    mesh = sp.datasets.make("helix_tube", 500)
+    want = sp.embed(mesh, "progressive", energy="isometric")
+    data = np.load(tmp_path / "sphere.npz")
+    assert sorted(data.files) == ["faces", "mesh_sha256", "points"]
+    np.testing.assert_array_equal(data["points"], want.points)
+    np.testing.assert_array_equal(sp.load(out).vertices, want.points)
+    assert cli.pair_is_consistent(out)
+
+
+@pytest.mark.parametrize("flags, message", [
+    (["--poles", "symmetry"], "--poles is an option of --method theta_phi, and the default "
+                              "method is progressive: add --method theta_phi to use it"),
+    (["--weights", "chord"], "--weights is an option of --method theta_phi, and the default "
+                             "method is progressive: add --method theta_phi to use it"),
+    (["--poles", "symmetry", "--symmetry-eps", "0.1"],
+     "--poles, --symmetry-eps are options of --method theta_phi, and the default method is "
+     "progressive: add --method theta_phi to use them"),
+    (["--method", "progressive", "--poles", "graph"],
+     "--poles is an option of --method theta_phi, not of --method progressive: use "
+     "--method theta_phi, or leave it out"),
+    (["--method", "theta_phi", "--energy", "stretch"],
+     "--energy is an option of --method progressive, not of --method theta_phi: use "
+     "--method progressive, or leave it out"),
+    (["--method", "radial", "--energy", "conformal"],
+     "--energy is an option of --method progressive, not of --method radial"),
+    (["--method", "theta_phi", "--symmetry-eps", "0.1"],
+     "--symmetry-eps 0.1 sets the band of --poles symmetry: add --poles symmetry to use it"),
+])
+def test_map_refuses_an_option_its_method_would_ignore(
+        flags: List[str], message: str, tmp_path: Path,
+        capsys: pytest.CaptureFixture[str]) -> None:
+    # Issue 10, item 8: `spherify map MESH --poles symmetry` meant theta-phi
+    # before the default became progressive; ignoring --poles now would map
+    # with another method than the one asked for.
+    out = tmp_path / "x.ply"
+    assert cli.main(["map", "--dataset", "icosphere", "--n-vertices", "200", *flags,
+                     "-o", str(out)]) == 2
+    captured = capsys.readouterr()
+    assert f"spherify: error: {message}" in captured.err and captured.out == ""
+    assert not out.exists()
 
 
 def test_map_refuses_broken_input_and_missing_folders(tmp_path: Path,
@@ -160,13 +212,13 @@ def test_map_refuses_broken_input_and_missing_folders(tmp_path: Path,
 
 def test_map_with_symmetry_poles(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     out = tmp_path / "s.ply"
-    assert cli.main(["map", "--dataset", "ellipsoid", "--n-vertices", "500", "--poles", "symmetry",
-                     "-o", str(out)]) == 0
+    assert cli.main(["map", "--dataset", "ellipsoid", "--n-vertices", "500", "--method", "theta_phi",
+                     "--poles", "symmetry", "-o", str(out)]) == 0
     text = capsys.readouterr().out
     assert "symmetry plane: normal (" in text and "fell back" not in text
     # The helix's plane meets the tube in small loops: reported, not hidden.
-    assert cli.main(["map", "--dataset", "helix_tube", "--n-vertices", "800", "--poles", "symmetry",
-                     "--symmetry-eps", "0.05", "-o", str(out)]) == 0
+    assert cli.main(["map", "--dataset", "helix_tube", "--n-vertices", "800", "--method", "theta_phi",
+                     "--poles", "symmetry", "--symmetry-eps", "0.05", "-o", str(out)]) == 0
     text = capsys.readouterr().out
     assert "symmetry poles fell back to fast_graph" in text
 

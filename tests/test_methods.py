@@ -20,6 +20,7 @@ every method succeeds everywhere.
 from __future__ import annotations
 
 import functools
+import warnings
 from typing import Any, Callable, Dict, Iterator, List, Optional, Tuple
 
 import numpy as np
@@ -249,6 +250,51 @@ def test_relabelled_vertices_relabel_the_rows(method: str) -> None:
 def test_unknown_option_raises_mesh_error(method: str) -> None:
     with pytest.raises(sp.MeshError, match="no_such_option"):
         sp.embed(shape("icosphere1"), method, no_such_option=1)
+
+
+def test_the_default_method_is_progressive_isometric() -> None:
+    mesh = shape("icosphere1")
+    m = sp.embed(mesh)
+    assert m.method == "progressive" and not isinstance(m, sp.ThetaPhiMap)
+    named = sp.embed(mesh, "progressive", energy="isometric")
+    np.testing.assert_array_equal(m.points, named.points)
+
+
+# A value theta-phi accepts for each of its options.
+THETA_PHI_VALUES = {"poles": "symmetry", "weights": "chord", "rho": 2.0, "symmetry_eps": 0.1,
+                    "symmetry_max_score": 0.1, "max_refinements": 3}
+
+
+def test_the_hint_knows_theta_phi_s_options() -> None:
+    # sp.embed words its hint from a list of its own; the core's list decides.
+    from spherify._embed import THETA_PHI_OPTIONS
+    with pytest.raises(sp.MeshError) as err:
+        sp.embed(shape("icosphere1"), "theta_phi", no_such_option=1)
+    listed = str(err.value).split("its options are: ")[1].split(", ")
+    assert sorted(listed) == sorted(THETA_PHI_OPTIONS) == sorted(THETA_PHI_VALUES)
+
+
+@pytest.mark.parametrize("names", [[name] for name in THETA_PHI_VALUES]
+                         + [["weights", "symmetry_eps"]])
+def test_theta_phi_options_without_the_method_say_to_name_it(names: List[str]) -> None:
+    # Issue 10, item 8: sp.embed(mesh, poles=...) used to mean theta-phi.
+    options = {name: THETA_PHI_VALUES[name] for name in names}
+    with pytest.raises(sp.MeshError) as err:
+        sp.embed(shape("icosphere1"), **options)
+    text = str(err.value)
+    assert all(repr(name) in text for name in names), text
+    assert 'default method is "progressive"' in text and 'pass method="theta_phi"' in text
+    assert ("theta-phi option" if len(names) == 1 else "theta-phi options") in text
+    # Named, theta-phi takes them.
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", sp.SpherifyWarning)  # symmetry may fall back
+        assert sp.embed(shape("icosphere1"), "theta_phi", **options).method == "theta_phi"
+
+
+def test_other_methods_keep_the_core_s_message() -> None:
+    with pytest.raises(sp.MeshError) as err:
+        sp.embed(shape("icosphere1"), "radial", poles="graph")
+    assert "theta_phi" not in str(err.value) and 'no option "poles"' in str(err.value)
 
 
 def _out_of_range_cases() -> Iterator[Any]:

@@ -109,11 +109,11 @@ def test_every_method_round_trips(method: str, how: str, tmp_path: Path) -> None
 
 def test_symmetry_details_and_explicit_poles_travel(tmp_path: Path) -> None:
     mesh = sp.datasets.make("ellipsoid", 600)
-    m = sp.embed(mesh, poles="symmetry", weights="mean_value")
+    m = sp.embed(mesh, "theta_phi", poles="symmetry", weights="mean_value")
     back = through_file(m, tmp_path)
     assert_same_map(m, back)
     assert back.options == {"poles": "symmetry", "weights": "mean_value"}
-    explicit = sp.embed(mesh, poles=(0, 5))
+    explicit = sp.embed(mesh, "theta_phi", poles=(0, 5))
     again = pickle.loads(pickle.dumps(explicit))
     assert again.options == {"poles": (0, 5)} and again.poles == explicit.poles
 

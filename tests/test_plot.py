@@ -15,8 +15,16 @@ pytest.importorskip("matplotlib")
 
 @pytest.fixture(scope="module")
 def blob() -> sp.ThetaPhiMap:
-    m = sp.embed(sp.datasets.bumpy_blob(600))
+    m = sp.embed(sp.datasets.bumpy_blob(600), "theta_phi")
     assert isinstance(m, sp.ThetaPhiMap)
+    return m
+
+
+@pytest.fixture(scope="module")
+def default_map() -> sp.SphereMap:
+    """The map of sp.embed's default method (progressive): no rectangle."""
+    m = sp.embed(sp.datasets.bumpy_blob(600))
+    assert not isinstance(m, sp.ThetaPhiMap)
     return m
 
 
@@ -25,10 +33,12 @@ def is_png(path: Path) -> bool:
 
 
 @pytest.mark.parametrize("color", sp.plot.COLORS)
-def test_sphere_pictures_for_every_colouring(blob: sp.ThetaPhiMap, color: str,
-                                             tmp_path: Path) -> None:
+@pytest.mark.parametrize("which", ["blob", "default_map"])
+def test_sphere_pictures_for_every_colouring(which: str, color: str, tmp_path: Path,
+                                             request: pytest.FixtureRequest) -> None:
+    m = request.getfixturevalue(which)
     path = tmp_path / f"{color}.png"
-    sp.plot.sphere(blob, color=color, path=path)
+    sp.plot.sphere(m, color=color, path=path)
     assert is_png(path)
 
 
@@ -47,7 +57,7 @@ def test_mesh_and_rectangle_pictures(blob: sp.ThetaPhiMap, tmp_path: Path) -> No
     plt.close(fig)
 
 
-def test_bad_arguments(blob: sp.ThetaPhiMap) -> None:
+def test_bad_arguments(blob: sp.ThetaPhiMap, default_map: sp.SphereMap) -> None:
     with pytest.raises(sp.MeshError, match="unknown color"):
         sp.plot.sphere(blob, color="rainbow")
     with pytest.raises(sp.MeshError, match="one entry per face"):
@@ -55,6 +65,8 @@ def test_bad_arguments(blob: sp.ThetaPhiMap) -> None:
     radial = sp.embed(sp.datasets.icosphere(1), "radial")
     with pytest.raises(sp.MeshError, match="theta-phi"):
         sp.plot.rectangle(radial)
+    with pytest.raises(sp.MeshError, match="theta-phi"):
+        sp.plot.rectangle(default_map)
 
 
 def test_face_quality_agrees_with_quality(blob: sp.ThetaPhiMap) -> None:

@@ -85,7 +85,7 @@ def assert_h_round_trips_or_fan_not_monotone(m: sp.SphereMap, mesh: sp.Mesh, see
 @given(surfaces(max_vertices=200), st.integers(0, 2**16))
 def test_theta_phi_h_round_trips_on_random_meshes(surface: Surface, seed: int) -> None:
     mesh = sp.Mesh(surface.V, surface.F)
-    m = sp.embed(mesh)
+    m = sp.embed(mesh, method="theta_phi")
     if mesh.n_vertices >= 30:
         # Fast-graph poles on a mesh of this size are far apart: the fans are
         # monotone after 6.36-6.38, and h must hold.
@@ -102,7 +102,7 @@ def test_theta_phi_h_round_trips_with_any_explicit_poles(surface: Surface, data)
     neighbours = np.unique(mesh.faces[(mesh.faces == n).any(1)])
     s = data.draw(st.sampled_from([int(v) for v in neighbours if v != n]
                                   + [(n + 1) % mesh.n_vertices]))
-    m = sp.embed(mesh, poles=(n, s))
+    m = sp.embed(mesh, method="theta_phi", poles=(n, s))
     assert_h_round_trips_or_fan_not_monotone(m, mesh, n)
 
 
@@ -121,7 +121,7 @@ def test_every_pole_pair_of_the_smallest_solids(name: str) -> None:
                       [2, 0, 5], [1, 2, 5], [3, 1, 5], [0, 3, 5]])
     mesh = sp.Mesh(V, F)
     for n, s in itertools.permutations(range(len(V)), 2):
-        m = sp.embed(mesh, poles=(n, s))
+        m = sp.embed(mesh, method="theta_phi", poles=(n, s))
         assert m.tp_valid
         assert_round_trips(m, mesh, 7 * n + s)
 
@@ -130,7 +130,7 @@ def test_every_pole_pair_of_the_smallest_solids(name: str) -> None:
                                        ("tentacles", 1500)])
 def test_theta_phi_h_on_dataset_shapes(name: str, size: int) -> None:
     mesh = sp.datasets.make(name, size)
-    m = sp.embed(mesh)
+    m = sp.embed(mesh, method="theta_phi")
     assert m.tp_valid
     rng = np.random.default_rng(1)
     # The sphere round trip holds to rounding however thin the triangles are.
@@ -150,7 +150,7 @@ def test_h_is_a_bijection_even_where_the_gc_drawing_is_not() -> None:
     """On the helix the folded vertices with minor-arc edges are not a valid
     GC-embedding (thesis 6.7), but h (rectangle, stretch, fold) still is."""
     mesh = sp.datasets.helix_tube(n_vertices=1500)
-    m = sp.embed(mesh)
+    m = sp.embed(mesh, method="theta_phi")
     assert m.tp_valid and not m.valid
     assert_round_trips(m, mesh, 3)
 
@@ -190,7 +190,7 @@ def test_to_surface_refuses_maps_that_are_not_bijections() -> None:
 def test_to_surface_refuses_an_uncertified_rectangle() -> None:
     mesh = sp.datasets.tentacles(n_vertices=5000)
     with pytest.warns(sp.SpherifyWarning):
-        m = sp.embed(mesh)
+        m = sp.embed(mesh, method="theta_phi")
     assert not m.tp_valid
     with pytest.raises(sp.MapError, match="tp_valid"):
         m.to_surface([[1.0, 0.0, 0.0]])

@@ -19,14 +19,15 @@ cli = pytest.importorskip("spherify.cli")
 def test_callable_sees_increasing_counts_ending_at_total() -> None:
     mesh = sp.datasets.bumpy_blob(n_vertices=1000)
     calls: List[Tuple[int, int]] = []
-    m = sp.embed(mesh, poles="graph", progress=lambda done, total: calls.append((done, total)))
+    m = sp.embed(mesh, method="theta_phi", poles="graph",
+                 progress=lambda done, total: calls.append((done, total)))
     assert m.tp_valid
     done = [d for d, _ in calls]
     assert {t for _, t in calls} == {mesh.n_vertices}
     assert done == sorted(set(done)) and done[-1] == mesh.n_vertices and done[0] >= 1
     assert 10 <= len(calls) <= 101  # throttled to about one call per 1%
     # The same poles as without a callable.
-    assert m.poles == sp.embed(mesh, poles="graph").poles
+    assert m.poles == sp.embed(mesh, method="theta_phi", poles="graph").poles
 
 
 class Stop(Exception):
@@ -53,7 +54,7 @@ def test_an_exception_in_the_callable_stops_the_search(error: type, mesh_2000: s
             raise error("enough")
 
     with pytest.raises(error, match="enough"):
-        sp.embed(mesh_2000, poles="graph", progress=callback)
+        sp.embed(mesh_2000, method="theta_phi", poles="graph", progress=callback)
     # The exception reached the caller after the third call, and the callable
     # was not called again: not by a worker still running, nor to report the end.
     assert len(calls) == 3
@@ -64,13 +65,13 @@ def test_an_exception_in_the_callable_stops_the_search(error: type, mesh_2000: s
     assert done < total // 2, calls
     # The interpreter is fine afterwards, no Python thread was left behind,
     # and nothing calls the callable late.
-    assert sp.embed(mesh_2000, poles="fast_graph").tp_valid
+    assert sp.embed(mesh_2000, method="theta_phi", poles="fast_graph").tp_valid
     assert set(threading.enumerate()) <= threads_before
     assert len(calls) == 3
 
 
 def test_true_draws_a_bar_on_stderr(capsys: pytest.CaptureFixture[str]) -> None:
-    sp.embed(sp.datasets.icosphere(2), poles="graph", progress=True)
+    sp.embed(sp.datasets.icosphere(2), method="theta_phi", poles="graph", progress=True)
     err = capsys.readouterr().err
     assert err.startswith("\rgraph poles [")
     assert "[" + "#" * 30 + "] 100%  162/162  " in err and err.endswith(" s\n")
@@ -88,24 +89,24 @@ def test_text_bar_redraws_at_most_20_times_a_second() -> None:
 
 @pytest.mark.parametrize("value", [False, None])
 def test_false_and_none_are_silent(value: object, capsys: pytest.CaptureFixture[str]) -> None:
-    sp.embed(sp.datasets.icosphere(1), poles="graph", progress=value)
+    sp.embed(sp.datasets.icosphere(1), method="theta_phi", poles="graph", progress=value)
     assert capsys.readouterr().err == ""
 
 
 def test_bad_progress_value_raises() -> None:
     with pytest.raises(sp.MeshError, match="progress"):
-        sp.embed(sp.datasets.icosphere(1), poles="graph", progress=3)
+        sp.embed(sp.datasets.icosphere(1), method="theta_phi", poles="graph", progress=3)
     with pytest.raises(sp.MeshError, match="progress"):
         sp._core.embed(sp.datasets.icosphere(1)._core, "theta_phi", {"poles": "graph"}, 3)
 
 
 def test_cli_progress_flag(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     out = tmp_path / "s.ply"
-    code = cli.main(["map", "--dataset", "icosphere", "--n-vertices", "200", "--poles", "graph",
-                     "--progress", "-o", str(out)])
+    code = cli.main(["map", "--dataset", "icosphere", "--n-vertices", "200", "--method", "theta_phi",
+                     "--poles", "graph", "--progress", "-o", str(out)])
     assert code == 0
     assert "graph poles [" in capsys.readouterr().err
     # Without the flag, and with stderr not a terminal, nothing is drawn.
-    assert cli.main(["map", "--dataset", "icosphere", "--n-vertices", "200", "--poles", "graph",
-                     "-o", str(out)]) == 0
+    assert cli.main(["map", "--dataset", "icosphere", "--n-vertices", "200", "--method", "theta_phi",
+                     "--poles", "graph", "-o", str(out)]) == 0
     assert capsys.readouterr().err == ""

@@ -89,10 +89,10 @@ LONG_CALLS = {
     """,
     "theta_phi": """
         mesh = sp.datasets.bumpy_blob(n_vertices=60000)
-        call = lambda: [sp.embed(mesh) for _ in range(1000)]
+        call = lambda: [sp.embed(mesh, "theta_phi") for _ in range(1000)]
     """,
     "to_surface": """
-        m = sp.embed(sp.datasets.bumpy_blob(n_vertices=2000))
+        m = sp.embed(sp.datasets.bumpy_blob(n_vertices=2000), "theta_phi")
         rng = np.random.default_rng(2)
         q = rng.normal(size=(2_000_000, 3))
         q /= np.linalg.norm(q, axis=1)[:, None]
@@ -163,13 +163,16 @@ FORK_SCRIPT = """
 
     def everything(_):
         report = sp.check(mesh)
-        m = sp.embed(mesh)
+        m = sp.embed(mesh, "theta_phi")
+        p = sp.embed(mesh)  # the default method, progressive
         r = sp.embed(mesh, "relaxation")
         s = sp.check_sphere(mesh, m.points)
         f, b, x = m.to_surface(m.points[:100])
+        g, c, y = p.to_surface(p.points[:100])
         sp.orient(mesh)
         sp.dijkstra(mesh, 0)
-        return report.is_sphere_topology and m.tp_valid and r.valid and s.valid
+        return (report.is_sphere_topology and m.tp_valid and p.valid and r.valid and s.valid
+                and np.allclose(y, mesh.vertices[:100], rtol=0.0, atol=1e-9))
 
     # Every kind of call in the parent first: this starts the worker threads.
     assert everything(None)
@@ -206,15 +209,15 @@ REENTRANT_SCRIPT = """
         sp.embed(small)  # a core call from inside the callback
 
     try:
-        sp.embed(mesh, poles="graph", progress=progress)
+        sp.embed(mesh, "theta_phi", poles="graph", progress=progress)
     except sp.SpherifyError as e:
         assert "progress callback" in str(e), e
         assert len(seen) == 1, seen
     else:
         raise AssertionError("the re-entrant call was neither refused nor completed")
     # Both work again afterwards.
-    assert sp.embed(small).tp_valid
-    assert sp.embed(mesh, poles="graph", progress=lambda d, t: None).tp_valid
+    assert sp.embed(small, "theta_phi").tp_valid
+    assert sp.embed(mesh, "theta_phi", poles="graph", progress=lambda d, t: None).tp_valid
     print("OK")
 """
 

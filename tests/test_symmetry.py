@@ -49,7 +49,7 @@ def assert_band(d: np.ndarray, eps: float, band: int) -> None:
 def embed_quietly(mesh: Any, **options: Any) -> Tuple[sp.SphereMap, List[warnings.WarningMessage]]:
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        m = sp.embed(mesh, poles="symmetry", **options)
+        m = sp.embed(mesh, method="theta_phi", poles="symmetry", **options)
     return m, list(caught)
 
 
@@ -141,18 +141,18 @@ def test_asymmetric_mesh_falls_back_with_a_warning() -> None:
     _, _, _, score = oracle_planes(mesh.vertices, mesh.faces)
     assert score.min() > 0.05  # the oracle agrees there is no convincing plane
     with pytest.warns(sp.SpherifyWarning, match="fell back to fast_graph: no convincing symmetry"):
-        m = sp.embed(mesh, poles="symmetry")
+        m = sp.embed(mesh, method="theta_phi", poles="symmetry")
     sym = m.details["symmetry"]
     assert "no convincing symmetry plane" in sym["fallback"]
     assert sym["score"] == pytest.approx(score.min(), rel=1e-6)
     # The fallback is exactly the fast-graph result.
-    fast = sp.embed(mesh, poles="fast_graph")
+    fast = sp.embed(mesh, method="theta_phi", poles="fast_graph")
     assert m.poles == fast.poles
     np.testing.assert_array_equal(m.cut_path, fast.cut_path)
     # Raising the threshold accepts the best plane instead, without warning.
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        lax = sp.embed(mesh, poles="symmetry", symmetry_max_score=1.0)
+        lax = sp.embed(mesh, method="theta_phi", poles="symmetry", symmetry_max_score=1.0)
     assert lax.details["symmetry"]["fallback"] is None
 
 
@@ -161,10 +161,11 @@ def test_too_thin_a_band_falls_back() -> None:
     # within 1e-9 of it.
     mesh = three_bumps()
     with pytest.warns(sp.SpherifyWarning, match="too few to hold a cut path"):
-        m = sp.embed(mesh, poles="symmetry", symmetry_eps=1e-9, symmetry_max_score=1.0)
+        m = sp.embed(mesh, method="theta_phi", poles="symmetry", symmetry_eps=1e-9,
+                     symmetry_max_score=1.0)
     sym = m.details["symmetry"]
     assert sym["band"] < 4 and sym["fallback"].startswith("the vertices near the symmetry plane")
-    assert m.poles == sp.embed(mesh, poles="fast_graph").poles
+    assert m.poles == sp.embed(mesh, method="theta_phi", poles="fast_graph").poles
 
 
 def test_poles_close_together_fall_back() -> None:
@@ -172,13 +173,13 @@ def test_poles_close_together_fall_back() -> None:
     # meets the tube in separate small loops: poles on one of them are close.
     mesh = sp.datasets.helix_tube(1500)
     with pytest.warns(sp.SpherifyWarning, match="too close together"):
-        m = sp.embed(mesh, poles="symmetry")
+        m = sp.embed(mesh, method="theta_phi", poles="symmetry")
     sym = m.details["symmetry"]
     assert sym["score"] < 1e-6 and sym["spread"] < 0.25
     assert sym["component"] < sym["band"] / 2
     # The spread is the path length inside the band over the fast-graph
     # distance; no path between the poles is shorter than their geodesic.
-    fast = sp.embed(mesh, poles="fast_graph")
+    fast = sp.embed(mesh, method="theta_phi", poles="fast_graph")
     dist, _ = sp.dijkstra(mesh, fast.poles[0])
     north, south = sym["symmetry_poles"]
     d_ns, _ = sp.dijkstra(mesh, north)
@@ -191,7 +192,7 @@ def test_poles_close_together_fall_back() -> None:
                                            ({"symmetry_max_score": 2.0}, "max_score")])
 def test_bad_parameters_raise(options: Dict[str, Any], word: str) -> None:
     with pytest.raises(sp.MeshError, match=word):
-        sp.embed(sp.datasets.ellipsoid(200), poles="symmetry", **options)
+        sp.embed(sp.datasets.ellipsoid(200), method="theta_phi", poles="symmetry", **options)
 
 
 @settings(max_examples=30)

@@ -47,7 +47,7 @@ def test_dataset_shapes_are_certified(name: str, size: int) -> None:
     mesh = sp.datasets.make(name, size)
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        m = sp.embed(mesh)
+        m = sp.embed(mesh, method="theta_phi")
     assert m.tp_valid, m.message
     assert_theta_phi_invariants(m, mesh)
     # A flip-free rectangle folds to a drawing that covers the sphere once.
@@ -57,7 +57,7 @@ def test_dataset_shapes_are_certified(name: str, size: int) -> None:
 @pytest.mark.parametrize("poles", ["fast_graph", "graph", "physical", (0, 100)])
 def test_pole_choices(poles: object) -> None:
     mesh = sp.datasets.bumpy_blob(n_vertices=300)
-    m = sp.embed(mesh, poles=poles)
+    m = sp.embed(mesh, method="theta_phi", poles=poles)
     assert m.tp_valid
     assert_theta_phi_invariants(m, mesh)
     if isinstance(poles, tuple):
@@ -66,7 +66,7 @@ def test_pole_choices(poles: object) -> None:
 
 def test_graph_poles_are_the_exact_graph_diameter() -> None:
     mesh = sp.datasets.helix_tube(n_vertices=200)
-    m = sp.embed(mesh, poles="graph")
+    m = sp.embed(mesh, method="theta_phi", poles="graph")
     best = max(sp.dijkstra(mesh, v)[0].max() for v in range(mesh.n_vertices))
     dist, _ = sp.dijkstra(mesh, m.poles[0])
     assert dist[m.poles[1]] == pytest.approx(best, rel=1e-12)
@@ -74,14 +74,14 @@ def test_graph_poles_are_the_exact_graph_diameter() -> None:
 
 def test_physical_poles_are_the_farthest_pair() -> None:
     mesh = sp.datasets.tentacles(n_vertices=2000)
-    m = sp.embed(mesh, poles="physical")
+    m = sp.embed(mesh, method="theta_phi", poles="physical")
     V = mesh.vertices
     d = np.linalg.norm(V[:, None, :] - V[None, :, :], axis=2)
     assert np.linalg.norm(V[m.poles[0]] - V[m.poles[1]]) == d.max()
 
 
 def test_tetrahedron_needs_a_lengthened_path() -> None:
-    m = sp.embed(sp.Mesh(TETRA_V, TETRA_F))
+    m = sp.embed(sp.Mesh(TETRA_V, TETRA_F), method="theta_phi")
     assert len(m.cut_path) == 4
     assert m.tp_valid
 
@@ -89,7 +89,7 @@ def test_tetrahedron_needs_a_lengthened_path() -> None:
 def test_inward_mesh_is_reoriented_first() -> None:
     mesh = sp.datasets.icosphere(2)
     inward = sp.Mesh(mesh.vertices, mesh.faces[:, ::-1])
-    m = sp.embed(inward)
+    m = sp.embed(inward, method="theta_phi")
     assert m.tp_valid and m.valid
     assert any("reoriented" in note for note in m.notes)
 
@@ -99,7 +99,7 @@ def test_double_precision_limit_is_reported_not_hidden() -> None:
     # than double precision can represent (see docs/experiments.md).
     mesh = sp.datasets.urchin(n_vertices=20000)
     with pytest.warns(sp.SpherifyWarning, match="double precision"):
-        m = sp.embed(mesh)
+        m = sp.embed(mesh, method="theta_phi")
     assert not m.tp_valid
     collapsed = len(m.details["tp_degenerate_faces"]) + len(m.details["tp_flipped_faces"])
     assert collapsed > 0
@@ -109,11 +109,11 @@ def test_double_precision_limit_is_reported_not_hidden() -> None:
 def test_bad_options() -> None:
     mesh = sp.datasets.icosphere(1)
     with pytest.raises(sp.MeshError, match="poles"):
-        sp.embed(mesh, poles="symmetric")
+        sp.embed(mesh, method="theta_phi", poles="symmetric")
     with pytest.raises(sp.MeshError):
-        sp.embed(mesh, poles=(3, 3))
+        sp.embed(mesh, method="theta_phi", poles=(3, 3))
     with pytest.raises(sp.MeshError, match="weights"):
-        sp.embed(mesh, weights="cotangent")
+        sp.embed(mesh, method="theta_phi", weights="cotangent")
     with pytest.raises(sp.MeshError, match="method"):
         sp.embed(mesh, "no_such_method")
     with pytest.raises(sp.TopologyError):
@@ -127,7 +127,7 @@ def test_corpus_is_certified(shared_meshes: Path) -> None:
         if not isinstance(entry["genus"], int):
             continue
         mesh = sp.load(shared_meshes / entry["path"])
-        m = sp.embed(mesh)
+        m = sp.embed(mesh, method="theta_phi")
         assert m.tp_valid, f"{entry['name']}: {m.message}"
 
 
@@ -141,7 +141,7 @@ def test_re_embedded_fan_is_pinned_on_a_strictly_convex_arc() -> None:
     from _meshgen import make_surface
     s = make_surface(47, 57, flip_fraction=1.5, stretch=1.0, flatten=0.5, twist=0.0, bend=0.0,
                      log_scale=0.0)
-    m = sp.embed(sp.Mesh(s.V, s.F))
+    m = sp.embed(sp.Mesh(s.V, s.F), method="theta_phi")
     assert m.details["re_embedded"][0]
     assert m.tp_valid, m.message
     assert all(m.details["fans_monotone"])

@@ -10,10 +10,17 @@ from typing import Any, List
 import numpy as np
 
 from . import _core
-from ._errors import SpherifyWarning
+from ._errors import MeshError, SpherifyWarning, TopologyError
 from ._mesh import MeshLike, as_mesh
 from ._progress import as_callback
 from ._spheremap import SphereMap, ThetaPhiMap, warn_if_thin
+
+
+#: The options of ``method="theta_phi"`` (the core refuses them for every
+#: method that does not read them; this list only words the hint below, and
+#: tests/test_methods.py checks it against the core's own list).
+THETA_PHI_OPTIONS = ("poles", "weights", "rho", "symmetry_eps", "symmetry_max_score",
+                     "max_refinements")
 
 
 def methods() -> List[str]:
@@ -21,7 +28,7 @@ def methods() -> List[str]:
     return list(_core.methods())
 
 
-def embed(mesh: MeshLike, method: str = "theta_phi", *, progress: Any = None,
+def embed(mesh: MeshLike, method: str = "progressive", *, progress: Any = None,
           **options: Any) -> SphereMap:
     """Map a closed genus-0 mesh onto the unit sphere.
 
@@ -32,14 +39,23 @@ def embed(mesh: MeshLike, method: str = "theta_phi", *, progress: Any = None,
         outward are reoriented first (noted in ``SphereMap.notes``).
     method : str
         One of :func:`methods`; see each method's options in the README. The
-        default, ``"theta_phi"`` (thesis ch. 6), is a bijection for every
-        genus-0 mesh; its options are below.
+        default, ``"progressive"`` with the isometric energy (thesis 9.3.3),
+        is a certified GC-embedding of every genus-0 mesh with low
+        distortion, long limbs and spikes included; its options are below.
+        ``"theta_phi"`` (thesis ch. 6) is the fastest (about 2.5 times faster
+        at 10^6 vertices) and gives the thesis's own bijection h, whose
+        rectangle is certified on shapes without long limbs; name it to use
+        it and its options (``poles``, ``weights``, ``symmetry_eps``, ...):
+        given to the default method, they raise :class:`MeshError` saying so.
     **options
-        Passed to the method (for example ``center="kernel"`` for ``"radial"``,
-        ``max_iter=`` and ``strict=`` for the iterative methods).
+        Passed to the method (for example ``energy=`` for ``"progressive"``,
+        ``poles=`` for ``"theta_phi"``, ``center="kernel"`` for ``"radial"``,
+        ``max_iter=`` and ``strict=`` for the iterative methods). An option
+        the method does not read raises :class:`MeshError`; it is never
+        ignored.
 
-    Theta-phi options
-    -----------------
+    Theta-phi options (``method="theta_phi"``)
+    ------------------------------------------
     poles : str or (int, int)
         How to choose the poles and the cut path (thesis 6.2):
 
@@ -77,11 +93,12 @@ def embed(mesh: MeshLike, method: str = "theta_phi", *, progress: Any = None,
     max_refinements : int
         Double-double refinement steps per embedding (default 8).
     progress : bool or callable
-        ``poles="graph"`` only: ``True`` draws a text progress bar on stderr;
-        a callable receives ``(done, total)`` sources, with ``done`` increasing
-        and ending at ``total``, at most about 100 times, from a worker thread.
-        If it raises, the search stops and the exception propagates. Ctrl-C
-        stops the search in any case. Default ``None``: silent.
+        ``poles="graph"`` (and the progressive method, below): ``True`` draws
+        a text progress bar on stderr; a callable receives ``(done, total)``
+        (here: sources), with ``done`` increasing and ending at ``total``, at
+        most about 100 times, from a worker thread. If it raises, the search
+        stops and the exception propagates. Ctrl-C stops the search in any
+        case. Default ``None``: silent.
 
     Returns
     -------
@@ -90,8 +107,8 @@ def embed(mesh: MeshLike, method: str = "theta_phi", *, progress: Any = None,
         by the exact tests of thesis 3.4; a :class:`ThetaPhiMap` for
         ``method="theta_phi"``.
 
-    Progressive options
-    -------------------
+    Progressive options (the default method)
+    ----------------------------------------
     ``method="progressive"`` (thesis 9.3.3; Praun and Hoppe 2003) collapses
     the mesh to a tetrahedron, maps that, and re-inserts the vertices one
     level at a time, each at the centre of its ring's kernel, lowering a
@@ -119,13 +136,18 @@ def embed(mesh: MeshLike, method: str = "theta_phi", *, progress: Any = None,
         Stop when a sweep lowers the energy by less than this fraction
         (default 1e-3; 1e-5 for ``"stretch"`` and ``"conformal"``, which keep
         improving in small steps).
+    progress : bool or callable
+        As for graph poles, counting the method's work from the hierarchy
+        to the final sweeps; if the callable raises, the method stops.
 
     Raises
     ------
     TopologyError
         Not a genus-0 surface; ``err.report`` says why.
     MeshError
-        Unknown method or option, or a value out of range.
+        Unknown method or option, or a value out of range. Theta-phi's
+        options given to the default method (``sp.embed(mesh,
+        poles="symmetry")``) say to pass ``method="theta_phi"``.
     ConvergenceError
         An iterative method with ``strict=True`` did not converge;
         ``err.state["points"]`` holds where it stopped. Also the progressive
@@ -136,8 +158,20 @@ def embed(mesh: MeshLike, method: str = "theta_phi", *, progress: Any = None,
     mesh = as_mesh(mesh)
     if "initial" in options and options["initial"] is not None:
         options["initial"] = np.ascontiguousarray(options["initial"], dtype=np.float64)
-    core = _core.embed(mesh._core, method, dict(options),
-                       as_callback(progress, "graph poles" if method == "theta_phi" else method))
+    try:
+        core = _core.embed(mesh._core, method, dict(options),
+                           as_callback(progress, "graph poles" if method == "theta_phi" else method))
+    except MeshError as err:
+        stray = [name for name in options if name in THETA_PHI_OPTIONS]
+        if method != "progressive" or not stray or isinstance(err, TopologyError):
+            raise
+        # Old code and habits call sp.embed(mesh, poles=...) without a method:
+        # say which method those options belong to.
+        names = ", ".join(repr(name) for name in stray)
+        what, them = ("is a theta-phi option", "it") if len(stray) == 1 else \
+            ("are theta-phi options", "them")
+        raise MeshError(f"{err}. {names} {what}, and sp.embed's default method is "
+                        f"\"progressive\": pass method=\"theta_phi\" to use {them}") from err
     if core.tp_valid is None:
         plain = SphereMap(core, mesh)
         plain._options = dict(options)

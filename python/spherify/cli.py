@@ -1,11 +1,19 @@
 """The ``spherify`` command line.
 
-    spherify map MESH -o OUT [--method theta_phi] [--poles fast_graph]
+    spherify map MESH -o OUT [--method progressive] [--energy isometric]
+    spherify map MESH -o OUT --method theta_phi [--poles fast_graph] [--weights uniform]
                                    map a mesh onto the sphere, print the certificate,
                                    write OUT (the sphere as a mesh; a FreeSurfer name
-                                   such as lh.sphere gets radius 100) and OUT's .npz;
-                                   --poles graph shows a progress bar on a terminal
-                                   (or with --progress)
+                                   such as lh.sphere gets radius 100) and OUT's .npz.
+                                   The default, progressive with the isometric energy,
+                                   gives a certified low-distortion map of every mesh;
+                                   theta_phi is the fastest and the thesis's own
+                                   bijection h (see README, "Which method when").
+                                   --poles, --weights and --symmetry-eps are theta-phi
+                                   options and need --method theta_phi; --energy needs
+                                   --method progressive. A progress bar shows on a
+                                   terminal (or with --progress) for progressive and
+                                   for --poles graph
     spherify check MESH            load, validate, orient and print the report
     spherify orient MESH -o OUT    write a consistently, outward-oriented copy
     spherify harmonics ...         the applications of thesis ch. 8: see
@@ -176,7 +184,45 @@ def _save_sphere(mesh: Mesh, points: np.ndarray, out: Path) -> None:
               f"({verdict.n_negative + verdict.n_zero} faces flipped or collapsed)")
 
 
+#: ``spherify map`` options that only one method reads, with that method and
+#: the default the method gets when the option is not given.
+METHOD_OPTIONS = {"poles": ("theta_phi", "fast_graph"), "weights": ("theta_phi", "uniform"),
+                  "symmetry_eps": ("theta_phi", None), "energy": ("progressive", "isometric")}
+
+
+def _method_options(args: argparse.Namespace) -> Dict[str, Any]:
+    """The options of ``args.method``, refusing (UsageError, exit 2) an
+    option of another method: under the default method a ``--poles`` would
+    otherwise be ignored, and the map would not be the one asked for."""
+    method = args.method or "progressive"
+    stray = [name for name, (owner, _) in METHOD_OPTIONS.items()
+             if getattr(args, name) is not None and owner != method]
+    if stray:
+        owner = METHOD_OPTIONS[stray[0]][0]
+        flags = [f"--{name.replace('_', '-')}" for name in stray
+                 if METHOD_OPTIONS[name][0] == owner]
+        what = (f"{flags[0]} is an option" if len(flags) == 1
+                else f"{', '.join(flags)} are options")
+        them = "it" if len(flags) == 1 else "them"
+        if args.method is None:
+            raise UsageError(f"{what} of --method {owner}, and the default method is {method}: "
+                             f"add --method {owner} to use {them}")
+        raise UsageError(f"{what} of --method {owner}, not of --method {method}: use "
+                         f"--method {owner}, or leave {them} out")
+    if args.symmetry_eps is not None and args.poles != "symmetry":
+        raise UsageError(f"--symmetry-eps {args.symmetry_eps:g} sets the band of --poles symmetry: "
+                         "add --poles symmetry to use it")
+    options: Dict[str, Any] = {}
+    for name, (owner, default) in METHOD_OPTIONS.items():
+        value = getattr(args, name)
+        if owner == method and (value is not None or default is not None):
+            options[name] = default if value is None else value
+    return options
+
+
 def _cmd_map(args: argparse.Namespace) -> int:
+    options = _method_options(args)
+    method = args.method or "progressive"
     _check_output(args.output)
     out = Path(args.output)
     start = time.perf_counter()
@@ -189,21 +235,13 @@ def _cmd_map(args: argparse.Namespace) -> int:
         print(report)
         print("refusing to map: the mesh is not a closed, connected, manifold genus-0 surface")
         return 1
-    options = {}
-    if args.method == "theta_phi":
-        options = {"poles": args.poles, "weights": args.weights}
-        if args.poles == "symmetry":
-            options["symmetry_eps"] = args.symmetry_eps
-        if args.poles == "graph" and (args.progress or sys.stderr.isatty()):
-            options["progress"] = True
-    elif args.method == "progressive":
-        options = {"energy": args.energy}
+    if method == "progressive" or options.get("poles") == "graph":
         if args.progress or sys.stderr.isatty():
             options["progress"] = True
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", SpherifyWarning)  # reported below instead
         try:
-            m = embed(mesh, args.method, **options)
+            m = embed(mesh, method, **options)
         except TopologyError:
             raise
         except MeshError as err:
@@ -294,18 +332,23 @@ def main(argv: Optional[List[str]] = None) -> int:
         if name in ("orient", "map"):
             p.add_argument("-o", "--output", required=True, help="output mesh file")
         if name == "map":
-            p.add_argument("--method", default="theta_phi", choices=methods())
-            p.add_argument("--poles", default="fast_graph", choices=names["poles"])
+            p.add_argument("--method", default=None, choices=methods(),
+                           help="the spherical method (default: progressive, a certified "
+                                "low-distortion map of every mesh; theta_phi is the fastest)")
+            p.add_argument("--poles", default=None, choices=names["poles"],
+                           help="--method theta_phi: how to choose the poles and the cut "
+                                "(default: fast_graph)")
             p.add_argument("--symmetry-eps", type=float, default=None,
-                           help="--poles symmetry: band half-width around the plane in mesh "
-                                "units (default: automatic)")
+                           help="--method theta_phi --poles symmetry: band half-width around "
+                                "the plane in mesh units (default: automatic)")
             p.add_argument("--progress", action="store_true",
-                           help="--poles graph and --method progressive: show a progress bar "
+                           help="--method progressive and --poles graph: show a progress bar "
                                 "even when stderr is not a terminal")
-            p.add_argument("--weights", default="uniform",
-                           choices=names["theta_phi_weights"])
-            p.add_argument("--energy", default="isometric", choices=names["energies"],
-                           help="--method progressive: the distortion energy it lowers")
+            p.add_argument("--weights", default=None, choices=names["theta_phi_weights"],
+                           help="--method theta_phi: the Tutte weights (default: uniform)")
+            p.add_argument("--energy", default=None, choices=names["energies"],
+                           help="--method progressive: the distortion energy it lowers "
+                                "(default: isometric)")
         p.set_defaults(func=func)
     p = sub.add_parser("batch", help="map many meshes, in parallel and resumably")
     p.add_argument("inputs", nargs="+", help="mesh files, folders, or .txt files of paths")
