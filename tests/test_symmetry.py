@@ -217,3 +217,15 @@ def test_random_meshes_give_a_valid_cut(surface: mg.Surface) -> None:
     if sym["fallback"] is None:
         d = (surface.V - sym["centre"]) @ np.asarray(sym["normal"])
         assert np.all(near(d[list(m.poles)], sym["eps"]))
+
+
+@pytest.mark.parametrize("poles", [None, "fast_graph", (0, 5)])
+@pytest.mark.parametrize("option", [{"symmetry_eps": 0.1}, {"symmetry_max_score": 0.2}])
+def test_symmetry_options_without_symmetry_poles_are_refused(poles: Any,
+                                                              option: Dict[str, float]) -> None:
+    # They would be ignored without a word: the caller meant something else.
+    mesh = sp.datasets.make("ellipsoid", 200)
+    extra: Dict[str, Any] = {} if poles is None else {"poles": poles}
+    with pytest.raises(sp.SpherifyError, match=f"{next(iter(option))} only applies to poles"):
+        sp.embed(mesh, "theta_phi", **option, **extra)
+    assert sp.embed(mesh, "theta_phi", poles="symmetry", **option).method == "theta_phi"

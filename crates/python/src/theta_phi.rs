@@ -76,15 +76,33 @@ fn symmetry_to_py<'py>(py: Python<'py>, sym: &Symmetry) -> PyResult<Bound<'py, P
 pub fn method(options: &Options<'_>) -> PyResult<Method> {
     let py = options.py();
     let defaults = ThetaPhiParams::default();
+    let eps = options.optional_number("symmetry_eps")?;
+    let max_score = options.optional_number("symmetry_max_score")?;
     let symmetry = SymmetryParams {
-        eps: options.optional_number("symmetry_eps")?,
-        max_score: options.number("symmetry_max_score", SymmetryParams::default().max_score)?,
+        eps,
+        max_score: max_score.unwrap_or(SymmetryParams::default().max_score),
         ..SymmetryParams::default()
     };
     let poles = match options.take("poles")? {
         Some(p) => pole_choice(py, &p, symmetry)?,
         None => PoleChoice::FastGraph,
     };
+    // The symmetry options mean nothing to the other pole choices: taking
+    // them without a word would hide the caller's mistake.
+    let given: Vec<&str> = [("symmetry_eps", eps), ("symmetry_max_score", max_score)]
+        .iter()
+        .filter(|(_, value)| value.is_some())
+        .map(|(name, _)| *name)
+        .collect();
+    if !given.is_empty() && !matches!(poles, PoleChoice::Symmetry(_)) {
+        return Err(mesh_error(
+            py,
+            format!(
+                "theta_phi: {} only applies to poles=\"symmetry\"; pass poles=\"symmetry\" or leave it out",
+                given.join(" and ")
+            ),
+        ));
+    }
     Ok(Method::ThetaPhi(ThetaPhiParams {
         poles,
         weights: options.weights()?,
