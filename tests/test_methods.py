@@ -285,7 +285,11 @@ def test_theta_phi_options_without_the_method_say_to_name_it(names: List[str]) -
     assert all(repr(name) in text for name in names), text
     assert 'default method is "progressive"' in text and 'pass method="theta_phi"' in text
     assert ("theta-phi option" if len(names) == 1 else "theta-phi options") in text
-    # Named, theta-phi takes them.
+    # Named, theta-phi takes them (the symmetry options with symmetry poles).
+    if any(name.startswith("symmetry_") for name in names):
+        options["poles"] = "symmetry"
+    if "rho" in names:
+        options["weights"] = "chord"
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", sp.SpherifyWarning)  # symmetry may fall back
         assert sp.embed(shape("icosphere1"), "theta_phi", **options).method == "theta_phi"
@@ -361,3 +365,12 @@ def test_exact_signs_decide_what_floats_cannot() -> None:
     assert (naive != np.array(truth)).any(), "the sample should fool plain floating point"
     # Faces the float filter decides never reach the fallback.
     assert n_exact < len(F)
+
+
+@pytest.mark.parametrize("weights", [None, "uniform", "mean_value"])
+def test_rho_without_chord_weights_is_refused(weights: Optional[str]) -> None:
+    # rho sets the chord weights' exponent; with other weights it would be
+    # ignored without a word.
+    extra = {} if weights is None else {"weights": weights}
+    with pytest.raises(sp.MeshError, match='rho only applies to weights="chord"'):
+        sp.embed(shape("icosphere1"), "theta_phi", rho=2.0, **extra)

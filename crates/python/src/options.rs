@@ -104,8 +104,20 @@ impl<'py> Options<'py> {
     /// accepts is the core's decision; here only the name is translated.
     pub fn weights(&self) -> PyResult<Weights> {
         let name = self.string("weights", "uniform")?;
-        let rho = self.number("rho", 1.0)?;
-        crate::convert::weights(self.py, &name, rho)
+        let rho = self.optional_number("rho")?;
+        let weights = crate::convert::weights(self.py, &name, rho.unwrap_or(1.0))?;
+        // rho means nothing to the other weights: taking it without a word
+        // would hide the caller's mistake.
+        if rho.is_some() && !matches!(weights, Weights::Chord { .. }) {
+            return Err(mesh_error(
+                self.py,
+                format!(
+                    "{}: rho only applies to weights=\"chord\", got weights={name:?}",
+                    self.method
+                ),
+            ));
+        }
+        Ok(weights)
     }
 
     /// Refuses whatever option the method did not read.
