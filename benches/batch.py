@@ -71,7 +71,7 @@ import sys, time, spherify as sp
 paths = sys.argv[1:]
 start = time.perf_counter()
 for path in paths:
-    sp.embed(sp.load(path))
+    sp.embed(sp.load(path), "theta_phi")
 print(time.perf_counter() - start)
 """
 
