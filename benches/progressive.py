@@ -38,7 +38,9 @@ SHAPES = ["tentacles", "urchin", "helix_tube", "bumpy_blob", "ellipsoid", "icosp
 def spherical_log_area(mesh: Any, points: Any) -> float:
     """Mean |log area ratio| with each face's spherical triangle (Van Oosterom
     and Strackee), issue 10's definition: (spherical area / 4 pi) over (surface
-    area / total). Faces with no positive spherical area (flipped) are left out."""
+    area / total). Faces with no positive spherical area (flipped) are left out.
+    ``mesh`` is the map's own (``m.mesh``: consistently outward, which the
+    input need not be)."""
     import numpy as np
     V, F = np.asarray(mesh.vertices), np.asarray(mesh.faces)
     p = points / np.linalg.norm(points, axis=1, keepdims=True)
@@ -89,7 +91,7 @@ def measure(spec: Dict[str, Any]) -> Dict[str, Any]:
                 f = sp.face_quality(mesh, m.points)
                 row.update(angle=q["angle_mean_deg"], stretch=q["stretch_l2"],
                            log_area=float(np.nanmean(np.abs(f["area_log"]))),
-                           log_area_sph=spherical_log_area(mesh, np.asarray(m.points)))
+                           log_area_sph=spherical_log_area(m.mesh, np.asarray(m.points)))
             except sp.SpherifyError:
                 pass
         out[method] = row
