@@ -103,7 +103,14 @@ def test_theta_phi_h_round_trips_with_any_explicit_poles(surface: Surface, data)
     s = data.draw(st.sampled_from([int(v) for v in neighbours if v != n]
                                   + [(n + 1) % mesh.n_vertices]))
     m = sp.embed(mesh, method="theta_phi", poles=(n, s))
-    assert_h_round_trips_or_fan_not_monotone(m, mesh, n)
+    # Adjacent poles split a face into thin pieces, where a sphere point's
+    # surface point can have no finite error bound: to_surface then warns
+    # (issue 13, item 7), as it should. The round trip must hold all the same
+    # (CI's derandomized draw: 91 vertices, seed 115, poles 18 and 46).
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", "[0-9]+ of [0-9]+ points lie where the map's triangles "
+                                "are nearly flat", sp.SpherifyWarning)
+        assert_h_round_trips_or_fan_not_monotone(m, mesh, n)
 
 
 @pytest.mark.parametrize("name", ["tetrahedron", "octahedron"])
