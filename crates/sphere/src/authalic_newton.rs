@@ -15,7 +15,7 @@
 //! Marquardt 1963).
 //!
 //! The residual of face f with surface share s_f is r_f = log(E_f / (sum E)
-//! / s_f), E_f the spherical triangle's area (Van Oosterom and Strackee:
+//! / s_f), E_f the spherical triangle's area ([`signed_area`]; Van Oosterom and Strackee:
 //! E = 2 atan2(det, 1 + a.b + b.c + c.a)). It is the area of the face's true
 //! image under the map of thesis 3.3 (issue 10 defines the area ratio with
 //! it), and it vanishes with det[a, b, c], so log E is a barrier against a
@@ -44,13 +44,13 @@
 
 use rayon::prelude::*;
 use spherify_mesh::predicates::{det3_sign, Sign};
-use spherify_mesh::vec3::{add, cross, det3, dot, norm, scale, sub};
+use spherify_mesh::vec3::{add, cross, det3, dot, scale, sub, triangle_area};
 use spherify_sparse::{CsrMatrix, Factorization};
 
 use crate::embedding::normalize;
 use crate::error::SphereError;
 use crate::flip_free::tangent_basis;
-use crate::validity::check_sphere;
+use crate::validity::{check_sphere, signed_area};
 
 /// A moved face may not fall below this fraction of the mean face in
 /// det[a, b, c] (proportional to area for small faces) unless it was
@@ -210,7 +210,7 @@ fn surface_shares(faces: &[[u32; 3]], surface: &[[f64; 3]], area_floor: f64) -> 
         .par_iter()
         .map(|&f| {
             let [a, b, c] = f.map(|v| surface[v as usize]);
-            let area = 0.5 * norm(cross(sub(b, a), sub(c, a)));
+            let area = triangle_area(a, b, c);
             if area >= area_floor && area.is_finite() {
                 area
             } else {
@@ -222,19 +222,13 @@ fn surface_shares(faces: &[[u32; 3]], surface: &[[f64; 3]], area_floor: f64) -> 
     areas.iter().map(|a| a / total).collect()
 }
 
-/// Spherical area of the triangle (a, b, c) of unit vectors (Van Oosterom
-/// and Strackee 1983).
-fn spherical_area(a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> f64 {
-    2.0 * det3(a, b, c).atan2(1.0 + dot(a, b) + dot(b, c) + dot(c, a))
-}
-
 /// The residual of every face (see the module docs).
 fn residuals(faces: &[[u32; 3]], points: &[[f64; 3]], target: &[f64]) -> Vec<f64> {
     let areas: Vec<f64> = faces
         .par_iter()
         .map(|&f| {
             let [a, b, c] = f.map(|v| points[v as usize]);
-            spherical_area(a, b, c)
+            signed_area(a, b, c)
         })
         .collect();
     let total: f64 = areas.iter().sum();

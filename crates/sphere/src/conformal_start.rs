@@ -38,7 +38,7 @@
 //! it, and the caller falls back to the hierarchy otherwise.
 
 use rayon::prelude::*;
-use spherify_mesh::vec3::{cross, dot, norm, scale, sub};
+use spherify_mesh::vec3::{cross, dot, norm, scale, sub, triangle_area};
 use spherify_sparse::tutte::{embed_with_fixed, FixedSystem, TutteError};
 use spherify_sparse::{solve, SolveParams, SolverKind};
 
@@ -287,7 +287,7 @@ fn vertex_areas(positions: &[[f64; 3]], faces: &[[u32; 3]], area_floor: f64) -> 
     let mut mass = vec![0.0; positions.len()];
     for f in faces {
         let [x, y, z] = f.map(|v| positions[v as usize]);
-        let area = (0.5 * norm(cross(sub(y, x), sub(z, x)))).max(area_floor);
+        let area = triangle_area(x, y, z).max(area_floor);
         for &v in f {
             mass[v as usize] += area / 3.0;
         }

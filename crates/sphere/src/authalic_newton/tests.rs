@@ -4,9 +4,9 @@ use super::*;
 use crate::distortion_energy::Energy;
 use crate::genus_zero::GenusZeroMesh;
 use crate::progressive::{area_floor, progressive, ProgressiveParams};
-use crate::validity::{check_sphere, signed_area};
+use crate::validity::check_sphere;
 use spherify_mesh::solids::{capsule, helix};
-use spherify_mesh::vec3::triangle_area;
+use spherify_mesh::vec3::{norm, triangle_area};
 
 fn map(mesh: &GenusZeroMesh, energy: Energy) -> Vec<[f64; 3]> {
     let params = ProgressiveParams::for_energy(energy);
