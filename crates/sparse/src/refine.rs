@@ -79,27 +79,34 @@ pub fn residual_double_double(
 }
 
 /// One refinement step for every right-hand side: x += A^{-1} (b - A x), the
-/// residual taken in double-double. Returns the max norm of the corrections.
+/// residual taken in double-double. Returns how many entries of `x` changed.
+///
+/// Zero means `x` is a fixed point of the step: the next step would compute
+/// the same residual and the same correction and change nothing again, so a
+/// caller that stops there ends on the same bits as one that goes on. (The
+/// size of the correction cannot tell this: at the correctly rounded solution
+/// it stays around half an ulp, which adding to `x` rounds away.)
 pub fn refine_step(
     a: &CsrMatrix,
     factor: &Factorization,
     rhs: &[Vec<f64>],
     x: &mut [Vec<f64>],
-) -> Result<f64, SparseError> {
+) -> Result<usize, SparseError> {
     let residuals = rhs
         .iter()
         .zip(x.iter())
         .map(|(b, xi)| residual_double_double(a, b, xi))
         .collect::<Result<Vec<_>, _>>()?;
     let corrections = factor.solve(a, &residuals)?;
-    let mut largest = 0.0f64;
+    let mut changed = 0;
     for (xi, d) in x.iter_mut().zip(&corrections) {
         for (v, dv) in xi.iter_mut().zip(d) {
-            *v += dv;
-            largest = largest.max(dv.abs());
+            let next = *v + dv;
+            changed += usize::from(next.to_bits() != v.to_bits());
+            *v = next;
         }
     }
-    Ok(largest)
+    Ok(changed)
 }
 
 #[cfg(test)]
@@ -169,5 +176,41 @@ mod tests {
             .fold(0.0f64, |m, r| m.max(r.abs()));
         assert!(after <= before, "{after} > {before}");
         assert!(after < 1e-14, "{after}");
+    }
+
+    #[test]
+    fn a_step_that_changes_nothing_is_a_fixed_point() {
+        // Refine a badly conditioned chain until a step reports no change;
+        // further steps must then leave every bit where it is.
+        let n = 300;
+        let (mut rows, mut cols, mut vals) = (vec![], vec![], vec![]);
+        for i in 0..n as u32 {
+            // Nearly singular: a chain Laplacian with a 1e-9 shift.
+            rows.push(i);
+            cols.push(i);
+            vals.push(2.0 + 1e-9);
+            for j in [i.checked_sub(1), Some(i + 1)].into_iter().flatten() {
+                if (j as usize) < n {
+                    rows.push(i);
+                    cols.push(j);
+                    vals.push(-1.0);
+                }
+            }
+        }
+        let a = CsrMatrix::from_triplets(n, n, &rows, &cols, &vals).unwrap();
+        let b: Vec<Vec<f64>> =
+            (0..2).map(|k| (0..n).map(|i| ((i * (k + 3)) % 11) as f64 - 5.0).collect()).collect();
+        let f = Factorization::new(&a).unwrap();
+        let mut x = f.solve(&a, &b).unwrap();
+        let mut steps = 0;
+        while refine_step(&a, &f, &b, &mut x).unwrap() != 0 {
+            steps += 1;
+            assert!(steps < 20, "refinement did not settle");
+        }
+        let settled = x.clone();
+        for _ in 0..3 {
+            assert_eq!(refine_step(&a, &f, &b, &mut x).unwrap(), 0);
+            assert_eq!(x, settled);
+        }
     }
 }

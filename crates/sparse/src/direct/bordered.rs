@@ -379,7 +379,7 @@ mod tests {
             let refined = |f: &Factorization| {
                 let mut x = f.solve(&a, &rhs).unwrap();
                 for _ in 0..8 {
-                    if refine_step(&a, f, &rhs, &mut x).unwrap() == 0.0 {
+                    if refine_step(&a, f, &rhs, &mut x).unwrap() == 0 {
                         break;
                     }
                 }
