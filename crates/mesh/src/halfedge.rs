@@ -247,7 +247,10 @@ impl HalfEdgeMesh {
         let mut neighbors = Vec::with_capacity(self.to.len());
         offsets.push(0);
         for v in 0..n as u32 {
-            neighbors.extend(self.vertex_ring(v));
+            // `vertex_ring` without its allocation: the rotation, reversed in place.
+            let start = neighbors.len();
+            neighbors.extend(self.rotation(v).map(|h| self.head(h)));
+            neighbors[start..].reverse();
             offsets.push(neighbors.len());
         }
         Adjacency { offsets, neighbors }
@@ -280,6 +283,9 @@ mod tests {
         }
         let adj = he.adjacency();
         assert_eq!(adj.n_edges(), 12);
+        for v in 0..6 {
+            assert_eq!(adj.neighbors(v), he.vertex_ring(v).as_slice());
+        }
         assert!((0..6).all(|v| adj.degree(v) == 4));
     }
 
@@ -302,6 +308,10 @@ mod tests {
         assert_eq!(he.vertex_ring(4).len(), 4);
         assert_eq!(he.vertex_ring(0).len(), 3);
         assert_eq!(he.vertex_faces(0).len(), 2);
+        let adj = he.adjacency();
+        for v in 0..5 {
+            assert_eq!(adj.neighbors(v), he.vertex_ring(v).as_slice());
+        }
     }
 
     #[test]

@@ -197,7 +197,22 @@ impl FixedSystem {
         weights: &[f64],
         fixed: &[Option<[f64; 2]>],
     ) -> Result<FixedSystem, TutteError> {
-        let n = he.n_vertices();
+        FixedSystem::assemble_rows(&fixed[..he.n_vertices()], |i, edges| {
+            edges.extend(he.rotation(i).map(|h| (he.head(h), weights[h as usize])));
+        })
+    }
+
+    /// Assembles the system from each free vertex's edges: `edges(i, out)`
+    /// appends (j, w_ij) for every neighbour j of vertex i to `out`, in the
+    /// order the row's sums are to run (for [`FixedSystem::assemble`],
+    /// rotation order). The same edges in the same order give the same
+    /// system bit for bit, however they are found. `fixed` has one entry per
+    /// vertex.
+    pub fn assemble_rows<E>(fixed: &[Option<[f64; 2]>], edges: E) -> Result<FixedSystem, TutteError>
+    where
+        E: Fn(u32, &mut Vec<(u32, f64)>) + Sync,
+    {
+        let n = fixed.len();
         let mut unknown = vec![u32::MAX; n];
         let mut free = Vec::new();
         for v in 0..n {
@@ -206,23 +221,30 @@ impl FixedSystem {
                 free.push(v as u32);
             }
         }
-        // Row by row in parallel; each row's sums run in rotation order, as
-        // they always have, so the system is the same bit for bit.
+        // Row by row in parallel; each row's sums run in the order given, as
+        // they always have, so the system is the same bit for bit. The row's
+        // edges are listed in `entries` and overwritten in place by its
+        // off-diagonal entries (at most one per edge).
         let (matrix, fixed_sums) = CsrMatrix::from_rows(free.len(), free.len(), |row, entries| {
             let i = free[row];
+            edges(i, entries);
             let (mut diagonal, mut x, mut y) = (0.0, 0.0, 0.0);
-            for h in he.rotation(i) {
-                let w = weights[h as usize];
-                let j = he.head(h);
+            let mut kept = 0;
+            for e in 0..entries.len() {
+                let (j, w) = entries[e];
                 diagonal += w;
                 match fixed[j as usize] {
                     Some(p) => {
                         x += w * p[0];
                         y += w * p[1];
                     }
-                    None => entries.push((unknown[j as usize], -w)),
+                    None => {
+                        entries[kept] = (unknown[j as usize], -w);
+                        kept += 1;
+                    }
                 }
             }
+            entries.truncate(kept);
             entries.push((row as u32, diagonal));
             [x, y]
         })?;

@@ -51,6 +51,7 @@ pub mod authalic_newton;
 pub mod bvh;
 pub mod conformal_start;
 pub mod cut_path;
+mod cut_rotations;
 pub mod distortion_energy;
 pub mod dogleg;
 pub mod embed;

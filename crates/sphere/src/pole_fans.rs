@@ -31,7 +31,11 @@ pub(crate) fn rectangle_boundary(
 /// valid embedding: P_n = (p_1, v_1, ..., v_l, N+k) for the north pole, and
 /// (p_k, ..., N+1) for the south pole (thesis 6.5.1).
 pub(crate) fn pole_fan(he: &HalfEdgeMesh, pole: u32, south: bool) -> Vec<u32> {
-    let ring = he.vertex_ring(pole);
+    fan_of_ring(he.vertex_ring(pole), south)
+}
+
+/// [`pole_fan`] from the pole's `vertex_ring` in the cut mesh.
+pub(crate) fn fan_of_ring(ring: Vec<u32>, south: bool) -> Vec<u32> {
     if south {
         ring.into_iter().rev().collect()
     } else {

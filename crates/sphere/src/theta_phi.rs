@@ -35,11 +35,12 @@ use spherify_sparse::weights::{half_edge_weights, Weights};
 use spherify_sparse::Factorization;
 
 use crate::cut_path::{cut_path, finish_path};
+use crate::cut_rotations::CutRotations;
 use crate::embedding::{SphereEmbedding, Status};
 use crate::error::SphereError;
 use crate::genus_zero::GenusZeroMesh;
 use crate::h_map::fold;
-use crate::pole_fans::{pin_fan, pole_fan, rectangle_boundary, strictly_increasing_phi};
+use crate::pole_fans::{fan_of_ring, pin_fan, rectangle_boundary, strictly_increasing_phi};
 use crate::poles::{self, Poles};
 use crate::symmetry::{self, Symmetry, SymmetryParams};
 
@@ -270,17 +271,31 @@ pub fn theta_phi_with_progress(
     drop(graph);
     solver.watch.lap("cut");
 
-    let cut_he = HalfEdgeMesh::new(&cut.mesh)?;
+    // Uniform weights (the default) need only the rotations of the cut
+    // disk, read from the sphere's half-edges; the other weights are computed
+    // on the disk's own half-edges (its face corners and boundary).
+    let cut_he = match params.weights {
+        Weights::Uniform => None,
+        _ => Some(HalfEdgeMesh::new(&cut.mesh)?),
+    };
     cut.mesh.forget_edge_table();
+    let rotations = CutRotations::new(he, mesh.faces(), &cut);
     let k = path.len() - 2;
     let n_vertices = mesh.n_vertices();
-    let north_fan = pole_fan(&cut_he, chosen.north, false);
-    let south_fan = pole_fan(&cut_he, chosen.south, true);
+    let ring = |pole| {
+        rotations.boundary_ring(pole).ok_or_else(|| topology(mesh, TopologyProblem::NotSphere))
+    };
+    let north_fan = fan_of_ring(ring(chosen.north)?, false);
+    let south_fan = fan_of_ring(ring(chosen.south)?, true);
 
     let mut fixed = rectangle_boundary(&cut.boundary, k, n_vertices);
     solver.watch.lap("system");
     go_on(progress, "cut")?;
-    let mut uv = solver.solve(cut_he, &cut.mesh, &fixed, progress)?;
+    let rows = |cut_he: Option<HalfEdgeMesh>| match cut_he {
+        Some(he) => Rows::Disk(he),
+        None => Rows::Sphere(&rotations),
+    };
+    let mut uv = solver.solve(rows(cut_he), &cut.mesh, &fixed, progress)?;
 
     // Pole fans (6.5.1): re-embed with the fan pinned (6.38) where phi is not
     // strictly increasing. Eq. 6.38 needs the fan's inner vertices to be free;
@@ -306,7 +321,11 @@ pub fn theta_phi_with_progress(
         if !pinned {
             break;
         }
-        uv = solver.solve(HalfEdgeMesh::new(&cut.mesh)?, &cut.mesh, &fixed, progress)?;
+        let cut_he = match params.weights {
+            Weights::Uniform => None,
+            _ => Some(HalfEdgeMesh::new(&cut.mesh)?),
+        };
+        uv = solver.solve(rows(cut_he), &cut.mesh, &fixed, progress)?;
     }
     let fans_monotone =
         [strictly_increasing_phi(&uv, &north_fan), strictly_increasing_phi(&uv, &south_fan)];
@@ -396,6 +415,14 @@ fn go_on(
     }
 }
 
+/// Where the rows of the rectangle system come from: the cut disk's own
+/// half-edges (any weights), or, for uniform weights, the rotations read from
+/// the sphere's half-edges (the same rows in the same order: [`CutRotations`]).
+enum Rows<'a> {
+    Disk(HalfEdgeMesh),
+    Sphere(&'a CutRotations<'a>),
+}
+
 /// What both rectangle solves (the first, and the one with pinned pole fans)
 /// share: the weights, the refinement budget, and the running counts.
 struct RectangleSolver {
@@ -407,26 +434,31 @@ struct RectangleSolver {
 }
 
 impl RectangleSolver {
-    /// Solves the Tutte system of `cut` (whose half-edges are `he`) with `fixed`
-    /// boundary, then refines in double-double while triangles are inverted
-    /// and refinement still changes the solution.
+    /// Solves the Tutte system of `cut` (whose rows come from `rows`) with
+    /// `fixed` boundary, then refines in double-double while triangles are
+    /// inverted and refinement still changes the solution.
     ///
-    /// `he` is taken by value so that it and the weights are freed once the
-    /// system is assembled: the factor then has their memory (at a million
-    /// vertices they are ~130 MB next to a ~600 MB factor).
+    /// `rows` is taken by value so that the disk's half-edges and the weights
+    /// are freed once the system is assembled: the factor then has their
+    /// memory (at a million vertices they are ~130 MB next to a ~600 MB factor).
     fn solve(
         &mut self,
-        he: HalfEdgeMesh,
+        rows: Rows<'_>,
         cut: &Mesh,
         fixed: &[Option<[f64; 2]>],
         progress: &(dyn Fn(usize, usize) -> bool + Sync),
     ) -> Result<Vec<[f64; 2]>, SphereError> {
-        let system = {
-            let weights = half_edge_weights(cut.positions(), &he, self.weights)
-                .map_err(|e| from_tutte(e.into()))?;
-            FixedSystem::assemble(&he, &weights, fixed).map_err(from_tutte)?
+        let system = match rows {
+            Rows::Sphere(rotations) => {
+                FixedSystem::assemble_rows(fixed, |i, out| rotations.uniform_edges(i, out))
+                    .map_err(from_tutte)?
+            }
+            Rows::Disk(he) => {
+                let weights = half_edge_weights(cut.positions(), &he, self.weights)
+                    .map_err(|e| from_tutte(e.into()))?;
+                FixedSystem::assemble(&he, &weights, fixed).map_err(from_tutte)?
+            }
         };
-        drop(he);
         let faces = cut.faces();
         if system.free.is_empty() {
             return Ok(system.fixed_positions(fixed));
