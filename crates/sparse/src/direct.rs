@@ -4,8 +4,8 @@
 //! (`crate::nested_dissection`) or AMD for Cholesky, COLAMD for LU). Large
 //! Cholesky factors are made in two halves in parallel ([`bordered`]).
 //!
-//! This module (with its child [`bordered`]) is the only one that names `faer`: its API changes between minor
-//! versions, and STYLE.md ("Avoid") wants such a dependency behind one small
+//! This module (with its children [`bordered`] and [`orderings`]) is the
+//! only one that names `faer`: its API changes between minor versions, and STYLE.md ("Avoid") wants such a dependency behind one small
 //! module so an upgrade touches one file.
 //!
 //! The thesis (4.5) prefers Gauss-Seidel to a direct method because the
@@ -18,6 +18,7 @@
 //! iterative refinement of `crate::refine`), lives here too.
 
 mod bordered;
+pub(crate) mod orderings;
 
 use crate::error::SparseError;
 use crate::nested_dissection::{nested_dissection, pseudo_diameter};
