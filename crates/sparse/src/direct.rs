@@ -5,8 +5,9 @@
 //! Cholesky factors are made in two halves in parallel ([`bordered`]).
 //!
 //! This module (with its children [`bordered`] and [`orderings`]) is the
-//! only one that names `faer`: its API changes between minor versions, and STYLE.md ("Avoid") wants such a dependency behind one small
-//! module so an upgrade touches one file.
+//! only one that names `faer`: its API changes between minor versions, and
+//! STYLE.md ("Avoid") wants such a dependency behind one small module so an
+//! upgrade touches one file.
 //!
 //! The thesis (4.5) prefers Gauss-Seidel to a direct method because the
 //! Tutte matrix has no band structure; a modern fill-reducing ordering makes

@@ -11,12 +11,16 @@
 //! dissection (1978): a breadth-first search from a pseudo-peripheral vertex
 //! (the end of a second sweep) cuts the piece into levels, each of which
 //! separates the levels before it from those after; we take the smallest level
-//! near the middle and keep only its vertices that touch the far side. On a
-//! triangle mesh a level is a closed curve of vertices, a ring on a tube, so
-//! this needs neither coordinates nor a multilevel partitioner, costs a few
-//! breadth-first sweeps per level of the recursion (`O(n log n)` in all), and
-//! the two halves of each piece are ordered in parallel. Small pieces are
-//! ordered by approximate minimum degree (faer's AMD) on their own.
+//! near the middle and refine it by Fiduccia-Mattheyses vertex moves
+//! ([`fiduccia_mattheyses`]; Ashcraft and Liu 1994), which drop the vertices
+//! that touch one side only and trade ragged stretches of the wavefront for
+//! shorter ones. On a triangle mesh a level is a closed curve of vertices, a
+//! ring on a tube, so this needs neither coordinates nor a multilevel
+//! partitioner, costs a few breadth-first sweeps per level of the recursion
+//! (`O(n log n)` in all; the refinement touches only the separator's
+//! neighbourhood), and the two halves of each piece are ordered in parallel.
+//! Small pieces are ordered by approximate minimum degree (faer's AMD) on
+//! their own.
 //!
 //! Why not METIS (the `metis` crate builds it from vendored C sources): its
 //! multilevel separators leave less fill (a quarter less than AMD on the
@@ -30,7 +34,10 @@
 //! The ordering is deterministic: the parallel halves touch disjoint vertices,
 //! and the piece labels they share only tell membership.
 
+mod fiduccia_mattheyses;
+
 use crate::direct::amd_order;
+use fiduccia_mattheyses::Split;
 use std::sync::atomic::{AtomicU32, Ordering::Relaxed};
 
 /// Pieces at most this large are ordered by approximate minimum degree,
@@ -374,7 +381,11 @@ impl Dissection<'_> {
             return;
         }
         let Cut { near, far, n_near, n_separator } = self.cut(&levels, vs, BALANCE);
+        // The searches' ends, unless the refinement moved them.
+        let label = |v: u32| self.label[v as usize].load(Relaxed);
+        let near_hint = if label(far_end) == near { far_end } else { vs[0] };
         let far_hint = levels.queue[len - 1];
+        let far_hint = if label(far_hint) == far { far_hint } else { vs[n_near] };
         drop(levels);
         let (near_part, rest) = vs.split_at_mut(n_near);
         let far_part = &mut rest[..len - n_near - n_separator];
@@ -382,45 +393,55 @@ impl Dissection<'_> {
         // rings around it, and starting the far side at its last vertex
         // (measured) gave 5% more fill on blobs for little time.
         self.both(
-            Piece { vs: near_part, label: near, hint: far_end },
+            Piece { vs: near_part, label: near, hint: near_hint },
             Piece { vs: far_part, label: far, hint: far_hint },
         );
     }
 
     /// Cuts a connected piece, searched in `levels` (at least three), at the
-    /// level [`separator_level`] picks: writes the near side, the far side and
-    /// the separator into `vs` in that order, each in breadth-first order, and
-    /// labels the sides afresh (the separator [`PLACED`]).
+    /// level [`separator_level`] picks, refined by Fiduccia-Mattheyses
+    /// ([`fiduccia_mattheyses`]): writes the near side, the far side and the
+    /// separator into `vs` in that order, the sides in breadth-first order,
+    /// and labels the sides afresh (the separator [`PLACED`]).
     fn cut(&self, levels: &Levels, vs: &mut [u32], balance: f64) -> Cut {
-        let k = separator_level(&levels.starts, vs.len(), balance);
-        let (near, far) = (self.fresh(), self.fresh());
-        for &v in &levels.queue[..levels.starts[k]] {
-            self.label[v as usize].store(near, Relaxed);
+        let len = vs.len();
+        let k = separator_level(&levels.starts, len, balance);
+        let (near, far, sep) = (self.fresh(), self.fresh(), self.fresh());
+        for (v, label) in levels.queue[..levels.starts[k]]
+            .iter()
+            .map(|v| (v, near))
+            .chain(levels.level(k).iter().map(|v| (v, sep)))
+            .chain(levels.queue[levels.starts[k + 1]..].iter().map(|v| (v, far)))
+        {
+            self.label[*v as usize].store(label, Relaxed);
         }
-        for &v in &levels.queue[levels.starts[k + 1]..] {
-            self.label[v as usize].store(far, Relaxed);
-        }
-        // A level-k vertex with no neighbour beyond the level joins the near
-        // side; the rest are the separator.
-        let mut separator = Vec::new();
-        let mut n_near = levels.starts[k];
-        vs[..n_near].copy_from_slice(&levels.queue[..n_near]);
-        for &v in levels.level(k) {
-            let touches_far =
-                self.neighbours(v).iter().any(|&w| self.label[w as usize].load(Relaxed) == far);
-            if touches_far {
-                self.label[v as usize].store(PLACED, Relaxed);
-                separator.push(v);
-            } else {
-                self.label[v as usize].store(near, Relaxed);
-                vs[n_near] = v;
-                n_near += 1;
+        // The level is a separator as it is; the refinement first drops
+        // the vertices that touch one side only (into the other), then
+        // trades the rest for shorter rings.
+        let mut split = Split {
+            labels: [near, far],
+            sep,
+            sizes: [levels.starts[k], len - levels.starts[k + 1]],
+            separator: levels.level(k).to_vec(),
+        };
+        self.refine_separator(&mut split, (balance * len as f64) as usize);
+        let n_near = split.sizes[0];
+        let (mut a, mut b) = (0, n_near);
+        for &v in &levels.queue {
+            let label = self.label[v as usize].load(Relaxed);
+            if label == near {
+                vs[a] = v;
+                a += 1;
+            } else if label == far {
+                vs[b] = v;
+                b += 1;
             }
         }
-        let far_part = &levels.queue[levels.starts[k + 1]..];
-        vs[n_near..n_near + far_part.len()].copy_from_slice(far_part);
-        vs[n_near + far_part.len()..].copy_from_slice(&separator);
-        Cut { near, far, n_near, n_separator: separator.len() }
+        for (slot, &v) in vs[b..].iter_mut().zip(&split.separator) {
+            *slot = v;
+            self.label[v as usize].store(PLACED, Relaxed);
+        }
+        Cut { near, far, n_near, n_separator: split.separator.len() }
     }
 
     /// Orders a small piece (`members`, each labelled `piece`) by approximate
