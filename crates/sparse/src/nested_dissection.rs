@@ -10,8 +10,9 @@
 //! The separators are BFS level sets, as in George and Liu's automatic nested
 //! dissection (1978): a breadth-first search from a pseudo-peripheral vertex
 //! (the end of a second sweep) cuts the piece into levels, each of which
-//! separates the levels before it from those after; we take the smallest level
-//! near the middle and refine it by Fiduccia-Mattheyses vertex moves
+//! separates the levels before it from those after; we take the level of
+//! least `|S| / (|near| |far|)` that leaves each side a tenth ([`Rule`]) and
+//! refine it by Fiduccia-Mattheyses vertex moves
 //! ([`fiduccia_mattheyses`]; Ashcraft and Liu 1994), which drop the vertices
 //! that touch one side only and trade ragged stretches of the wavefront for
 //! shorter ones. On a triangle mesh a level is a closed curve of vertices, a
@@ -48,15 +49,40 @@ const LEAF: usize = 256;
 /// Pieces larger than this order their two halves on two rayon tasks.
 const PARALLEL: usize = 8_192;
 
-/// Where a separator may fall: each side keeps at least this share of the
-/// piece (0.33 against 0.25 and 0.45: the smallest factor on the 1M shapes).
-const BALANCE: f64 = 0.33;
+/// How [`Dissection::dissect`] picks its levels: the ratio cut, each side
+/// keeping at least a tenth of the piece (0.1 against 0.05 and 0.2, and
+/// against the smallest level leaving each side a third, the rule before:
+/// the smallest factors on the corpus and the 1M shapes, docs/benchmarks.md).
+const RULE: Rule = Rule::Ratio(0.1);
 
-/// [`BALANCE`] of [`bisection`], whose halves are factored on two cores at
+/// The balance of [`bisection`], whose halves are factored on two cores at
 /// once: there the larger half sets the time (a 45/55 split costs 57% of
 /// one core's time at `O(n^1.5)` work, a 33/67 split 70%), and the
 /// separator, factored dense, costs little unless it is much larger.
-const HALVES_BALANCE: f64 = 0.45;
+const HALVES: Rule = Rule::Balanced(0.45);
+
+/// How [`separator_level`] weighs a level's size against the balance of
+/// the sides it leaves; each rule's share is the least either side keeps.
+#[derive(Debug, Clone, Copy)]
+enum Rule {
+    /// The smallest level.
+    Balanced(f64),
+    /// The level of least `|S| / (|near| |far|)`: the ratio cut (Wei and
+    /// Cheng 1989). On shapes with limbs (the corpus's scorpion, armadillo,
+    /// octopus) a small cut at a limb's root then beats a balanced one
+    /// through the body, which AMD would not make either: the dense corner
+    /// of a separator and the boundaries it leaves its pieces cost more
+    /// than the imbalance.
+    Ratio(f64),
+}
+
+impl Rule {
+    /// The least number of vertices either side of a `len`-vertex piece keeps.
+    fn least(self, len: usize) -> usize {
+        let (Rule::Balanced(share) | Rule::Ratio(share)) = self;
+        (share * len as f64) as usize
+    }
+}
 
 /// The label of a vertex placed in a separator: never a piece's label.
 const PLACED: u32 = u32::MAX;
@@ -175,7 +201,7 @@ pub(crate) fn bisection(offsets: &[usize], indices: &[u32]) -> Option<Bisection>
         return None;
     }
     let mut vs = vec![0u32; n];
-    let cut = work.cut(&levels, &mut vs, HALVES_BALANCE);
+    let cut = work.cut(&levels, &mut vs, HALVES);
     Some(Bisection { vs, n_near: cut.n_near, n_separator: cut.n_separator })
 }
 
@@ -380,7 +406,7 @@ impl Dissection<'_> {
             self.minimum_degree(vs, &levels.queue, second);
             return;
         }
-        let Cut { near, far, n_near, n_separator } = self.cut(&levels, vs, BALANCE);
+        let Cut { near, far, n_near, n_separator } = self.cut(&levels, vs, RULE);
         // The searches' ends, unless the refinement moved them.
         let label = |v: u32| self.label[v as usize].load(Relaxed);
         let near_hint = if label(far_end) == near { far_end } else { vs[0] };
@@ -403,9 +429,9 @@ impl Dissection<'_> {
     /// ([`fiduccia_mattheyses`]): writes the near side, the far side and the
     /// separator into `vs` in that order, the sides in breadth-first order,
     /// and labels the sides afresh (the separator [`PLACED`]).
-    fn cut(&self, levels: &Levels, vs: &mut [u32], balance: f64) -> Cut {
+    fn cut(&self, levels: &Levels, vs: &mut [u32], rule: Rule) -> Cut {
         let len = vs.len();
-        let k = separator_level(&levels.starts, len, balance);
+        let k = separator_level(&levels.starts, len, rule);
         let (near, far, sep) = (self.fresh(), self.fresh(), self.fresh());
         for (v, label) in levels.queue[..levels.starts[k]]
             .iter()
@@ -424,7 +450,7 @@ impl Dissection<'_> {
             sizes: [levels.starts[k], len - levels.starts[k + 1]],
             separator: levels.level(k).to_vec(),
         };
-        self.refine_separator(&mut split, (balance * len as f64) as usize);
+        self.refine_separator(&mut split, rule.least(len));
         let n_near = split.sizes[0];
         let (mut a, mut b) = (0, n_near);
         for &v in &levels.queue {
@@ -492,17 +518,23 @@ impl Dissection<'_> {
     }
 }
 
-/// The level to cut at: the smallest one that leaves each side at least
-/// `balance` of the piece, or the one holding the median vertex when none
-/// does. Never the first or the last level, so both sides are non-empty.
-fn separator_level(starts: &[usize], len: usize, balance: f64) -> usize {
+/// The level to cut at: the best by `rule` among those that leave each side
+/// its least share of the piece, or the one holding the median vertex when
+/// none does. Never the first or the last level, so both sides are non-empty.
+fn separator_level(starts: &[usize], len: usize, rule: Rule) -> usize {
     let count = starts.len() - 1;
-    let least = (balance * len as f64) as usize;
+    let least = rule.least(len);
     let size = |k: usize| starts[k + 1] - starts[k];
-    let balanced = (1..count - 1)
-        .filter(|&k| starts[k] >= least && len - starts[k + 1] >= least)
-        .min_by_key(|&k| (size(k), k));
-    balanced.unwrap_or_else(|| {
+    let allowed = (1..count - 1).filter(|&k| starts[k] >= least && len - starts[k + 1] >= least);
+    let best = match rule {
+        Rule::Balanced(_) => allowed.min_by_key(|&k| (size(k), k)),
+        Rule::Ratio(_) => {
+            let cost =
+                |k: usize| size(k) as f64 / (starts[k] as f64 * (len - starts[k + 1]) as f64);
+            allowed.min_by(|&a, &b| cost(a).total_cmp(&cost(b)).then(a.cmp(&b)))
+        }
+    };
+    best.unwrap_or_else(|| {
         let median = (1..count).find(|&k| starts[k + 1] > len / 2).unwrap_or(count - 1);
         median.clamp(1, count - 2)
     })

@@ -222,23 +222,23 @@ fn cuts_separate_within_the_balance_bound_and_never_grow_the_level() {
         if levels.count() < 3 {
             continue;
         }
-        for balance in [BALANCE, HALVES_BALANCE] {
+        for rule in [RULE, HALVES, Rule::Balanced(0.33)] {
             // Label the searched component afresh for each cut.
             let label = work.fresh();
             for &v in &levels.queue {
                 work.label[v as usize].store(label, Relaxed);
             }
-            let k = separator_level(&levels.starts, len, balance);
+            let k = separator_level(&levels.starts, len, rule);
             let level = levels.starts[k + 1] - levels.starts[k];
             let before = levels.starts[k].min(len - levels.starts[k + 1]);
             let mut vs = vec![0; len];
-            let cut = work.cut(&levels, &mut vs, balance);
+            let cut = work.cut(&levels, &mut vs, rule);
             let (near, rest) = vs.split_at(cut.n_near);
             let (far, separator) = rest.split_at(len - cut.n_near - cut.n_separator);
             assert!(separated(&offsets, &indices, near, far));
             assert!(!near.is_empty() && !far.is_empty());
             assert!(cut.n_separator <= level, "{} > {level}", cut.n_separator);
-            let least = ((balance * len as f64) as usize).min(before).max(1);
+            let least = rule.least(len).min(before).max(1);
             assert!(near.len().min(far.len()) >= least, "{} {} {least}", near.len(), far.len());
             // Every vertex of the component once, with its side's label.
             let mut sorted = vs.clone();
@@ -253,7 +253,7 @@ fn cuts_separate_within_the_balance_bound_and_never_grow_the_level() {
         }
     }
     // The refinement did something on most of them.
-    assert!(refined > 100, "{refined}");
+    assert!(refined > 150, "{refined}");
 }
 
 #[test]
