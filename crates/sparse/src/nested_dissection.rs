@@ -95,7 +95,8 @@ struct Dissection<'a> {
     /// vertices it reaches to a fresh label, so labels double as visit marks.
     label: Vec<AtomicU32>,
     next_label: AtomicU32,
-    /// Index of each vertex within its piece, while a small piece is ordered.
+    /// Index of each vertex within its piece, while a small piece is
+    /// ordered; while a piece is cut, the separator refinement's locks.
     local: Vec<AtomicU32>,
 }
 
@@ -186,7 +187,7 @@ pub(crate) fn bisection(offsets: &[usize], indices: &[u32]) -> Option<Bisection>
         indices,
         label: (0..n).map(|_| AtomicU32::new(0)).collect(),
         next_label: AtomicU32::new(1),
-        local: Vec::new(),
+        local: (0..n).map(|_| AtomicU32::new(0)).collect(),
     };
     let first = work.fresh();
     let sweep = work.bfs(0, 0, first, n);

@@ -21,14 +21,19 @@
 //! moves times the squared degree, nothing per vertex of the piece.
 
 use super::Dissection;
-use std::collections::{BinaryHeap, HashSet};
+use std::collections::BinaryHeap;
 use std::sync::atomic::Ordering::Relaxed;
 
 /// Passes at most (each one that does not shrink the separator ends the refinement).
 const PASSES: usize = 8;
 
-/// Moves a pass makes past its best separator before it gives up.
-const PATIENCE: usize = 100;
+/// Moves a pass makes past its best separator before it gives up: 1% of
+/// the piece, at least 15 and at most 100 (the limit of METIS's
+/// `FM_2WayNodeRefine`): a small piece's separator is short, and most
+/// pieces of the recursion are small.
+fn patience(len: usize) -> usize {
+    (len / 100).clamp(15, 100)
+}
 
 /// A piece cut in two: the labels of its near side, far side and separator,
 /// how many vertices each side has, and the separator's vertices. No edge
@@ -71,6 +76,7 @@ impl Dissection<'_> {
 
     /// One pass; whether it shrank the separator.
     fn pass(&self, split: &mut Split, least: usize) -> bool {
+        let patience = patience(split.sizes[0] + split.sizes[1] + split.separator.len());
         let labels = split.labels;
         let sep = split.sep;
         let label = |v: u32| self.label[v as usize].load(Relaxed);
@@ -85,7 +91,12 @@ impl Dissection<'_> {
                 heap.push((gain(v, to), v, to));
             }
         }
-        let mut locked: HashSet<u32> = HashSet::new();
+        // A vertex moved in this pass is locked: its `local` slot holds the
+        // pass's stamp, a label never used before (the slots of a piece
+        // being cut hold nothing else: `local` serves the leaves, and a
+        // leaf is never cut).
+        let stamp = self.fresh();
+        let locked = |v: u32| self.local[v as usize].load(Relaxed) == stamp;
         let mut moves: Vec<Move> = Vec::new();
         let mut pulled: Vec<u32> = Vec::new();
         let mut entered: Vec<u32> = Vec::new();
@@ -94,7 +105,7 @@ impl Dissection<'_> {
         let (mut size, mut sizes) = (start, split.sizes);
         let (mut best, mut best_moves) = ((start, imbalance(sizes)), 0);
         while let Some((g, v, to)) = heap.pop() {
-            if label(v) != sep || locked.contains(&v) || gain(v, to) != g {
+            if label(v) != sep || locked(v) || gain(v, to) != g {
                 continue;
             }
             let from = 1 - to;
@@ -105,7 +116,7 @@ impl Dissection<'_> {
             // The move: v to side `to`, its neighbours on the other side
             // into the separator.
             self.label[v as usize].store(labels[to], Relaxed);
-            locked.insert(v);
+            self.local[v as usize].store(stamp, Relaxed);
             moves.push(Move { v, to, from: pulled.len() });
             for &w in self.neighbours(v) {
                 if label(w) == labels[from] {
@@ -121,7 +132,7 @@ impl Dissection<'_> {
             let first = moves.last().map_or(0, |m| m.from);
             for &u in std::iter::once(&v).chain(&pulled[first..]) {
                 for &x in std::iter::once(&u).chain(self.neighbours(u)) {
-                    if label(x) == sep && !locked.contains(&x) {
+                    if label(x) == sep && !locked(x) {
                         for t in 0..2 {
                             heap.push((gain(x, t), x, t));
                         }
@@ -131,7 +142,7 @@ impl Dissection<'_> {
             let now = (size, imbalance(sizes));
             if now < best {
                 (best, best_moves) = (now, moves.len());
-            } else if moves.len() - best_moves > PATIENCE {
+            } else if moves.len() - best_moves > patience {
                 break;
             }
         }
