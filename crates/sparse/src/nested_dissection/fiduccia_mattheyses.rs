@@ -21,11 +21,18 @@
 //! moves times the squared degree, nothing per vertex of the piece.
 
 use super::Dissection;
-use std::collections::BinaryHeap;
 use std::sync::atomic::Ordering::Relaxed;
 
-/// Passes at most (each one that does not shrink the separator ends the refinement).
-const PASSES: usize = 8;
+/// Passes at most (each one that does not shrink the separator ends the
+/// refinement): the first takes most of the gain.
+const PASSES: usize = 3;
+
+/// Pieces at least this large are refined in full; smaller ones take one
+/// pass that stops at its first move that does not shrink the separator
+/// (which drops the vertices touching one side only). Measured on the 1M
+/// helix and blob: the same fill, and most of the refinement's time saved
+/// (most pieces of the recursion are small).
+const THOROUGH: usize = 4096;
 
 /// Moves a pass makes past its best separator before it gives up: 1% of
 /// the piece, at least 15 and at most 100 (the limit of METIS's
@@ -59,8 +66,11 @@ impl Dissection<'_> {
     /// side falls below `least` vertices that it did not start below.
     pub(super) fn refine_separator(&self, split: &mut Split, least: usize) {
         let least = least.min(split.sizes[0]).min(split.sizes[1]).max(1);
-        for _ in 0..PASSES {
-            if !self.pass(split, least) {
+        let mut queue = Buckets { buckets: Vec::new(), lowest: 0 };
+        let len = split.sizes[0] + split.sizes[1] + split.separator.len();
+        let (passes, patience) = if len >= THOROUGH { (PASSES, patience(len)) } else { (1, 0) };
+        for _ in 0..passes {
+            if !self.pass(split, least, patience, &mut queue) {
                 break;
             }
         }
@@ -75,20 +85,19 @@ impl Dissection<'_> {
     }
 
     /// One pass; whether it shrank the separator.
-    fn pass(&self, split: &mut Split, least: usize) -> bool {
-        let patience = patience(split.sizes[0] + split.sizes[1] + split.separator.len());
+    fn pass(&self, split: &mut Split, least: usize, patience: usize, queue: &mut Buckets) -> bool {
         let labels = split.labels;
         let sep = split.sep;
         let label = |v: u32| self.label[v as usize].load(Relaxed);
-        let gain = |v: u32, to: usize| 1 - self.count_labelled(v, labels[1 - to]);
+        // The neighbours a move of `v` to side `to` would pull: its cost.
+        let pulls = |v: u32, to: usize| self.count_labelled(v, labels[1 - to]) as usize;
         // Entries go stale as their vertices' neighbourhoods change; each
-        // change pushes a fresh one, and a popped entry whose gain is no
-        // longer the vertex's is dropped. The vertex breaks ties, so the
-        // order is deterministic.
-        let mut heap = BinaryHeap::new();
+        // change pushes a fresh one, and a popped entry whose cost is no
+        // longer the vertex's is dropped.
+        queue.clear();
         for &v in &split.separator {
             for to in 0..2 {
-                heap.push((gain(v, to), v, to));
+                queue.push(pulls(v, to), v, to);
             }
         }
         // A vertex moved in this pass is locked: its `local` slot holds the
@@ -104,12 +113,11 @@ impl Dissection<'_> {
         let imbalance = |sizes: [usize; 2]| sizes[0].abs_diff(sizes[1]);
         let (mut size, mut sizes) = (start, split.sizes);
         let (mut best, mut best_moves) = ((start, imbalance(sizes)), 0);
-        while let Some((g, v, to)) = heap.pop() {
-            if label(v) != sep || locked(v) || gain(v, to) != g {
+        while let Some((taken, v, to)) = queue.pop() {
+            if label(v) != sep || locked(v) || pulls(v, to) != taken {
                 continue;
             }
             let from = 1 - to;
-            let taken = self.count_labelled(v, labels[from]) as usize;
             if sizes[from] < least + taken {
                 continue;
             }
@@ -134,7 +142,7 @@ impl Dissection<'_> {
                 for &x in std::iter::once(&u).chain(self.neighbours(u)) {
                     if label(x) == sep && !locked(x) {
                         for t in 0..2 {
-                            heap.push((gain(x, t), x, t));
+                            queue.push(pulls(x, t), x, t);
                         }
                     }
                 }
@@ -173,5 +181,47 @@ impl Dissection<'_> {
             self.label[v as usize].store(sep, Relaxed);
         }
         best.0 < start
+    }
+}
+
+/// Candidate moves, cheapest first: bucket `c` holds the moves that pull
+/// `c` vertices into the separator (gain `1 - c`). Costs are small integers
+/// (a mesh vertex has about six neighbours), so a bucket queue pushes and
+/// pops in constant time where a binary heap took about half of the
+/// refinement's time. Within a bucket the first pushed comes first
+/// (deterministic; on the 1M blob it left 5% fewer flops than last-first).
+struct Buckets {
+    /// Each bucket's moves, and how many of them were popped.
+    buckets: Vec<(Vec<(u32, u8)>, usize)>,
+    /// No bucket below this one holds anything.
+    lowest: usize,
+}
+
+impl Buckets {
+    fn clear(&mut self) {
+        for (moves, head) in &mut self.buckets {
+            moves.clear();
+            *head = 0;
+        }
+        self.lowest = self.buckets.len();
+    }
+
+    fn push(&mut self, cost: usize, v: u32, to: usize) {
+        if cost >= self.buckets.len() {
+            self.buckets.resize_with(cost + 1, Default::default);
+        }
+        self.buckets[cost].0.push((v, to as u8));
+        self.lowest = self.lowest.min(cost);
+    }
+
+    fn pop(&mut self) -> Option<(usize, u32, usize)> {
+        while let Some((moves, head)) = self.buckets.get_mut(self.lowest) {
+            if let Some(&(v, to)) = moves.get(*head) {
+                *head += 1;
+                return Some((self.lowest, v, to as usize));
+            }
+            self.lowest += 1;
+        }
+        None
     }
 }
