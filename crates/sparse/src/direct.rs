@@ -195,9 +195,9 @@ pub(crate) fn symbolic_llt<I: Index>(
 /// ([`crate::nested_dissection`]) or AMD, whichever fits the graph.
 ///
 /// Measured on the theta-phi systems of the 1M-vertex shapes
-/// (docs/benchmarks.md), nested dissection leaves 12% less fill than AMD on
-/// the helix tube and 2-3% less on the tentacles and the ellipsoid, 3% more
-/// on the bumpy blob; its factor is at least as fast to compute (its tree
+/// (docs/benchmarks.md, issue 14 third session), nested dissection stores
+/// 15% fewer values of L than AMD on the helix tube, 9% fewer on the
+/// tentacles, 7% on the ellipsoid and 1% on the bumpy blob; its factor is at least as fast to compute (its tree
 /// is balanced, so both cores work), but its ordering costs up to twice
 /// AMD's on round shapes. It pays on long graphs, whose diameter is large
 /// against `sqrt(n)` (helix 4.9, tentacles 2.2, blob and ellipsoid 0.95).
