@@ -4,9 +4,10 @@
 //! (`crate::nested_dissection`) or AMD for Cholesky, COLAMD for LU). Large
 //! Cholesky factors are made in two halves in parallel ([`bordered`]).
 //!
-//! This module (with its child [`bordered`]) is the only one that names `faer`: its API changes between minor
-//! versions, and STYLE.md ("Avoid") wants such a dependency behind one small
-//! module so an upgrade touches one file.
+//! This module (with its children [`bordered`] and [`orderings`]) is the
+//! only one that names `faer`: its API changes between minor versions, and
+//! STYLE.md ("Avoid") wants such a dependency behind one small module so an
+//! upgrade touches one file.
 //!
 //! The thesis (4.5) prefers Gauss-Seidel to a direct method because the
 //! Tutte matrix has no band structure; a modern fill-reducing ordering makes
@@ -18,6 +19,7 @@
 //! iterative refinement of `crate::refine`), lives here too.
 
 mod bordered;
+pub(crate) mod orderings;
 
 use crate::error::SparseError;
 use crate::nested_dissection::{nested_dissection, pseudo_diameter};
@@ -193,9 +195,9 @@ pub(crate) fn symbolic_llt<I: Index>(
 /// ([`crate::nested_dissection`]) or AMD, whichever fits the graph.
 ///
 /// Measured on the theta-phi systems of the 1M-vertex shapes
-/// (docs/benchmarks.md), nested dissection leaves 12% less fill than AMD on
-/// the helix tube and 2-3% less on the tentacles and the ellipsoid, 3% more
-/// on the bumpy blob; its factor is at least as fast to compute (its tree
+/// (docs/benchmarks.md, issue 14 third session), nested dissection stores
+/// 15% fewer values of L than AMD on the helix tube, 9% fewer on the
+/// tentacles, 7% on the ellipsoid and 1% on the bumpy blob; its factor is at least as fast to compute (its tree
 /// is balanced, so both cores work), but its ordering costs up to twice
 /// AMD's on round shapes. It pays on long graphs, whose diameter is large
 /// against `sqrt(n)` (helix 4.9, tentacles 2.2, blob and ellipsoid 0.95).

@@ -31,6 +31,7 @@ mod test_support;
 mod vector;
 
 pub use csr::CsrMatrix;
+pub use direct::orderings::{ordering_report, OrderingStats};
 pub use direct::Factorization;
 pub use error::SparseError;
 pub use solve::{solve, SolveInfo, SolveParams};

@@ -10,13 +10,18 @@
 //! The separators are BFS level sets, as in George and Liu's automatic nested
 //! dissection (1978): a breadth-first search from a pseudo-peripheral vertex
 //! (the end of a second sweep) cuts the piece into levels, each of which
-//! separates the levels before it from those after; we take the smallest level
-//! near the middle and keep only its vertices that touch the far side. On a
-//! triangle mesh a level is a closed curve of vertices, a ring on a tube, so
-//! this needs neither coordinates nor a multilevel partitioner, costs a few
-//! breadth-first sweeps per level of the recursion (`O(n log n)` in all), and
-//! the two halves of each piece are ordered in parallel. Small pieces are
-//! ordered by approximate minimum degree (faer's AMD) on their own.
+//! separates the levels before it from those after; we take the level of
+//! least `|S| / (|near| |far|)` that leaves each side a tenth ([`Rule`]) and
+//! refine it by Fiduccia-Mattheyses vertex moves
+//! ([`fiduccia_mattheyses`]; Ashcraft and Liu 1994), which drop the vertices
+//! that touch one side only and trade ragged stretches of the wavefront for
+//! shorter ones. On a triangle mesh a level is a closed curve of vertices, a
+//! ring on a tube, so this needs neither coordinates nor a multilevel
+//! partitioner, costs a few breadth-first sweeps per level of the recursion
+//! (`O(n log n)` in all; the refinement touches only the separator's
+//! neighbourhood), and the two halves of each piece are ordered in parallel.
+//! Small pieces are ordered by approximate minimum degree (faer's AMD) on
+//! their own.
 //!
 //! Why not METIS (the `metis` crate builds it from vendored C sources): its
 //! multilevel separators leave less fill (a quarter less than AMD on the
@@ -30,7 +35,10 @@
 //! The ordering is deterministic: the parallel halves touch disjoint vertices,
 //! and the piece labels they share only tell membership.
 
+mod fiduccia_mattheyses;
+
 use crate::direct::amd_order;
+use fiduccia_mattheyses::Split;
 use std::sync::atomic::{AtomicU32, Ordering::Relaxed};
 
 /// Pieces at most this large are ordered by approximate minimum degree,
@@ -41,15 +49,40 @@ const LEAF: usize = 256;
 /// Pieces larger than this order their two halves on two rayon tasks.
 const PARALLEL: usize = 8_192;
 
-/// Where a separator may fall: each side keeps at least this share of the
-/// piece (0.33 against 0.25 and 0.45: the smallest factor on the 1M shapes).
-const BALANCE: f64 = 0.33;
+/// How [`Dissection::dissect`] picks its levels: the ratio cut, each side
+/// keeping at least a tenth of the piece (0.1 against 0.05 and 0.2, and
+/// against the smallest level leaving each side a third, the rule before:
+/// the smallest factors on the corpus and the 1M shapes, docs/benchmarks.md).
+const RULE: Rule = Rule::Ratio(0.1);
 
-/// [`BALANCE`] of [`bisection`], whose halves are factored on two cores at
+/// The balance of [`bisection`], whose halves are factored on two cores at
 /// once: there the larger half sets the time (a 45/55 split costs 57% of
 /// one core's time at `O(n^1.5)` work, a 33/67 split 70%), and the
 /// separator, factored dense, costs little unless it is much larger.
-const HALVES_BALANCE: f64 = 0.45;
+const HALVES: Rule = Rule::Balanced(0.45);
+
+/// How [`separator_level`] weighs a level's size against the balance of
+/// the sides it leaves; each rule's share is the least either side keeps.
+#[derive(Debug, Clone, Copy)]
+enum Rule {
+    /// The smallest level.
+    Balanced(f64),
+    /// The level of least `|S| / (|near| |far|)`: the ratio cut (Wei and
+    /// Cheng 1989). On shapes with limbs (the corpus's scorpion, armadillo,
+    /// octopus) a small cut at a limb's root then beats a balanced one
+    /// through the body, which AMD would not make either: the dense corner
+    /// of a separator and the boundaries it leaves its pieces cost more
+    /// than the imbalance.
+    Ratio(f64),
+}
+
+impl Rule {
+    /// The least number of vertices either side of a `len`-vertex piece keeps.
+    fn least(self, len: usize) -> usize {
+        let (Rule::Balanced(share) | Rule::Ratio(share)) = self;
+        (share * len as f64) as usize
+    }
+}
 
 /// The label of a vertex placed in a separator: never a piece's label.
 const PLACED: u32 = u32::MAX;
@@ -62,7 +95,8 @@ struct Dissection<'a> {
     /// vertices it reaches to a fresh label, so labels double as visit marks.
     label: Vec<AtomicU32>,
     next_label: AtomicU32,
-    /// Index of each vertex within its piece, while a small piece is ordered.
+    /// Index of each vertex within its piece, while a small piece is
+    /// ordered; while a piece is cut, the separator refinement's locks.
     local: Vec<AtomicU32>,
 }
 
@@ -153,7 +187,7 @@ pub(crate) fn bisection(offsets: &[usize], indices: &[u32]) -> Option<Bisection>
         indices,
         label: (0..n).map(|_| AtomicU32::new(0)).collect(),
         next_label: AtomicU32::new(1),
-        local: Vec::new(),
+        local: (0..n).map(|_| AtomicU32::new(0)).collect(),
     };
     let first = work.fresh();
     let sweep = work.bfs(0, 0, first, n);
@@ -168,7 +202,7 @@ pub(crate) fn bisection(offsets: &[usize], indices: &[u32]) -> Option<Bisection>
         return None;
     }
     let mut vs = vec![0u32; n];
-    let cut = work.cut(&levels, &mut vs, HALVES_BALANCE);
+    let cut = work.cut(&levels, &mut vs, HALVES);
     Some(Bisection { vs, n_near: cut.n_near, n_separator: cut.n_separator })
 }
 
@@ -373,8 +407,12 @@ impl Dissection<'_> {
             self.minimum_degree(vs, &levels.queue, second);
             return;
         }
-        let Cut { near, far, n_near, n_separator } = self.cut(&levels, vs, BALANCE);
+        let Cut { near, far, n_near, n_separator } = self.cut(&levels, vs, RULE);
+        // The searches' ends, unless the refinement moved them.
+        let label = |v: u32| self.label[v as usize].load(Relaxed);
+        let near_hint = if label(far_end) == near { far_end } else { vs[0] };
         let far_hint = levels.queue[len - 1];
+        let far_hint = if label(far_hint) == far { far_hint } else { vs[n_near] };
         drop(levels);
         let (near_part, rest) = vs.split_at_mut(n_near);
         let far_part = &mut rest[..len - n_near - n_separator];
@@ -382,45 +420,55 @@ impl Dissection<'_> {
         // rings around it, and starting the far side at its last vertex
         // (measured) gave 5% more fill on blobs for little time.
         self.both(
-            Piece { vs: near_part, label: near, hint: far_end },
+            Piece { vs: near_part, label: near, hint: near_hint },
             Piece { vs: far_part, label: far, hint: far_hint },
         );
     }
 
     /// Cuts a connected piece, searched in `levels` (at least three), at the
-    /// level [`separator_level`] picks: writes the near side, the far side and
-    /// the separator into `vs` in that order, each in breadth-first order, and
-    /// labels the sides afresh (the separator [`PLACED`]).
-    fn cut(&self, levels: &Levels, vs: &mut [u32], balance: f64) -> Cut {
-        let k = separator_level(&levels.starts, vs.len(), balance);
-        let (near, far) = (self.fresh(), self.fresh());
-        for &v in &levels.queue[..levels.starts[k]] {
-            self.label[v as usize].store(near, Relaxed);
+    /// level [`separator_level`] picks, refined by Fiduccia-Mattheyses
+    /// ([`fiduccia_mattheyses`]): writes the near side, the far side and the
+    /// separator into `vs` in that order, the sides in breadth-first order,
+    /// and labels the sides afresh (the separator [`PLACED`]).
+    fn cut(&self, levels: &Levels, vs: &mut [u32], rule: Rule) -> Cut {
+        let len = vs.len();
+        let k = separator_level(&levels.starts, len, rule);
+        let (near, far, sep) = (self.fresh(), self.fresh(), self.fresh());
+        for (v, label) in levels.queue[..levels.starts[k]]
+            .iter()
+            .map(|v| (v, near))
+            .chain(levels.level(k).iter().map(|v| (v, sep)))
+            .chain(levels.queue[levels.starts[k + 1]..].iter().map(|v| (v, far)))
+        {
+            self.label[*v as usize].store(label, Relaxed);
         }
-        for &v in &levels.queue[levels.starts[k + 1]..] {
-            self.label[v as usize].store(far, Relaxed);
-        }
-        // A level-k vertex with no neighbour beyond the level joins the near
-        // side; the rest are the separator.
-        let mut separator = Vec::new();
-        let mut n_near = levels.starts[k];
-        vs[..n_near].copy_from_slice(&levels.queue[..n_near]);
-        for &v in levels.level(k) {
-            let touches_far =
-                self.neighbours(v).iter().any(|&w| self.label[w as usize].load(Relaxed) == far);
-            if touches_far {
-                self.label[v as usize].store(PLACED, Relaxed);
-                separator.push(v);
-            } else {
-                self.label[v as usize].store(near, Relaxed);
-                vs[n_near] = v;
-                n_near += 1;
+        // The level is a separator as it is; the refinement first drops
+        // the vertices that touch one side only (into the other), then
+        // trades the rest for shorter rings.
+        let mut split = Split {
+            labels: [near, far],
+            sep,
+            sizes: [levels.starts[k], len - levels.starts[k + 1]],
+            separator: levels.level(k).to_vec(),
+        };
+        self.refine_separator(&mut split, rule.least(len));
+        let n_near = split.sizes[0];
+        let (mut a, mut b) = (0, n_near);
+        for &v in &levels.queue {
+            let label = self.label[v as usize].load(Relaxed);
+            if label == near {
+                vs[a] = v;
+                a += 1;
+            } else if label == far {
+                vs[b] = v;
+                b += 1;
             }
         }
-        let far_part = &levels.queue[levels.starts[k + 1]..];
-        vs[n_near..n_near + far_part.len()].copy_from_slice(far_part);
-        vs[n_near + far_part.len()..].copy_from_slice(&separator);
-        Cut { near, far, n_near, n_separator: separator.len() }
+        for (slot, &v) in vs[b..].iter_mut().zip(&split.separator) {
+            *slot = v;
+            self.label[v as usize].store(PLACED, Relaxed);
+        }
+        Cut { near, far, n_near, n_separator: split.separator.len() }
     }
 
     /// Orders a small piece (`members`, each labelled `piece`) by approximate
@@ -471,17 +519,23 @@ impl Dissection<'_> {
     }
 }
 
-/// The level to cut at: the smallest one that leaves each side at least
-/// `balance` of the piece, or the one holding the median vertex when none
-/// does. Never the first or the last level, so both sides are non-empty.
-fn separator_level(starts: &[usize], len: usize, balance: f64) -> usize {
+/// The level to cut at: the best by `rule` among those that leave each side
+/// its least share of the piece, or the one holding the median vertex when
+/// none does. Never the first or the last level, so both sides are non-empty.
+fn separator_level(starts: &[usize], len: usize, rule: Rule) -> usize {
     let count = starts.len() - 1;
-    let least = (balance * len as f64) as usize;
+    let least = rule.least(len);
     let size = |k: usize| starts[k + 1] - starts[k];
-    let balanced = (1..count - 1)
-        .filter(|&k| starts[k] >= least && len - starts[k + 1] >= least)
-        .min_by_key(|&k| (size(k), k));
-    balanced.unwrap_or_else(|| {
+    let allowed = (1..count - 1).filter(|&k| starts[k] >= least && len - starts[k + 1] >= least);
+    let best = match rule {
+        Rule::Balanced(_) => allowed.min_by_key(|&k| (size(k), k)),
+        Rule::Ratio(_) => {
+            let cost =
+                |k: usize| size(k) as f64 / (starts[k] as f64 * (len - starts[k + 1]) as f64);
+            allowed.min_by(|&a, &b| cost(a).total_cmp(&cost(b)).then(a.cmp(&b)))
+        }
+    };
+    best.unwrap_or_else(|| {
         let median = (1..count).find(|&k| starts[k + 1] > len / 2).unwrap_or(count - 1);
         median.clamp(1, count - 2)
     })

@@ -511,5 +511,8 @@ pub(crate) fn rectangle_margin(faces: &[[u32; 3]], uv: &[[f64; 2]]) -> f64 {
         / (2.0 * PI * PI)
 }
 
+mod system;
+pub use system::rectangle_system;
+
 #[cfg(test)]
 mod tests;

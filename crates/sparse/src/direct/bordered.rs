@@ -297,6 +297,18 @@ impl Half {
 }
 
 impl Bordered {
+    /// Each half's rows of `A` in its factor's order (its own unknowns,
+    /// then the separator's), how many are its own, and its symbolic
+    /// factor: for the ordering report (`super::orderings`).
+    pub(super) fn halves(&self) -> [(&[u32], usize, &SymbolicCholesky<u32>); 2] {
+        self.halves.each_ref().map(|h| (&h.rows[..], h.n_own, &h.symbolic))
+    }
+
+    /// The number of unknowns in the separator (the dense corner's size).
+    pub(super) fn separator_len(&self) -> usize {
+        self.separator.len()
+    }
+
     /// Solves `A x = b` in place for every column of `x`.
     pub(crate) fn solve_in_place(&self, mut x: MatMut<'_, f64>) -> Result<(), SparseError> {
         let [h1, h2] = &self.halves;

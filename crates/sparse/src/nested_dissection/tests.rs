@@ -111,3 +111,200 @@ fn deterministic() {
     let a = grid_laplacian(150, 140);
     assert_eq!(order(&a), order(&a));
 }
+
+/// A small deterministic generator (SplitMix64) for the random graphs below.
+struct Rng(u64);
+
+impl Rng {
+    fn next(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        z ^ (z >> 31)
+    }
+
+    fn below(&mut self, n: usize) -> usize {
+        (self.next() % n as u64) as usize
+    }
+}
+
+/// CSR arrays (sorted, no duplicates, no self loops) of the undirected graph
+/// with these edges on `n` vertices.
+fn csr(n: usize, edges: &[(usize, usize)]) -> (Vec<usize>, Vec<u32>) {
+    let mut rows: Vec<Vec<u32>> = vec![Vec::new(); n];
+    for &(a, b) in edges {
+        if a != b {
+            rows[a].push(b as u32);
+            rows[b].push(a as u32);
+        }
+    }
+    let mut offsets = vec![0];
+    let mut indices = Vec::new();
+    for mut row in rows {
+        row.sort_unstable();
+        row.dedup();
+        indices.extend(row);
+        offsets.push(indices.len());
+    }
+    (offsets, indices)
+}
+
+/// A triangulated `w x h` grid with a random diagonal in each cell, a
+/// random share of its edges dropped (so it may fall apart), and a few
+/// random long edges: mesh-like graphs with defects.
+fn random_graph(rng: &mut Rng) -> (Vec<usize>, Vec<u32>) {
+    let (w, h) = (3 + rng.below(60), 3 + rng.below(60));
+    let id = |x: usize, y: usize| y * w + x;
+    let drop_per_mille = [0, 0, 20, 100][rng.below(4)];
+    let mut edges = Vec::new();
+    for y in 0..h {
+        for x in 0..w {
+            let mut candidates = Vec::new();
+            if x + 1 < w {
+                candidates.push(id(x + 1, y));
+            }
+            if y + 1 < h {
+                candidates.push(id(x, y + 1));
+            }
+            if x + 1 < w && y + 1 < h {
+                candidates.push(id(x + 1, y + 1));
+            }
+            if x > 0 && y + 1 < h && rng.below(2) == 0 {
+                candidates.push(id(x - 1, y + 1));
+            }
+            for c in candidates {
+                if rng.below(1000) >= drop_per_mille {
+                    edges.push((id(x, y), c));
+                }
+            }
+        }
+    }
+    for _ in 0..rng.below(4) {
+        edges.push((rng.below(w * h), rng.below(w * h)));
+    }
+    csr(w * h, &edges)
+}
+
+fn work<'a>(offsets: &'a [usize], indices: &'a [u32]) -> Dissection<'a> {
+    let n = offsets.len() - 1;
+    Dissection {
+        offsets,
+        indices,
+        label: (0..n).map(|_| AtomicU32::new(0)).collect(),
+        next_label: AtomicU32::new(1),
+        local: (0..n).map(|_| AtomicU32::new(0)).collect(),
+    }
+}
+
+/// Whether no edge joins `a` to `b`.
+fn separated(offsets: &[usize], indices: &[u32], a: &[u32], b: &[u32]) -> bool {
+    let mut in_b = vec![false; offsets.len() - 1];
+    for &v in b {
+        in_b[v as usize] = true;
+    }
+    a.iter().all(|&v| {
+        indices[offsets[v as usize]..offsets[v as usize + 1]].iter().all(|&w| !in_b[w as usize])
+    })
+}
+
+#[test]
+fn cuts_separate_within_the_balance_bound_and_never_grow_the_level() {
+    let mut rng = Rng(14);
+    let mut refined = 0;
+    for _ in 0..200 {
+        let (offsets, indices) = random_graph(&mut rng);
+        let n = offsets.len() - 1;
+        let work = work(&offsets, &indices);
+        let piece = work.fresh();
+        let levels = work.bfs(rng.below(n) as u32, 0, piece, n);
+        let len = levels.queue.len();
+        if levels.count() < 3 {
+            continue;
+        }
+        for rule in [RULE, HALVES, Rule::Balanced(0.33)] {
+            // Label the searched component afresh for each cut.
+            let label = work.fresh();
+            for &v in &levels.queue {
+                work.label[v as usize].store(label, Relaxed);
+            }
+            let k = separator_level(&levels.starts, len, rule);
+            let level = levels.starts[k + 1] - levels.starts[k];
+            let before = levels.starts[k].min(len - levels.starts[k + 1]);
+            let mut vs = vec![0; len];
+            let cut = work.cut(&levels, &mut vs, rule);
+            let (near, rest) = vs.split_at(cut.n_near);
+            let (far, separator) = rest.split_at(len - cut.n_near - cut.n_separator);
+            assert!(separated(&offsets, &indices, near, far));
+            assert!(!near.is_empty() && !far.is_empty());
+            assert!(cut.n_separator <= level, "{} > {level}", cut.n_separator);
+            let least = rule.least(len).min(before).max(1);
+            assert!(near.len().min(far.len()) >= least, "{} {} {least}", near.len(), far.len());
+            // Every vertex of the component once, with its side's label.
+            let mut sorted = vs.clone();
+            sorted.sort_unstable();
+            let mut component = levels.queue.clone();
+            component.sort_unstable();
+            assert_eq!(sorted, component);
+            assert!(near.iter().all(|&v| work.label[v as usize].load(Relaxed) == cut.near));
+            assert!(far.iter().all(|&v| work.label[v as usize].load(Relaxed) == cut.far));
+            assert!(separator.iter().all(|&v| work.label[v as usize].load(Relaxed) == PLACED));
+            refined += usize::from(cut.n_separator < level);
+        }
+    }
+    // The refinement did something on most of them.
+    assert!(refined > 150, "{refined}");
+}
+
+#[test]
+fn refinement_straightens_a_ragged_separator() {
+    // On a 40 x 40 grid (4-neighbour), the separator {x = 19 or x = 20}
+    // is twice as thick as it needs: refinement keeps one column.
+    let (w, h) = (40, 40);
+    let a = grid_laplacian(h, w);
+    let (offsets, indices) = (a.row_offsets(), a.col_indices());
+    let work = work(offsets, indices);
+    let (near, far, sep) = (work.fresh(), work.fresh(), work.fresh());
+    let mut split = Split { labels: [near, far], sep, sizes: [0, 0], separator: Vec::new() };
+    for v in 0..w * h {
+        let x = v % w;
+        let label = match x {
+            0..=18 => near,
+            19 | 20 => sep,
+            _ => far,
+        };
+        work.label[v].store(label, Relaxed);
+        match x {
+            0..=18 => split.sizes[0] += 1,
+            19 | 20 => split.separator.push(v as u32),
+            _ => split.sizes[1] += 1,
+        }
+    }
+    work.refine_separator(&mut split, 600);
+    assert_eq!(split.separator.len(), h);
+    assert_eq!(split.sizes[0] + split.sizes[1] + h, w * h);
+    let side = |label: u32| -> Vec<u32> {
+        (0..(w * h) as u32).filter(|&v| work.label[v as usize].load(Relaxed) == label).collect()
+    };
+    assert!(separated(offsets, indices, &side(near), &side(far)));
+    assert_eq!(side(sep).len(), h);
+}
+
+#[test]
+fn random_graphs_order_to_permutations_and_bisect_cleanly() {
+    let mut rng = Rng(1978);
+    for _ in 0..100 {
+        let (offsets, indices) = random_graph(&mut rng);
+        let n = offsets.len() - 1;
+        let perm = nested_dissection(&offsets, &indices);
+        assert_eq!(perm.len(), n);
+        assert!(is_permutation(&perm));
+        if let Some(b) = bisection(&offsets, &indices) {
+            assert!(is_permutation(&b.vs) && b.vs.len() == n);
+            let (near, rest) = b.vs.split_at(b.n_near);
+            let far = &rest[..n - b.n_near - b.n_separator];
+            assert!(!near.is_empty() && !far.is_empty());
+            assert!(separated(&offsets, &indices, near, far));
+        }
+    }
+}
