@@ -320,19 +320,23 @@ impl Half {
         out
     }
 
-    /// The forward solve of `M` with `[b_own; 0]` (`b` in `A`'s rows), and
+    /// The forward solve of `M` with `[b_own; 0]` (`b(row of A, column)`, `k` columns), and
     /// `LS y = -C` times its separator part.
-    fn forward(&self, b: MatRef<'_, f64>) -> Result<(Mat<f64>, Mat<f64>), SparseError> {
+    fn forward(
+        &self,
+        k: usize,
+        b: &(dyn Fn(usize, usize) -> f64 + Sync),
+    ) -> Result<(Mat<f64>, Mat<f64>), SparseError> {
         let symbolic = self.supernodal();
         let n_own = self.n_own;
-        let mut z = Mat::from_fn(self.rows.len(), b.ncols(), |i, j| {
+        let mut z = Mat::from_fn(self.rows.len(), k, |i, j| {
             if i < n_own {
-                b[(self.rows[i] as usize, j)]
+                b(self.rows[i] as usize, j)
             } else {
                 0.0
             }
         });
-        let mut mem = scratch(symbolic.solve_in_place_scratch::<f64>(b.ncols(), Par::Seq))?;
+        let mut mem = scratch(symbolic.solve_in_place_scratch::<f64>(k, Par::Seq))?;
         SupernodalLltRef::new(symbolic, &self.values).l_solve_with_conj(
             Conj::No,
             z.as_mut(),
@@ -364,31 +368,67 @@ impl Half {
     }
 }
 
+/// A solution by halves, before it is written back: each half's own
+/// unknowns in its `rows` order, and the separator's.
+struct Solved {
+    own: [Mat<f64>; 2],
+    xs: Mat<f64>,
+}
+
 impl Bordered {
-    /// Solves `A x = b` in place for every column of `x`.
-    pub(crate) fn solve_in_place(&self, mut x: MatMut<'_, f64>) -> Result<(), SparseError> {
+    /// Solves `A x = b` for the `k` columns of `b`, read as `b(row, column)`.
+    fn solve(
+        &self,
+        k: usize,
+        b: &(dyn Fn(usize, usize) -> f64 + Sync),
+    ) -> Result<Solved, SparseError> {
         let [h1, h2] = &self.halves;
-        let b = x.as_ref();
-        let (f1, f2) = rayon::join(|| h1.forward(b), || h2.forward(b));
+        let (f1, f2) = rayon::join(|| h1.forward(k, b), || h2.forward(k, b));
         let ((z1, ly1), (z2, ly2)) = (f1?, f2?);
-        let mut xs = Mat::from_fn(self.separator.len(), x.ncols(), |t, j| {
-            x[(self.separator[t] as usize, j)] - ly1[(t, j)] - ly2[(t, j)]
+        let mut xs = Mat::from_fn(self.separator.len(), k, |t, j| {
+            b(self.separator[t] as usize, j) - ly1[(t, j)] - ly2[(t, j)]
         });
         self.corner.solve_in_place(xs.as_mut());
         let (o1, o2) =
             rayon::join(|| h1.backward(z1, xs.as_ref()), || h2.backward(z2, xs.as_ref()));
-        for (h, own) in [(h1, o1?), (h2, o2?)] {
+        Ok(Solved { own: [o1?, o2?], xs })
+    }
+
+    /// Calls `set(row, column, value)` for every entry of the solution.
+    fn write(&self, solved: &Solved, mut set: impl FnMut(usize, usize, f64)) {
+        for (h, own) in self.halves.iter().zip(&solved.own) {
             for (r, &v) in h.rows[..h.n_own].iter().enumerate() {
-                for j in 0..x.ncols() {
-                    x[(v as usize, j)] = own[(r, j)];
+                for j in 0..own.ncols() {
+                    set(v as usize, j, own[(r, j)]);
                 }
             }
         }
         for (t, &v) in self.separator.iter().enumerate() {
-            for j in 0..x.ncols() {
-                x[(v as usize, j)] = xs[(t, j)];
+            for j in 0..solved.xs.ncols() {
+                set(v as usize, j, solved.xs[(t, j)]);
             }
         }
+    }
+
+    /// Solves `A x = b` in place for every column of `x`.
+    pub(crate) fn solve_in_place(&self, mut x: MatMut<'_, f64>) -> Result<(), SparseError> {
+        let b = x.as_ref();
+        let solved = self.solve(b.ncols(), &|i, j| b[(i, j)])?;
+        self.write(&solved, |i, j, v| x[(i, j)] = v);
+        Ok(())
+    }
+
+    /// Solves `A x = b` in place for every column `b` of `columns` (each of
+    /// `A`'s size), with no `n x k` copy of them: the halves' own work
+    /// arrays are the only other copy (what [`Factor::solve_columns`] is for).
+    ///
+    /// [`Factor::solve_columns`]: super::Factor::solve_columns
+    pub(crate) fn solve_columns(&self, columns: &mut [Vec<f64>]) -> Result<(), SparseError> {
+        let solved = {
+            let b: &[Vec<f64>] = columns;
+            self.solve(b.len(), &|i, j| b[j][i])?
+        };
+        self.write(&solved, |i, j, v| columns[j][i] = v);
         Ok(())
     }
 }
