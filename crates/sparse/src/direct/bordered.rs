@@ -153,48 +153,74 @@ struct Triangle {
 }
 
 impl Triangle {
-    /// The `part` triangle of `M`, whose row `r` is row `rows[r]` of `a`
-    /// (`local` maps a row of `a` to its row of `M`, `u32::MAX` outside it).
-    /// `M` is symmetric, so its column `j` is its row `j`: read from `a`'s
-    /// CSR rows and sorted. The arrays are counted first and allocated at
-    /// their exact size. `None` when `M`'s entries do not fit 32 bits.
-    fn of(a: &CsrMatrix, rows: &[u32], local: &[u32], part: Part) -> Option<Triangle> {
-        let keep = |r: usize, u: u32| {
+    /// The `part` triangle of `M`, the `size x size` principal submatrix of
+    /// `a` whose row `local[v]` is row `v` of `a` (`u32::MAX` outside it).
+    /// `M` is symmetric, so its column `j` is its row `j`. `a`'s rows are
+    /// read in their own order, once to count each column and once to fill
+    /// it, and each column is then sorted: reading them in `M`'s (nested
+    /// dissection) order instead jumps through `a` at random, 0.15-0.2 s per
+    /// triangle and half at a million unknowns. The arrays have their exact
+    /// size. `None` when `M`'s entries do not fit 32 bits.
+    fn of(a: &CsrMatrix, local: &[u32], size: usize, part: Part) -> Option<Triangle> {
+        let keep = |r: u32, u: u32| {
             u != u32::MAX
                 && match part {
-                    Part::Upper => u as usize <= r,
-                    Part::Lower => u as usize >= r,
+                    Part::Upper => u <= r,
+                    Part::Lower => u >= r,
                 }
         };
-        let count = |r: usize| {
-            a.row(rows[r] as usize).0.iter().filter(|&&w| keep(r, local[w as usize])).count()
-        };
-        let nnz: usize = (0..rows.len()).map(count).sum();
+        let mut col_ptr = vec![0u32; size + 1];
+        let mut nnz = 0usize;
+        for (v, &r) in local.iter().enumerate() {
+            if r != u32::MAX {
+                let count = a.row(v).0.iter().filter(|&&w| keep(r, local[w as usize])).count();
+                // At most a row's length, which is below `size`.
+                col_ptr[r as usize + 1] = count as u32;
+                nnz += count;
+            }
+        }
         u32::try_from(nnz).ok()?;
-        let mut t = Triangle {
-            col_ptr: Vec::with_capacity(rows.len() + 1),
-            row_idx: Vec::with_capacity(nnz),
-            values: Vec::with_capacity(if part == Part::Lower { nnz } else { 0 }),
-        };
-        t.col_ptr.push(0);
+        for j in 0..size {
+            col_ptr[j + 1] += col_ptr[j];
+        }
+        let with_values = part == Part::Lower;
+        let mut row_idx = vec![0u32; nnz];
+        let mut values = vec![0.0; if with_values { nnz } else { 0 }];
+        let mut next = col_ptr[..size].to_vec();
+        for (v, &r) in local.iter().enumerate() {
+            if r == u32::MAX {
+                continue;
+            }
+            let (cols, vals) = a.row(v);
+            for (&w, &x) in cols.iter().zip(vals) {
+                let u = local[w as usize];
+                if keep(r, u) {
+                    let k = next[r as usize] as usize;
+                    row_idx[k] = u;
+                    if with_values {
+                        values[k] = x;
+                    }
+                    next[r as usize] += 1;
+                }
+            }
+        }
+        drop(next);
         let mut column: Vec<(u32, f64)> = Vec::new();
-        for (r, &v) in rows.iter().enumerate() {
-            let (cols, vals) = a.row(v as usize);
+        for j in 0..size {
+            let range = col_ptr[j] as usize..col_ptr[j + 1] as usize;
             column.clear();
             column.extend(
-                cols.iter()
-                    .zip(vals)
-                    .map(|(&w, &x)| (local[w as usize], x))
-                    .filter(|&(u, _)| keep(r, u)),
+                range.clone().map(|k| (row_idx[k], if with_values { values[k] } else { 0.0 })),
             );
             column.sort_unstable_by_key(|&(u, _)| u);
-            t.row_idx.extend(column.iter().map(|&(u, _)| u));
-            if part == Part::Lower {
-                t.values.extend(column.iter().map(|&(_, x)| x));
+            for (k, (u, x)) in range.zip(column.iter().copied()) {
+                row_idx[k] = u;
+                if with_values {
+                    values[k] = x;
+                }
             }
-            t.col_ptr.push(t.row_idx.len() as u32);
         }
-        Some(t)
+        Some(Triangle { col_ptr, row_idx, values })
     }
 
     fn pattern(&self, size: usize) -> SymbolicSparseColMatRef<'_, u32> {
@@ -246,7 +272,7 @@ impl Half {
         // halves of a million unknowns).
         let size = rows.len();
         let symbolic = {
-            let Some(upper) = Triangle::of(a, &rows, &local, Part::Upper) else {
+            let Some(upper) = Triangle::of(a, &local, size, Part::Upper) else {
                 return Ok(None);
             };
             let pattern = upper.pattern(size);
@@ -259,7 +285,7 @@ impl Half {
             // Forced above; a faer that ignored it would land here.
             return Ok(None);
         }
-        let Some(lower) = Triangle::of(a, &rows, &local, Part::Lower) else {
+        let Some(lower) = Triangle::of(a, &local, size, Part::Lower) else {
             return Ok(None);
         };
         drop(local);
