@@ -255,7 +255,9 @@ fn numeric_llt<I: Index>(
     symbolic: &SymbolicCholesky<I>,
     m: SparseColMatRef<'_, I, f64>,
 ) -> Result<Vec<f64>, SparseError> {
-    release_free_memory();
+    if symbolic.len_val() >= TRIM_FROM_VALUES {
+        release_free_memory();
+    }
     let mut values = Vec::new();
     values
         .try_reserve_exact(symbolic.len_val())
@@ -278,6 +280,12 @@ fn numeric_llt<I: Index>(
     }
     Ok(values)
 }
+
+/// Factors of at least this many values (32 MB, glibc's largest mmap
+/// threshold) are preceded by [`release_free_memory`]; smaller ones, such as
+/// the many small systems of the progressive method's Newton steps, are not
+/// worth the call.
+const TRIM_FROM_VALUES: usize = 1 << 22;
 
 /// Hands the allocator's free pages back to the system, so that the factor
 /// about to be allocated does not sit beside them: it is the memory peak.
