@@ -92,12 +92,13 @@ pub fn refine_step(
     rhs: &[Vec<f64>],
     x: &mut [Vec<f64>],
 ) -> Result<usize, SparseError> {
-    let residuals = rhs
+    let mut corrections = rhs
         .iter()
         .zip(x.iter())
         .map(|(b, xi)| residual_double_double(a, b, xi))
         .collect::<Result<Vec<_>, _>>()?;
-    let corrections = factor.solve(a, &residuals)?;
+    // The residuals become the corrections where they are (no copy).
+    factor.solve_in_place(a, &mut corrections)?;
     let mut changed = 0;
     for (xi, d) in x.iter_mut().zip(&corrections) {
         for (v, dv) in xi.iter_mut().zip(d) {

@@ -92,8 +92,7 @@ impl<'a> CutRotations<'a> {
         let mut heads: Vec<u32> = links.iter().map(|&(_, b)| b).collect();
         heads.sort_unstable();
         // The ring starts at the one vertex that follows no other.
-        let mut starts =
-            links.iter().map(|&(a, _)| a).filter(|a| heads.binary_search(a).is_err());
+        let mut starts = links.iter().map(|&(a, _)| a).filter(|a| heads.binary_search(a).is_err());
         let (first, None) = (starts.next()?, starts.next()) else { return None };
         let mut ring = vec![first];
         while let Some(b) = follows(ring[ring.len() - 1]) {

@@ -65,3 +65,36 @@ fn indefinite_cholesky_and_singular_lu_are_errors() {
     let r = Factor::lu(&s).and_then(|f| f.solve(&s, &[vec![1.0, 1.0]], 1e-10));
     assert!(matches!(r, Err(SparseError::Singular { .. })), "{r:?}");
 }
+
+#[test]
+fn solving_in_place_is_solving() {
+    // The whole factor and the two halves (the grid is large enough to cut).
+    for a in [grid_laplacian(20, 30), grid_laplacian(400, 12)] {
+        let n = a.n_rows();
+        let rhs: Vec<Vec<f64>> =
+            (0..2).map(|j| (0..n).map(|i| ((i * (j + 2)) as f64 * 0.31).sin()).collect()).collect();
+        let mut factors = vec![Factorization::new(&a).unwrap()];
+        if let Some(halves) = bordered::factor(&a).unwrap() {
+            factors.push(Factorization { factor: Factor::Bordered(Box::new(halves)), n });
+        }
+        for f in &factors {
+            let x = f.solve(&a, &rhs).unwrap();
+            let mut y = rhs.clone();
+            f.solve_in_place(&a, &mut y).unwrap();
+            assert_eq!(x, y);
+            for (xj, b) in x.iter().zip(&rhs) {
+                let mut ax = vec![0.0; n];
+                a.mul_vec(xj, &mut ax).unwrap();
+                assert!(rel_err(&ax, b) < 1e-10);
+            }
+            let mut short = vec![vec![0.0; n - 1]];
+            assert!(matches!(
+                f.solve_in_place(&a, &mut short),
+                Err(SparseError::LengthMismatch { .. })
+            ));
+        }
+        if n == 4800 {
+            assert_eq!(factors.len(), 2, "the long grid cuts in two");
+        }
+    }
+}
