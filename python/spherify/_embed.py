@@ -91,7 +91,9 @@ def embed(mesh: MeshLike, method: str = "progressive", *, progress: Any = None,
     weights : str
         ``"uniform"``, ``"chord"`` (with ``rho``) or ``"mean_value"``.
     max_refinements : int
-        Double-double refinement steps per embedding (default 8).
+        Most double-double refinement steps per embedding (default 8). It
+        stops earlier once the rectangle is flip-free, or once a step changes
+        no coordinate (every further step would give the same bits).
     progress : bool or callable
         ``poles="graph"`` (and the progressive method, below): ``True`` draws
         a text progress bar on stderr; a callable receives ``(done, total)``
