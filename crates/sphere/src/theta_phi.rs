@@ -274,10 +274,7 @@ pub fn theta_phi_with_progress(
     // Uniform weights (the default) need only the rotations of the cut
     // disk, read from the sphere's half-edges; the other weights are computed
     // on the disk's own half-edges (its face corners and boundary).
-    let cut_he = match params.weights {
-        Weights::Uniform => None,
-        _ => Some(HalfEdgeMesh::new(&cut.mesh)?),
-    };
+    let cut_he = disk_half_edges(params.weights, &cut.mesh)?;
     cut.mesh.forget_edge_table();
     let rotations = CutRotations::new(he, mesh.faces(), &cut);
     let k = path.len() - 2;
@@ -321,11 +318,12 @@ pub fn theta_phi_with_progress(
         if !pinned {
             break;
         }
-        let cut_he = match params.weights {
-            Weights::Uniform => None,
-            _ => Some(HalfEdgeMesh::new(&cut.mesh)?),
-        };
-        uv = solver.solve(rows(cut_he), &cut.mesh, &fixed, progress)?;
+        uv = solver.solve(
+            rows(disk_half_edges(params.weights, &cut.mesh)?),
+            &cut.mesh,
+            &fixed,
+            progress,
+        )?;
     }
     let fans_monotone =
         [strictly_increasing_phi(&uv, &north_fan), strictly_increasing_phi(&uv, &south_fan)];
@@ -415,6 +413,30 @@ fn go_on(
     }
 }
 
+/// The cut disk's own half-edges where `weights` need them (its face
+/// corners and boundary); uniform weights read the rows from the sphere's
+/// ([`Rows::Sphere`]) and get `None`.
+fn disk_half_edges(weights: Weights, cut: &Mesh) -> Result<Option<HalfEdgeMesh>, SphereError> {
+    Ok(match weights {
+        Weights::Uniform => None,
+        _ => Some(HalfEdgeMesh::new(cut)?),
+    })
+}
+
+/// The rectangle system assembled on the cut disk's own half-edges `he`
+/// with `weights`: any weights, and what [`Rows::Sphere`] gives bit for bit
+/// for uniform ones.
+fn disk_system(
+    cut: &Mesh,
+    he: &HalfEdgeMesh,
+    weights: Weights,
+    fixed: &[Option<[f64; 2]>],
+) -> Result<FixedSystem, SphereError> {
+    let weights =
+        half_edge_weights(cut.positions(), he, weights).map_err(|e| from_tutte(e.into()))?;
+    FixedSystem::assemble(he, &weights, fixed).map_err(from_tutte)
+}
+
 /// Where the rows of the rectangle system come from: the cut disk's own
 /// half-edges (any weights), or, for uniform weights, the rotations read from
 /// the sphere's half-edges (the same rows in the same order: [`CutRotations`]).
@@ -453,11 +475,7 @@ impl RectangleSolver {
                 FixedSystem::assemble_rows(fixed, |i, out| rotations.uniform_edges(i, out))
                     .map_err(from_tutte)?
             }
-            Rows::Disk(he) => {
-                let weights = half_edge_weights(cut.positions(), &he, self.weights)
-                    .map_err(|e| from_tutte(e.into()))?;
-                FixedSystem::assemble(&he, &weights, fixed).map_err(from_tutte)?
-            }
+            Rows::Disk(he) => disk_system(cut, &he, self.weights, fixed)?,
         };
         let faces = cut.faces();
         if system.free.is_empty() {

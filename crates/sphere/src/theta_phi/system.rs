@@ -4,9 +4,9 @@
 
 use spherify_mesh::HalfEdgeMesh;
 use spherify_sparse::tutte::FixedSystem;
-use spherify_sparse::weights::{half_edge_weights, Weights};
+use spherify_sparse::weights::Weights;
 
-use super::{from_tutte, ThetaPhi};
+use super::{disk_system, ThetaPhi};
 use crate::error::SphereError;
 use crate::genus_zero::GenusZeroMesh;
 use crate::pole_fans::rectangle_boundary;
@@ -25,7 +25,5 @@ pub fn rectangle_system(
     let he = HalfEdgeMesh::new(&cut.mesh)?;
     let k = details.cut_path.len() - 2;
     let fixed = rectangle_boundary(&cut.boundary, k, mesh.mesh().n_vertices());
-    let weights =
-        half_edge_weights(cut.mesh.positions(), &he, weights).map_err(|e| from_tutte(e.into()))?;
-    FixedSystem::assemble(&he, &weights, &fixed).map_err(from_tutte)
+    disk_system(&cut.mesh, &he, weights, &fixed)
 }
