@@ -154,3 +154,29 @@ fn pole_choices_round_trip_by_name_and_unknown_names_list_them() {
     let err = PoleChoice::from_name("north", SymmetryParams::default()).unwrap_err();
     assert!(err.to_string().contains("fast_graph, graph, physical, symmetry"), "{err}");
 }
+
+#[test]
+fn rectangle_system_is_the_system_the_run_solved() {
+    // The run's theta-phi coordinates of the free vertices satisfy the
+    // rebuilt system to rounding, with every weight theta-phi accepts; a
+    // system with another boundary or other weights would leave O(1) residuals.
+    let mesh = uv_sphere(10, 14);
+    for weights in [Weights::Uniform, Weights::Chord { rho: 1.0 }, Weights::MeanValue] {
+        let params = ThetaPhiParams { weights, ..ThetaPhiParams::default() };
+        let valid = GenusZeroMesh::new(mesh.clone()).unwrap();
+        let (_, details) = super::theta_phi(&valid, &params).unwrap();
+        assert_eq!(details.re_embedded, [false, false], "{weights:?}");
+        let system = rectangle_system(&valid, &details, weights).unwrap();
+        let boundary = details.cut.boundary.len();
+        assert_eq!(system.free.len(), details.theta_phi.len() - boundary, "{weights:?}");
+        for (c, rhs) in system.rhs.iter().enumerate() {
+            let x: Vec<f64> =
+                system.free.iter().map(|&v| details.theta_phi[v as usize][c]).collect();
+            let r =
+                spherify_sparse::refine::residual_double_double(&system.matrix, rhs, &x).unwrap();
+            let scale = rhs.iter().fold(1.0f64, |m, b| m.max(b.abs()));
+            let worst = r.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            assert!(worst < 1e-12 * scale, "{weights:?} column {c}: residual {worst:e}");
+        }
+    }
+}
