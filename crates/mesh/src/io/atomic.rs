@@ -13,12 +13,21 @@
 //! * a process killed between creating and renaming its temporary leaves it
 //!   behind for good: temporaries carry the writer's process id
 //!   (`.name.tmp-PID-N`), and each write removes those of processes that no
-//!   longer exist from the folder it writes into (Linux, where `/proc` tells).
+//!   longer exist from the folder it writes into (Linux, where `/proc` tells);
+//! * a target that is not a regular file would be replaced by one: renamed
+//!   over `/dev/null` (as root) or a named pipe, the device node or the pipe
+//!   is gone. A character device (`/dev/null`, a terminal behind
+//!   `/dev/stdout`) and a pipe are written straight into instead, as `cat >`
+//!   would: there is no file to lose. A pipe must have a reader already
+//!   (opening one for writing waits for a reader; it is opened non-blocking
+//!   first, so the call fails at once instead). A folder is an
+//!   `IsADirectory` error before anything is written; a block device or a
+//!   socket is refused.
 //!
 //! A hard link to the target is still broken (the name then points at a new
 //! file): keeping it would mean writing in place, which is not atomic.
 
-use crate::error::MeshError;
+use crate::error::{FormatError, Location, MeshError};
 use std::fs::{File, OpenOptions};
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
@@ -31,11 +40,15 @@ static COUNTER: AtomicU64 = AtomicU64::new(0);
 const MAX_LINKS: usize = 40;
 
 /// Writes `path` through `fill`, atomically. On any error the temporary file is
-/// removed and the error names `path`.
+/// removed and the error names `path`. A character device or a pipe at `path`
+/// is written straight into (module comment).
 pub(crate) fn write_file(
     path: &Path,
     fill: impl FnOnce(&mut BufWriter<File>) -> std::io::Result<()>,
 ) -> Result<(), MeshError> {
+    if let Some(stream) = stream_target(path)? {
+        return write_stream(path, stream, fill);
+    }
     let target = final_target(path).map_err(|e| MeshError::io(path, e))?;
     remove_stale_temporaries(&target);
     let temp = temp_path(&target)?;
@@ -59,6 +72,111 @@ pub(crate) fn write_file(
 /// Writes `bytes` to `path` atomically (see [`write_file`]).
 pub(crate) fn write_bytes(path: &Path, bytes: &[u8]) -> Result<(), MeshError> {
     write_file(path, |out| out.write_all(bytes))
+}
+
+/// What is at a path that is written straight into rather than replaced.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Stream {
+    /// A character device: `/dev/null`, a terminal.
+    Device,
+    /// A named or anonymous pipe (`/dev/stdout` into `| gzip`, `>(...)`).
+    Pipe,
+}
+
+/// `Some` when `path` (links followed by the kernel, so `/dev/stdout` and
+/// `/proc/self/fd/N` resolve too) is a character device or a pipe; `None`
+/// when it is a regular file or nothing (yet), which are replaced
+/// atomically. A folder is an `IsADirectory` error, anything else (a block
+/// device, a socket) a [`MeshError::Format`] saying what it is.
+fn stream_target(path: &Path) -> Result<Option<Stream>, MeshError> {
+    // Absent, or not ours to look at: the replacing write then says why.
+    let Ok(meta) = std::fs::metadata(path) else { return Ok(None) };
+    let kind = meta.file_type();
+    if kind.is_file() {
+        return Ok(None);
+    }
+    if kind.is_dir() {
+        return Err(MeshError::io(path, std::io::ErrorKind::IsADirectory.into()));
+    }
+    #[cfg(unix)]
+    let what = {
+        use std::os::unix::fs::FileTypeExt;
+        if kind.is_char_device() {
+            return Ok(Some(Stream::Device));
+        }
+        if kind.is_fifo() {
+            return Ok(Some(Stream::Pipe));
+        }
+        if kind.is_block_device() {
+            "a block device"
+        } else if kind.is_socket() {
+            "a socket"
+        } else {
+            "not a regular file"
+        }
+    };
+    #[cfg(not(unix))]
+    let what = "not a regular file";
+    Err(refused(
+        path,
+        format!(
+            "this is {what}: only regular files (replaced atomically), character devices \
+             such as /dev/null and pipes are written"
+        ),
+    ))
+}
+
+/// A write refused for what the path is, as a [`MeshError::Format`] naming it
+/// (reading refuses special files the same way).
+fn refused(path: &Path, message: String) -> MeshError {
+    FormatError::new(&path.display().to_string(), Location::File, message).into()
+}
+
+/// Writes a character device or a pipe through `fill`, in place: nothing is
+/// renamed and nothing synced (neither can be).
+fn write_stream(
+    path: &Path,
+    stream: Stream,
+    fill: impl FnOnce(&mut BufWriter<File>) -> std::io::Result<()>,
+) -> Result<(), MeshError> {
+    let io = |e| MeshError::io(path, e);
+    // Opening a pipe for writing waits until a process opens it for reading;
+    // non-blocking, it fails at once (ENXIO) when none has. The probe stays
+    // open until the write is done: a reader that finds no writer at all
+    // between two opens reads end-of-file and may leave, and the open below
+    // would then wait. With the probe open it finds the reader at once
+    // (unless the reader leaves on its own in between: then it waits for
+    // the next, as `cat > pipe` would).
+    #[cfg(unix)]
+    let _probe = match stream {
+        Stream::Device => None,
+        Stream::Pipe => {
+            use std::os::unix::fs::OpenOptionsExt;
+            match OpenOptions::new().write(true).custom_flags(libc::O_NONBLOCK).open(path) {
+                Err(e) if e.raw_os_error() == Some(libc::ENXIO) => {
+                    return Err(refused(
+                        path,
+                        "this is a pipe that no process is reading: writing would wait for one"
+                            .into(),
+                    ))
+                }
+                Err(e) => return Err(io(e)),
+                Ok(probe) => Some(probe),
+            }
+        }
+    };
+    #[cfg(not(unix))]
+    let _ = stream;
+    let file = OpenOptions::new().write(true).open(path).map_err(io)?;
+    // The path may have changed since it was looked at: a regular file now
+    // would be overwritten in place, which is what the atomic write avoids.
+    if file.metadata().map_err(io)?.is_file() {
+        return Err(io(std::io::Error::other(
+            "the path became a regular file while it was opened",
+        )));
+    }
+    let mut out = BufWriter::with_capacity(1 << 16, file);
+    fill(&mut out).and_then(|()| out.flush()).map_err(io)
 }
 
 /// `path`, or where the chain of symbolic links starting at it ends (the end
@@ -215,6 +333,77 @@ mod tests {
         assert_eq!(std::fs::read(&target).unwrap(), b"new");
         let mode = std::fs::metadata(&target).unwrap().permissions().mode() & 0o777;
         assert_eq!(mode, 0o600);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn special_files_are_written_into_or_refused_never_replaced() {
+        use std::os::unix::fs::FileTypeExt;
+        // Classified only: a test must not risk replacing the machine's /dev/null.
+        assert_eq!(stream_target(Path::new("/dev/null")).unwrap(), Some(Stream::Device));
+        let dir = scratch_dir("special");
+        assert_eq!(stream_target(&dir.join("absent.ply")).unwrap(), None);
+        let regular = dir.join("regular.ply");
+        std::fs::write(&regular, b"old").unwrap();
+        assert_eq!(stream_target(&regular).unwrap(), None);
+
+        // A pipe with a reader receives the bytes and stays a pipe.
+        let pipe = dir.join("pipe.ply");
+        assert!(std::process::Command::new("mkfifo").arg(&pipe).status().unwrap().success());
+        let reader = {
+            let pipe = pipe.clone();
+            std::thread::spawn(move || std::fs::read(pipe).unwrap())
+        };
+        // The reader opens the pipe when its thread runs; until then the
+        // write is refused for want of one, which is the other half of the test.
+        let started = std::time::Instant::now();
+        loop {
+            match write_file(&pipe, |w| w.write_all(b"through the pipe")) {
+                Ok(()) => break,
+                Err(MeshError::Format(e)) => {
+                    assert!(e.message.contains("no process is reading"), "{}", e.message);
+                    assert!(started.elapsed().as_secs() < 10, "no reader appeared");
+                    std::thread::sleep(std::time::Duration::from_millis(5));
+                }
+                Err(other) => panic!("{other:?}"),
+            }
+        }
+        // Checked before the join: a pipe replaced by a file would leave the
+        // reader waiting for ever.
+        assert!(std::fs::metadata(&pipe).unwrap().file_type().is_fifo());
+        assert_eq!(reader.join().unwrap(), b"through the pipe");
+
+        // Without a reader: refused at once, not a wait.
+        let started = std::time::Instant::now();
+        let err = write_file(&pipe, |w| w.write_all(b"x")).unwrap_err();
+        assert!(started.elapsed().as_secs() < 2);
+        assert!(
+            matches!(&err, MeshError::Format(e) if e.message.contains("no process is reading"))
+        );
+        assert!(std::fs::metadata(&pipe).unwrap().file_type().is_fifo());
+
+        // A folder: IsADirectory before anything is written.
+        let folder = dir.join("folder.ply");
+        std::fs::create_dir(&folder).unwrap();
+        let err = write_file(&folder, |w| w.write_all(b"x")).unwrap_err();
+        assert!(matches!(&err, MeshError::Io { source, .. }
+            if source.kind() == std::io::ErrorKind::IsADirectory));
+
+        // A socket: refused, and still a socket.
+        let socket = dir.join("socket.ply");
+        let _listener = std::os::unix::net::UnixListener::bind(&socket).unwrap();
+        let err = write_file(&socket, |w| w.write_all(b"x")).unwrap_err();
+        assert!(matches!(&err, MeshError::Format(e) if e.message.contains("a socket")), "{err}");
+        assert!(std::fs::metadata(&socket).unwrap().file_type().is_socket());
+
+        // No temporary file was left anywhere.
+        let mut names: Vec<String> = std::fs::read_dir(&dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        names.sort();
+        assert_eq!(names, ["folder.ply", "pipe.ply", "regular.ply", "socket.ply"]);
         std::fs::remove_dir_all(&dir).unwrap();
     }
 
