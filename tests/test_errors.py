@@ -1,5 +1,6 @@
-"""Every failure a user can cause raises the right SpherifyError subclass (or an
-OSError for the file system), with a message that says what is wrong."""
+"""Every failure a user can cause raises the right SpherifyError subclass (for
+the file system a FileError, also the builtin OSError of its cause), with a
+message that says what is wrong."""
 
 from __future__ import annotations
 
@@ -223,7 +224,7 @@ def test_unknown_extension_is_a_format_error(tmp_path: Path, name: str) -> None:
 def test_missing_file_is_file_not_found(tmp_path: Path) -> None:
     path = tmp_path / "missing.obj"
     err = raises(FileNotFoundError, lambda: sp.load(path), str(path))
-    assert not isinstance(err, sp.SpherifyError)
+    assert isinstance(err, sp.FileError) and isinstance(err, sp.SpherifyError)
 
 
 # --------------------------------------------------------------------------

@@ -7,8 +7,8 @@ from __future__ import annotations
 
 from . import datasets, harmonics, plot, texture
 from ._core import __version__
-from ._errors import (ConvergenceError, FormatError, MapError, MeshError, SpherifyError,
-                      SpherifyWarning, TopologyError)
+from ._errors import (ConvergenceError, FileError, FormatError, MapError, MeshError,
+                      SpherifyError, SpherifyWarning, TopologyError)
 from ._mesh import Mesh, check, check_sphere, dijkstra, load, orient, save, shortest_path
 from ._report import MeshReport, SphereReport
 from ._spheremap import SphereMap, ThetaPhiMap
@@ -25,6 +25,7 @@ from ._batch import BatchResult, batch
 __all__ = [
     "BatchResult",
     "ConvergenceError",
+    "FileError",
     "FormatError",
     "MapError",
     "Mesh",

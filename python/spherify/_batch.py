@@ -50,6 +50,7 @@ from pathlib import Path
 from typing import Any, Dict, Iterable, Iterator, List, Optional, Sequence, Union
 
 from ._atomic import is_temporary, write_atomically
+from ._files import file_errors, special_kind
 from ._batch_pool import LocalPool, executor_rows, usable_cores
 from ._batch_task import COLUMNS, QUALITY, Task, file_matches, run_task
 from ._errors import MeshError
@@ -92,6 +93,10 @@ def expand_inputs(inputs: Iterable[PathLike]) -> List[Path]:
             found.extend(expand_inputs(listed))
         elif path.is_file():
             found.append(path)
+        elif path.exists():
+            what = special_kind(path.stat().st_mode) or "not a regular file"
+            raise MeshError(f"batch input {path} is {what}, not a mesh file: only regular "
+                            "files are read")
         else:
             raise MeshError(f"batch input {path} does not exist")
     unique: Dict[Path, None] = {}
@@ -242,6 +247,7 @@ class _Progress:
             sys.stderr.flush()
 
 
+@file_errors
 def batch(paths: Union[PathLike, Iterable[PathLike]], out_dir: PathLike, executor: Any = None, *,
           method: str = "theta_phi", workers: Optional[int] = None,
           timeout: Optional[float] = None, scheduler: Optional[str] = None,

@@ -6,7 +6,9 @@ The Rust core raises these classes directly, so they are defined here once.
 
 from __future__ import annotations
 
-from typing import Any, Optional
+import errno
+import os
+from typing import Any, Dict, Optional, Type, cast
 
 
 class SpherifyError(Exception):
@@ -54,6 +56,69 @@ class MapError(SpherifyError, ValueError):
     that is not a certified bijection (a GC-embedding that fails the tests of
     thesis 3.4, or a theta-phi rectangle that double precision could not hold),
     where the preimage of a sphere point is not defined."""
+
+
+class FileError(SpherifyError, OSError):
+    """The operating system refused a file: missing, a folder, no permission,
+    a full disk. Also an :class:`OSError`, and each instance is also the
+    builtin subclass that names its cause (``FileNotFoundError``,
+    ``PermissionError``, ``IsADirectoryError``, ...), so ``except
+    FileNotFoundError`` works as usual. ``errno``, ``strerror`` and
+    ``filename`` are set where the system said them."""
+
+
+def _file_error_class(builtin: type) -> Type[FileError]:
+    """``FileError`` that is also ``builtin``, kept as ``FileError.<builtin
+    name>`` (where pickle finds it: batch workers send errors to the parent)."""
+    name = builtin.__name__
+    cls = type(name, (FileError, builtin), {
+        "__module__": __name__,
+        "__qualname__": f"FileError.{name}",
+        "__doc__": f"A :class:`FileError` that is also a builtin ``{name}``.",
+    })
+    setattr(FileError, name, cls)
+    return cast(Type[FileError], cls)
+
+
+#: The FileError for each cause, by errno (as OSError maps its own).
+_FILE_ERRORS: Dict[int, Type[FileError]] = {
+    errno.ENOENT: _file_error_class(FileNotFoundError),
+    errno.EACCES: _file_error_class(PermissionError),
+    errno.EEXIST: _file_error_class(FileExistsError),
+    errno.EISDIR: _file_error_class(IsADirectoryError),
+    errno.ENOTDIR: _file_error_class(NotADirectoryError),
+}
+_FILE_ERRORS[errno.EPERM] = _FILE_ERRORS[errno.EACCES]
+
+
+#: The errno of each Rust ``io::ErrorKind`` the core raises without one.
+_ERRNO_OF_KIND = {"NotFound": errno.ENOENT, "PermissionDenied": errno.EACCES,
+                  "AlreadyExists": errno.EEXIST, "IsADirectory": errno.EISDIR,
+                  "NotADirectory": errno.ENOTDIR}
+
+
+def file_error(code: Optional[int], kind: str, message: str, filename: str) -> FileError:
+    """The :class:`FileError` of a failed file operation on ``filename``, as
+    the core reports it: the OS error number ``code`` when the system gave
+    one, else the Rust ``io::ErrorKind`` name ``kind``, and its ``message``.
+    With a number it reads as Python's own do (``[Errno 2] No such file or
+    directory: 'mesh.ply'``); without one, ``filename: message``."""
+    if code is None:
+        code = _ERRNO_OF_KIND.get(kind)
+    if code is None:
+        return FileError(f"{filename}: {message}")
+    return _FILE_ERRORS.get(code, FileError)(code, os.strerror(code), filename)
+
+
+def as_file_error(err: OSError) -> FileError:
+    """``err`` (a builtin OSError from Python's own file calls) as a FileError
+    with the same number, text and file names; one already is returned as it is."""
+    if isinstance(err, FileError):
+        return err
+    if err.errno is None or err.strerror is None:
+        return FileError(*err.args)
+    names = (err.filename,) if err.filename2 is None else (err.filename, None, err.filename2)
+    return _FILE_ERRORS.get(err.errno, FileError)(err.errno, err.strerror, *names)
 
 
 class SpherifyWarning(UserWarning):

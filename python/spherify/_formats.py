@@ -25,6 +25,7 @@ import numpy as np
 
 from ._atomic import write_atomically
 from ._errors import FormatError, MeshError
+from ._files import require_regular_file
 
 #: What a reader returns: vertices, faces, notes, per-vertex attributes.
 Loaded = Tuple[np.ndarray, np.ndarray, List[str], Dict[str, np.ndarray]]
@@ -72,6 +73,7 @@ def reader_for(path: Path) -> Optional[Reader]:
                           "of paths or an .npz holding V and F", str(path))
     if path.suffix.lower() in CORE_SUFFIXES:
         return None
+    require_regular_file(path)
     with open(path, "rb") as handle:
         magic = handle.read(3)
     if magic in (FREESURFER_TRIANGLE_MAGIC, FREESURFER_QUAD_MAGIC):
@@ -122,6 +124,7 @@ def _pick(arrays: Any, path: Path, names: Tuple[str, ...]) -> np.ndarray:
 def read_npz(path: Path) -> Loaded:
     """``V``/``F`` (or ``vertices``/``faces``) from an ``.npz``; ``sphere`` (n, 3)
     and ``uv`` (n, 2), when present, become attributes. Never unpickles."""
+    require_regular_file(path)
     with open(path, "rb"):
         pass  # FileNotFoundError / PermissionError before is_zipfile's silent False
     if not zipfile.is_zipfile(path):
@@ -143,6 +146,7 @@ def read_npy_pair(vertices_path: Path, faces_path: Path) -> Loaded:
     """Vertices and faces from two ``.npy`` files. Never unpickles."""
     arrays = []
     for path in (vertices_path, faces_path):
+        require_regular_file(path)
         try:
             arrays.append(np.load(path, allow_pickle=False))
         except (ValueError, EOFError) as err:
@@ -217,6 +221,7 @@ def write_freesurfer(path: Path, vertices: np.ndarray, faces: np.ndarray,
 def read_gifti(path: Path) -> Loaded:
     """A GIfTI surface: its ``NIFTI_INTENT_POINTSET`` and ``NIFTI_INTENT_TRIANGLE`` arrays."""
     gifti = _nibabel(path, "reading a GIfTI surface", "gifti")
+    require_regular_file(path)
     data = path.read_bytes()
     try:
         image = gifti.GiftiImage.from_bytes(data)

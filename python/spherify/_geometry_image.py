@@ -25,7 +25,9 @@ from typing import Tuple, Union
 
 import numpy as np
 
+from ._atomic import write_bytes_atomically
 from ._errors import FormatError, MeshError
+from ._files import file_errors, require_regular_file
 from ._mesh import Mesh
 from ._spheremap import SphereMap
 
@@ -140,6 +142,7 @@ def _chunk(kind: bytes, data: bytes) -> bytes:
             + struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF))
 
 
+@file_errors
 def save_geometry_image(image: np.ndarray, path: PathLike) -> int:
     """Write a geometry image as a 16-bit RGB PNG (8.2's compression).
 
@@ -165,17 +168,11 @@ def save_geometry_image(image: np.ndarray, path: PathLike) -> int:
             + _chunk(b"tEXt", b"spherify-bbox\x00" + bbox)
             + _chunk(b"IDAT", zlib.compress(rows, 9))
             + _chunk(b"IEND", b""))
-    target = Path(path)
-    temporary = target.with_name(f".{target.name}.tmp-{os.getpid()}")
-    try:
-        temporary.write_bytes(data)
-        os.replace(temporary, target)
-    finally:
-        if temporary.exists():
-            temporary.unlink()
+    write_bytes_atomically(path, data)
     return len(data)
 
 
+@file_errors
 def load_geometry_image(path: PathLike) -> np.ndarray:
     """Read a PNG written by :func:`save_geometry_image`: (n, n, 3) float64.
 
@@ -186,6 +183,7 @@ def load_geometry_image(path: PathLike) -> np.ndarray:
         a missing bounding box), with the path and byte offset.
     """
     name = os.fspath(path)
+    require_regular_file(Path(name))
     data = Path(path).read_bytes()
 
     def bad(message: str, offset: int) -> FormatError:

@@ -10,6 +10,7 @@ from typing import Any, Dict, List, Literal, Optional, Tuple, Union, overload
 import numpy as np
 
 from . import _args, _core, _formats
+from ._files import file_errors
 from ._errors import FormatError, MeshError
 from ._report import MeshReport, SphereReport
 
@@ -164,6 +165,7 @@ def as_mesh(mesh: Any) -> Mesh:
                     f"`vertices` and `faces` arrays, got {type(mesh).__name__}")
 
 
+@file_errors
 def load(path: Union[PathLike, Tuple[PathLike, PathLike]]) -> Mesh:
     """Read a triangle mesh; the format is chosen by the file's name.
 
@@ -182,8 +184,9 @@ def load(path: Union[PathLike, Tuple[PathLike, PathLike]]) -> Mesh:
 
     Raises
     ------
-    FileNotFoundError, OSError
-        The file cannot be read.
+    FileError
+        The file cannot be read (also the builtin ``FileNotFoundError``,
+        ``PermissionError``, ``IsADirectoryError``, ... of the cause).
     FormatError
         The file is malformed, holds bad indices or coordinates, or is in no
         format spherify reads (or needs nibabel, which is missing); the message
@@ -221,6 +224,7 @@ def _from_arrays(path: Path, loaded: _formats.Loaded) -> Mesh:
     return mesh
 
 
+@file_errors
 def save(mesh: MeshLike, path: PathLike, *, sphere: Any = None, uv: Any = None,
          texture: Any = None, ply_encoding: str = "binary_little_endian",
          stl_binary: bool = True, format: Optional[str] = None) -> None:

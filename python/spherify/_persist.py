@@ -29,6 +29,7 @@ import numpy as np
 from . import _core
 from ._atomic import write_atomically
 from ._errors import FormatError, MeshError
+from ._files import file_errors, require_regular_file
 
 if TYPE_CHECKING:
     from ._spheremap import SphereMap
@@ -160,6 +161,7 @@ def rebuild(arrays: Any, source: str) -> "SphereMap":
                          details=details)
 
 
+@file_errors
 def save_map(m: "SphereMap", path: PathLike) -> None:
     """Write ``m`` to ``path`` atomically (temporary file, then rename)."""
     arrays: Dict[str, Any] = record(m)
@@ -170,6 +172,7 @@ def save_map(m: "SphereMap", path: PathLike) -> None:
     write_atomically(path, fill)
 
 
+@file_errors
 def load_map(path: PathLike) -> "SphereMap":
     """Read a map written by :meth:`SphereMap.save` and certify it again.
 
@@ -179,14 +182,16 @@ def load_map(path: PathLike) -> "SphereMap":
 
     Raises
     ------
-    FileNotFoundError, OSError
-        The file cannot be read.
+    FileError
+        The file cannot be read (also the builtin ``FileNotFoundError``,
+        ``PermissionError``, ``IsADirectoryError``, ... of the cause).
     FormatError
         Not a sphere map, a newer format, or parts that do not fit the mesh or
         each other (points off the fold of the rectangle, a rectangle boundary
         not where eq. 6.31 puts it, a path that is not a cut); names the file.
     """
     file = Path(os.fspath(path))
+    require_regular_file(file)
     with open(file, "rb"):
         pass  # FileNotFoundError / PermissionError first
     if not zipfile.is_zipfile(file):

@@ -57,7 +57,9 @@ from typing import Any, Callable, Dict, Optional, Union
 import numpy as np
 import numpy.typing as npt
 
+from ._atomic import write_bytes_atomically
 from ._errors import FormatError, MeshError
+from ._files import file_errors
 from ._geometry_image import _chunk
 from ._mesh import Mesh
 from ._quality import quality
@@ -459,16 +461,7 @@ def uv(m: SphereMap, projection: str = "cube") -> UVLayout:
     return _equirectangular(points, faces)
 
 
-def _atomic_write(path: Path, data: bytes) -> None:
-    temporary = path.with_name(f".{path.name}.tmp-{os.getpid()}")
-    try:
-        temporary.write_bytes(data)
-        os.replace(temporary, path)
-    finally:
-        if temporary.exists():
-            temporary.unlink()
-
-
+@file_errors
 def write_png(image: npt.ArrayLike, path: PathLike) -> None:
     """An (h, w, 3) RGB image with values in [0, 1] (NaN as black) as an
     8-bit PNG, written atomically."""
@@ -480,9 +473,10 @@ def write_png(image: npt.ArrayLike, path: PathLike) -> None:
     data = (b"\x89PNG\r\n\x1a\n"
             + _chunk(b"IHDR", struct.pack(">IIBBBBB", q.shape[1], q.shape[0], 8, 2, 0, 0, 0))
             + _chunk(b"IDAT", zlib.compress(rows, 6)) + _chunk(b"IEND", b""))
-    _atomic_write(Path(path), data)
+    write_bytes_atomically(Path(path), data)
 
 
+@file_errors
 def save_obj(mesh: Mesh, path: PathLike, layout: UVLayout,
              image: Optional[npt.ArrayLike] = None) -> None:
     """Write ``mesh`` as OBJ with one ``vt`` per face corner and, with
@@ -511,14 +505,14 @@ def _write_obj(mesh: Mesh, target: Path, corners: np.ndarray, label: str,
             write_png(texture, target.with_suffix(".png"))
             name = target.with_suffix(".png").name
         mtl = target.with_suffix(".mtl")
-        _atomic_write(mtl, f"newmtl texture\nKa 1 1 1\nKd 1 1 1\nmap_Kd {name}\n".encode())
+        write_bytes_atomically(mtl, f"newmtl texture\nKa 1 1 1\nKd 1 1 1\nmap_Kd {name}\n".encode())
         lines += [f"mtllib {mtl.name}", "usemtl texture"]
     lines += ["v %.17g %.17g %.17g" % tuple(p) for p in mesh.vertices.tolist()]
     lines += ["vt %.17g %.17g" % tuple(p) for p in corners.reshape(-1, 2).tolist()]
     f = mesh.faces + 1
     t = np.arange(1, 3 * mesh.n_faces + 1).reshape(-1, 3)
     lines += [f"f {a}/{ta} {b}/{tb} {c}/{tc}" for (a, b, c), (ta, tb, tc) in zip(f, t)]
-    _atomic_write(target, ("\n".join(lines) + "\n").encode())
+    write_bytes_atomically(target, ("\n".join(lines) + "\n").encode())
 
 
 def _is_per_corner(uv: Any) -> bool:

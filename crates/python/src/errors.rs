@@ -1,12 +1,8 @@
 //! Core errors -> the Python exceptions of DESIGN.md, which are defined in
 //! `spherify/_errors.py` so that they can inherit from both `SpherifyError` and
-//! the matching builtin (`ValueError`, `RuntimeError`).
+//! the matching builtin (`ValueError`, `RuntimeError`, `OSError`).
 
 use pyo3::call::PyCallArgs;
-use pyo3::exceptions::{
-    PyFileExistsError, PyFileNotFoundError, PyIsADirectoryError, PyNotADirectoryError, PyOSError,
-    PyPermissionError,
-};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use spherify_mesh::{Location, MeshError};
@@ -44,17 +40,12 @@ pub fn to_py(py: Python<'_>, err: MeshError) -> PyErr {
             };
             spherify_error(py, "FormatError", (f.to_string(), f.path.clone(), line, offset))
         }
-        MeshError::Io { path, source } => {
-            let message = format!("{path}: {source}");
-            match source.kind() {
-                std::io::ErrorKind::NotFound => PyFileNotFoundError::new_err(message),
-                std::io::ErrorKind::PermissionDenied => PyPermissionError::new_err(message),
-                std::io::ErrorKind::AlreadyExists => PyFileExistsError::new_err(message),
-                std::io::ErrorKind::IsADirectory => PyIsADirectoryError::new_err(message),
-                std::io::ErrorKind::NotADirectory => PyNotADirectoryError::new_err(message),
-                _ => PyOSError::new_err(message),
-            }
-        }
+        // `FileError`: a SpherifyError and the builtin OSError subclass of the cause.
+        MeshError::Io { path, source } => spherify_error(
+            py,
+            "file_error",
+            (source.raw_os_error(), format!("{:?}", source.kind()), source.to_string(), path),
+        ),
         MeshError::Topology(t) => {
             let report = match crate::validate::report_to_py(py, &t.report) {
                 Ok(report) => report,
