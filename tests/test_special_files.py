@@ -92,6 +92,35 @@ def test_a_fifo_or_a_device_is_refused_at_once_by_every_reader(
     assert done.stdout.strip() == "OK", done.stderr
 
 
+def test_a_file_larger_than_memory_is_an_error_not_an_abort(tmp_path: Path) -> None:
+    """A 4 TB sparse .ply: the core used to abort the whole process (Rust's
+    allocation failure) where it reserved the file's size. In a child, which
+    such an abort would kill."""
+    try:
+        overcommit = Path("/proc/sys/vm/overcommit_memory").read_text().strip()
+    except OSError:
+        pytest.skip("needs Linux's /proc/sys/vm/overcommit_memory")
+    if overcommit == "1":
+        pytest.skip("the kernel grants any allocation here: the read would really start")
+    path = tmp_path / "huge.ply"
+    try:
+        with open(path, "wb") as handle:
+            handle.truncate(4 << 40)
+    except OSError:
+        pytest.skip("the file system holds no 4 TB sparse file")
+    script = f"""
+        import spherify as sp
+        try:
+            sp.load({str(path)!r})
+        except sp.FileError as e:
+            assert "more than this process can hold in memory" in str(e), e
+            print("OK")
+    """
+    done = subprocess.run([sys.executable, "-c", textwrap.dedent(script)], capture_output=True,
+                          text=True, timeout=60, env=_child_env())
+    assert done.stdout.strip() == "OK", (done.returncode, done.stderr[-2000:])
+
+
 # --------------------------------------------------------------------------
 # Writing
 # --------------------------------------------------------------------------

@@ -152,7 +152,18 @@ fn read_regular_file(path: &Path) -> Result<Vec<u8>, MeshError> {
         return Err(refuse(what));
     }
     let size = meta.len();
-    let mut bytes = Vec::with_capacity(usize::try_from(size).unwrap_or(0));
+    // Reserved fallibly: a file larger than the memory the process can get
+    // (a 100 GB sparse file, a mesh bigger than the machine) would otherwise
+    // abort the process, Python and all, instead of raising.
+    let mut bytes = Vec::new();
+    usize::try_from(size).ok().and_then(|size| bytes.try_reserve_exact(size).ok()).ok_or_else(
+        || {
+            io(std::io::Error::new(
+                std::io::ErrorKind::OutOfMemory,
+                format!("the file is {size} bytes, more than this process can hold in memory"),
+            ))
+        },
+    )?;
     file.take(size).read_to_end(&mut bytes).map_err(io)?;
     Ok(bytes)
 }
