@@ -183,6 +183,19 @@ def test_cli_refuses_an_unknown_extension_before_working(
         assert "unknown extension '.gltf'" in capsys.readouterr().err
 
 
+def test_cli_refuses_a_folder_as_output_before_working(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch) -> None:
+    def no_work(*args: Any, **kwargs: Any) -> None:
+        raise AssertionError("the mesh was loaded before the output was checked")
+    monkeypatch.setattr(cli, "_load", no_work)
+    folder = tmp_path / "out.ply"
+    folder.mkdir()
+    for command in ("map", "orient"):
+        assert cli.main([command, "--dataset", "icosphere", "-o", str(folder)]) == 2
+        assert "this is a folder" in capsys.readouterr().err
+    assert list(folder.iterdir()) == []
+
+
 def test_cli_a_map_the_method_refuses_exits_1(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     # A helix tube is not star-shaped: radial refuses it.
     code = cli.main(["map", "--dataset", "helix_tube", "--n-vertices", "500", "--method", "radial",

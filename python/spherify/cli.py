@@ -83,6 +83,8 @@ def _check_output(path: str) -> None:
         raise UsageError(f"-o {path}: unknown extension {out.suffix or '(none)'!r}; "
                          f"use one of {', '.join(MESH_EXTENSIONS)}, .npz, .gii or a FreeSurfer "
                          "surface name (lh.sphere, rh.pial, ...)") from None
+    if out.is_dir():
+        raise UsageError(f"-o {path}: this is a folder; name the output file in it")
     folder = out.parent
     if not folder.is_dir():
         raise UsageError(f"-o {path}: the output folder {folder} does not exist")
