@@ -196,6 +196,21 @@ def test_cli_refuses_a_folder_as_output_before_working(
     assert list(folder.iterdir()) == []
 
 
+@pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="needs FIFOs (POSIX)")
+def test_cli_map_refuses_a_pipe_as_output_before_working(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch) -> None:
+    """map reads OUT back for the hash in OUT's .npz: from a pipe that read
+    would wait for a writer for ever."""
+    def no_work(*args: Any, **kwargs: Any) -> None:
+        raise AssertionError("the mesh was loaded before the output was checked")
+    monkeypatch.setattr(cli, "_load", no_work)
+    fifo = tmp_path / "out.ply"
+    os.mkfifo(fifo)
+    assert cli.main(["map", "--dataset", "icosphere", "-o", str(fifo)]) == 2
+    assert "FIFO" in capsys.readouterr().err
+    assert [p.name for p in tmp_path.iterdir()] == ["out.ply"]
+
+
 def test_cli_a_map_the_method_refuses_exits_1(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     # A helix tube is not star-shaped: radial refuses it.
     code = cli.main(["map", "--dataset", "helix_tube", "--n-vertices", "500", "--method", "radial",

@@ -43,7 +43,7 @@ from typing import Any, Dict, List, Optional, Union
 
 import numpy as np
 
-from . import _args, _cli_apps, _core, _formats, datasets
+from . import _args, _cli_apps, _core, _files, _formats, datasets
 from ._embed import embed, methods
 from ._errors import MeshError, SpherifyError, SpherifyWarning, TopologyError
 from ._mesh import Mesh, check, check_sphere, load, orient, save
@@ -227,6 +227,12 @@ def _cmd_map(args: argparse.Namespace) -> int:
     method = args.method or "progressive"
     _check_output(args.output)
     out = Path(args.output)
+    if out.exists() and not out.is_file():
+        # OUT is read back for the hash its .npz records: a pipe would wait
+        # for a writer for ever, a device would give a hash of nothing.
+        what = _files.special_kind(out.stat().st_mode) or "not a regular file"
+        raise UsageError(f"-o {out}: this is {what}; spherify map writes OUT and records its "
+                         "hash in OUT's .npz, so OUT must be a regular file")
     start = time.perf_counter()
     mesh = _load(args)
     loaded = time.perf_counter()
