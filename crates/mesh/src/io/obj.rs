@@ -18,11 +18,16 @@ const NO_VT: u32 = u32::MAX;
 /// Records that are valid OBJ but carry nothing spherify uses: skipped silently.
 #[rustfmt::skip]
 const KNOWN: &[&[u8]] = &[
-    b"vn", b"vp", b"o", b"g", b"s", b"usemtl", b"mtllib", b"l", b"p", b"cstype", b"deg",
-    b"bmat", b"step", b"curv", b"curv2", b"surf", b"parm", b"trim", b"hole", b"scrv", b"sp",
+    b"vn", b"vp", b"o", b"g", b"s", b"usemtl", b"mtllib", b"cstype", b"deg",
+    b"bmat", b"step", b"parm", b"trim", b"hole", b"scrv", b"sp",
     b"end", b"con", b"mg", b"bevel", b"c_interp", b"d_interp", b"lod", b"maplib", b"usemap",
     b"shadow_obj", b"trace_obj", b"ctech", b"stech",
 ];
+
+/// Valid OBJ records of geometry other than faces (points, polylines,
+/// free-form curves and surfaces): skipped, with a note, since the mesh read
+/// is then not all the file describes.
+const OTHER_GEOMETRY: &[&[u8]] = &[b"p", b"l", b"curv", b"curv2", b"surf"];
 
 /// Parses an OBJ file held in memory.
 pub(crate) fn read(bytes: &[u8], name: &str) -> Result<LoadedMesh, MeshError> {
@@ -79,6 +84,8 @@ struct Reader<'n> {
     forward: Vec<(u64, u64, u64)>,
     unknown: usize,
     first_unknown: Option<(u64, String)>,
+    other_geometry: usize,
+    first_other_geometry: Option<(u64, String)>,
 }
 
 impl<'n> Reader<'n> {
@@ -99,6 +106,8 @@ impl<'n> Reader<'n> {
             forward: Vec::new(),
             unknown: 0,
             first_unknown: None,
+            other_geometry: 0,
+            first_other_geometry: None,
         }
     }
 
@@ -111,6 +120,13 @@ impl<'n> Reader<'n> {
             b"f" => self.face(number, rest),
             b"vt" => self.texcoord(number, rest),
             _ if keyword.starts_with(b"#") || KNOWN.contains(&keyword) => Ok(()),
+            _ if OTHER_GEOMETRY.contains(&keyword) => {
+                self.other_geometry += 1;
+                if self.first_other_geometry.is_none() {
+                    self.first_other_geometry = Some((number, text::show(Some(keyword))));
+                }
+                Ok(())
+            }
             _ => {
                 self.unknown += 1;
                 if self.first_unknown.is_none() {
@@ -309,6 +325,13 @@ impl<'n> Reader<'n> {
         let mut notes = Vec::new();
         let uv = self.per_vertex_uv(&mut notes);
         notes.extend(self.triangles.note());
+        if let Some((number, keyword)) = &self.first_other_geometry {
+            notes.push(format!(
+                "ignored {} point, line and free-form records (p, l, curv, curv2, surf; the \
+                 first, {keyword}, at line {number}): spherify reads the faces only",
+                self.other_geometry
+            ));
+        }
         if let Some((number, keyword)) = &self.first_unknown {
             notes.push(format!(
                 "ignored {} lines with unknown OBJ records (the first, {keyword}, at line {number})",
@@ -427,7 +450,9 @@ mod tests {
         );
         assert_eq!(loaded.mesh.faces(), &[[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]]);
         assert_eq!(loaded.attributes.uv, None);
-        assert!(loaded.notes.is_empty(), "{:?}", loaded.notes);
+        // Only the point and the line are worth a note: geometry not read.
+        assert_eq!(loaded.notes.len(), 1, "{:?}", loaded.notes);
+        assert!(loaded.notes[0].starts_with("ignored 2 point, line"), "{:?}", loaded.notes);
     }
 
     #[test]
@@ -470,6 +495,22 @@ mod tests {
         let loaded = parse(text).unwrap();
         assert_eq!(loaded.mesh.faces(), &[[0, 1, 2]]);
         assert!(loaded.notes.iter().any(|n| n.contains("'foo', at line 4")), "{:?}", loaded.notes);
+    }
+
+    #[test]
+    fn points_lines_and_free_form_geometry_are_noted_and_the_rest_is_silent() {
+        let text = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\ng a\ns 1\nusemtl m\nf 1 2 3\n\
+                    l 1 2\np 3\nl 2 3\n";
+        let loaded = parse(text).unwrap();
+        assert_eq!(loaded.mesh.faces(), &[[0, 1, 2]]);
+        assert_eq!(
+            loaded.notes,
+            vec!["ignored 3 point, line and free-form records (p, l, curv, curv2, surf; the \
+                  first, 'l', at line 9): spherify reads the faces only"
+                .to_string()]
+        );
+        let silent = parse("v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\no x\ng a\nf 1//1 2//1 3//1\n");
+        assert_eq!(silent.unwrap().notes, Vec::<String>::new());
     }
 
     #[test]
