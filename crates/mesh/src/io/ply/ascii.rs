@@ -145,8 +145,13 @@ mod tests {
         assert_eq!(loaded.attributes, VertexAttributes::default());
         assert_eq!(
             loaded.notes,
-            vec!["1 polygons with more than 3 vertices were fan-triangulated into 2 triangles"
-                .to_string()]
+            vec![
+                "1 polygons with more than 3 vertices were fan-triangulated into 2 triangles"
+                    .to_string(),
+                "ignored the 2 records of element 'edge' (header line 11): spherify reads the \
+                 vertex and face elements only"
+                    .to_string()
+            ]
         );
     }
 

@@ -81,6 +81,17 @@ pub(crate) fn read(bytes: &[u8], name: &str) -> Result<LoadedMesh, MeshError> {
         return Err(MeshError::TooManyVertices { n_vertices, max: MAX_VERTICES });
     }
     let mut out = sink::Sink::new(nv, nf, layout);
+    // Other elements (an `edge` list, materials) are valid PLY and skipped:
+    // said, since the mesh returned is then not all the file holds.
+    for element in header.elements.iter().filter(|e| e.count > 0) {
+        if element.name != "vertex" && element.name != "face" {
+            out.notes.push(format!(
+                "ignored the {} records of element '{}' (header line {}): spherify reads \
+                 the vertex and face elements only",
+                element.count, element.name, element.line
+            ));
+        }
+    }
     let body = bytes.get(header.body_start..).unwrap_or_default();
     match header.encoding {
         PlyEncoding::Ascii => ascii::read_body(&header, body, &mut out, name)?,
@@ -95,6 +106,24 @@ pub(crate) fn read(bytes: &[u8], name: &str) -> Result<LoadedMesh, MeshError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn other_elements_are_skipped_with_a_note() {
+        let text = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n\
+                    property float y\nproperty float z\nproperty uchar red\nelement face 1\n\
+                    property list uchar int vertex_indices\nelement edge 2\nproperty int vertex1\n\
+                    property int vertex2\nelement material 0\nproperty uchar red\nend_header\n\
+                    0 0 0 9\n1 0 0 9\n0 1 0 9\n3 0 1 2\n0 1\n1 2\n";
+        let loaded = read(text.as_bytes(), "t.ply").unwrap();
+        assert_eq!(loaded.mesh.faces(), &[[0, 1, 2]]);
+        // The empty element and the extra vertex property say nothing.
+        assert_eq!(
+            loaded.notes,
+            vec!["ignored the 2 records of element 'edge' (header line 10): spherify reads \
+                  the vertex and face elements only"
+                .to_string()]
+        );
+    }
 
     #[test]
     fn encoding_names_round_trip() {
