@@ -494,3 +494,43 @@ def test_two_hundred_meshes_mixed_with_broken_ones(tmp_path: Path, shared_meshes
                       + ["journal.jsonl", "summary.csv"])
     assert sorted(p.name for p in out.iterdir()) == expected
     json.dumps(result.rows)  # every row is plain JSON
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="the folder lock is POSIX (fcntl)")
+def test_a_second_batch_into_the_same_folder_is_refused_at_once(tmp_path: Path) -> None:
+    """Two batches in one folder would each rewrite the journal and the
+    summary from what they read; the second raises while the first holds it."""
+    import errno
+    import fcntl
+
+    make_inputs(tmp_path / "in", 2)
+    out = tmp_path / "out"
+    out.mkdir()
+    held = os.open(out, os.O_RDONLY)  # as a running batch holds the folder
+    try:
+        fcntl.flock(held, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        start = time.monotonic()
+        with pytest.raises(sp.FileError) as info:
+            sp.batch(tmp_path / "in", out, executor=cf.ThreadPoolExecutor(1))
+        assert time.monotonic() - start < 5
+        assert info.value.errno == errno.EBUSY and "another spherify batch" in str(info.value)
+        assert list(out.iterdir()) == []
+    finally:
+        os.close(held)
+    # Released (as when the first batch ends, however it ends): the next runs.
+    result = sp.batch(tmp_path / "in", out, executor=cf.ThreadPoolExecutor(1))
+    assert result.counts["certified"] == 2
+
+
+def test_a_batch_removes_dead_writers_temporaries_only(tmp_path: Path) -> None:
+    """A killed run's temporaries go; a live process's write in progress in
+    the same folder (sp.save from elsewhere) is left alone."""
+    make_inputs(tmp_path / "in", 1)
+    out = tmp_path / "out"
+    out.mkdir()
+    dead = out / f".x.sphere.ply.tmp-{2 ** 22 + 7}-0"  # above Linux's largest pid
+    alive = out / f".y.npz.tmp-{os.getpid()}-3"
+    dead.write_bytes(b"half")
+    alive.write_bytes(b"in progress")
+    sp.batch(tmp_path / "in", out, executor=cf.ThreadPoolExecutor(1))
+    assert not dead.exists() and alive.read_bytes() == b"in progress"

@@ -49,6 +49,25 @@ def is_temporary(path: Path) -> bool:
     return path.name.startswith(".") and TEMP_MARK in path.name
 
 
+def is_stale_temporary(path: Path) -> bool:
+    """Whether ``path`` is a temporary file whose writer no longer runs (the
+    process id in ``.name.tmp-PID-N``): a killed run's leftover, safe to
+    remove. Another process's write in progress is not (the core's writer
+    tells them apart the same way)."""
+    if not is_temporary(path):
+        return False
+    pid, _, counter = path.name.rpartition(TEMP_MARK)[2].partition("-")
+    if not (pid.isdigit() and counter.isdigit()):
+        return False
+    try:
+        os.kill(int(pid), 0)
+    except ProcessLookupError:
+        return True
+    except (PermissionError, OverflowError, OSError):
+        return False  # alive under another user, or not a process id we can ask about
+    return False
+
+
 def write_bytes_atomically(path: PathLike, data: bytes) -> None:
     """Write ``data`` to ``path`` with the core's atomic writer (the one
     ``sp.save`` uses for OBJ, OFF, PLY and STL)."""

@@ -38,6 +38,7 @@ from __future__ import annotations
 
 import concurrent.futures as cf
 import csv
+import errno
 import hashlib
 import importlib
 import io
@@ -45,15 +46,16 @@ import json
 import os
 import sys
 import time
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Dict, Iterable, Iterator, List, Optional, Sequence, Union
 
-from ._atomic import is_temporary, write_atomically
+from ._atomic import is_stale_temporary, is_temporary, write_atomically
 from ._files import file_errors, special_kind
 from ._batch_pool import LocalPool, executor_rows, usable_cores
 from ._batch_task import COLUMNS, QUALITY, Task, file_matches, run_task
-from ._errors import MeshError
+from ._errors import FileError, MeshError
 
 PathLike = Union[str, "os.PathLike[str]"]
 
@@ -305,6 +307,9 @@ def batch(paths: Union[PathLike, Iterable[PathLike]], out_dir: PathLike, executo
     MeshError
         An input path that does not exist, bad ``workers`` or ``timeout``, or
         options that cannot be stored.
+    FileError
+        ``out_dir`` cannot be made or written, or another batch is writing
+        into it (``errno.EBUSY``: two at once would each rewrite the journal).
     KeyboardInterrupt
         After Ctrl-C, once the workers are stopped; the journal holds every
         mesh that finished, and a rerun resumes.
@@ -324,8 +329,42 @@ def batch(paths: Union[PathLike, Iterable[PathLike]], out_dir: PathLike, executo
         raise MeshError(f"batch options must be JSON values (numbers, strings, lists): {err}") from None
     out = Path(os.fspath(out_dir))
     out.mkdir(parents=True, exist_ok=True)
+    with _folder_lock(out):
+        return _batch_into(out, inputs, executor, method, workers, timeout, scheduler, progress,
+                           options)
+
+
+@contextmanager
+def _folder_lock(out: Path) -> Iterator[None]:
+    """One batch at a time in an output folder. Two would each rewrite the
+    journal from what they read (one's rows would go to a replaced file) and
+    write summary.csv in turn: neither would say what the folder holds. An
+    advisory lock on the folder itself (no lock file is left behind; the
+    system releases it when the process ends, however it ends) makes the
+    second raise at once; without ``fcntl`` (not POSIX) there is no lock."""
+    try:
+        import fcntl
+    except ImportError:
+        yield
+        return
+    folder = os.open(out, os.O_RDONLY)
+    try:
+        try:
+            fcntl.flock(folder, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            raise FileError(errno.EBUSY, "another spherify batch is writing into this folder; "
+                            "wait for it, or give another folder", str(out)) from None
+        yield
+    finally:
+        os.close(folder)
+
+
+def _batch_into(out: Path, inputs: List[Path], executor: Any, method: str,
+                workers: Optional[int], timeout: Optional[float], scheduler: Optional[str],
+                progress: bool, options: Dict[str, Any]) -> BatchResult:
+    """:func:`batch` once its arguments are checked and ``out`` is locked."""
     for stale in out.iterdir():
-        if is_temporary(stale):  # left by a killed run
+        if is_stale_temporary(stale):  # left by a killed run
             stale.unlink()
     client: Any = None
     if scheduler is not None:
