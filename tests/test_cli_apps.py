@@ -115,3 +115,20 @@ def test_texture_writes_obj_mtl_and_png(tmp_path: Path, capsys: pytest.CaptureFi
     assert sorted(p.name for p in tmp_path.iterdir()) == ["t.mtl", "t.obj", "t.png"]
     assert cli.main(["texture", "--dataset", "bumpy_blob", "-o", str(tmp_path / "t.ply")]) == 2
     assert "OBJ" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("command, extra", [
+    ("harmonics", ["--lmax", "4"]), ("remesh", ["--level", "1"]), ("texture", []),
+    ("morph", ["--target-dataset", "ellipsoid"]),
+])
+def test_a_folder_as_output_is_refused_before_the_work(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str], command: str, extra: list) -> None:
+    folder = tmp_path / "out.ply"
+    folder.mkdir()
+    code = cli.main([command, "--dataset", "bumpy_blob", "--n-vertices", "300", *extra,
+                     "-o", str(folder)])
+    assert code != 0
+    captured = capsys.readouterr()
+    assert "this is a folder" in captured.err + captured.out
+    assert "vertices" not in captured.out  # nothing was mapped first
+    assert list(folder.iterdir()) == []

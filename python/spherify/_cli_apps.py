@@ -58,6 +58,8 @@ def mapped(mesh: Mesh, method: str) -> SphereMap:
 
 def output_path(args: argparse.Namespace) -> Path:
     out = Path(args.output)
+    if out.is_dir():
+        raise SpherifyError(f"-o {out}: this is a folder; name the output file in it")
     if not out.parent.is_dir():
         raise SpherifyError(f"the output folder {out.parent} does not exist")
     return out
