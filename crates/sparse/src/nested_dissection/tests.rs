@@ -312,7 +312,6 @@ fn random_graphs_order_to_permutations_and_bisect_cleanly() {
     }
 }
 
-
 /// Asserts that the ordering and the first cut of the graph are those of
 /// [`reference`], the implementation before the searches were made faster:
 /// the speed-ups must change no permutation, hence no factor or result.
