@@ -287,6 +287,16 @@ fn postorder(offsets: &[usize], indices: &[u32], perm: Vec<u32>) -> Vec<u32> {
     let mut parent = vec![NONE; n];
     let mut ancestor = vec![NONE; n];
     for (k, &v) in perm.iter().enumerate() {
+        // `perm` jumps about the graph (leaf by leaf, then the separators):
+        // fetch the neighbour lists ahead, as the searches do.
+        if let Some(&u) = perm.get(k + 2 * AHEAD) {
+            prefetch(&offsets[u as usize]);
+        }
+        if let Some(&u) = perm.get(k + AHEAD) {
+            if let Some(first) = indices.get(offsets[u as usize]) {
+                prefetch(first);
+            }
+        }
         let k = k as u32;
         for &w in &indices[offsets[v as usize]..offsets[v as usize + 1]] {
             let mut i = inverse[w as usize];
