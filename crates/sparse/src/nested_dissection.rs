@@ -213,8 +213,8 @@ pub(crate) fn nested_dissection(offsets: &[usize], indices: &[u32]) -> Vec<u32> 
     let mut perm: Vec<u32> = (0..n as u32).collect();
     if n > 0 {
         // In the breadth-first numbering a search from vertex 0 meets the
-        // vertices of its component in the order 0, 1, 2, ...: all of it is
-        // known, and the first of the whole graph's four sweeps is saved.
+        // vertices of its component in the order 0, 1, 2, ...: the whole
+        // graph's first sweep is known without searching.
         let known = Known { head: first_component, end: first_component };
         work.dissect(Piece { vs: &mut perm, label: 0, hint: 0, known });
     }
