@@ -35,9 +35,12 @@
 //! The ordering is deterministic: the parallel halves touch disjoint vertices,
 //! and the piece labels they share only tell membership.
 
+mod breadth_first;
 mod fiduccia_mattheyses;
 
 use crate::direct::amd_order;
+pub(crate) use breadth_first::{prefetch, AHEAD};
+use breadth_first::{Known, Levels};
 use fiduccia_mattheyses::Split;
 use std::sync::atomic::{AtomicU32, Ordering::Relaxed};
 
@@ -132,28 +135,13 @@ pub(crate) fn pseudo_diameter(offsets: &[usize], indices: &[u32]) -> usize {
 }
 
 /// A piece of the graph to order: its vertices `vs` (each labelled `label`),
-/// to be overwritten by their order, and a vertex `hint` of it to search
-/// from.
+/// to be overwritten by their order, a vertex `hint` of it to search from,
+/// and what is `known` of that search already.
 struct Piece<'a> {
     vs: &'a mut [u32],
     label: u32,
     hint: u32,
-}
-
-/// A breadth-first search's vertices in visiting order, and where each level starts.
-struct Levels {
-    queue: Vec<u32>,
-    starts: Vec<usize>,
-}
-
-impl Levels {
-    fn count(&self) -> usize {
-        self.starts.len() - 1
-    }
-
-    fn level(&self, k: usize) -> &[u32] {
-        &self.queue[self.starts[k]..self.starts[k + 1]]
-    }
+    known: Known,
 }
 
 /// What [`Dissection::cut`] made of a piece: the labels of its two sides
@@ -214,7 +202,7 @@ pub(crate) fn nested_dissection(offsets: &[usize], indices: &[u32]) -> Vec<u32> 
     // The searches below jump between neighbours; numbered in breadth-first
     // order, the graph's neighbours sit close in memory and each piece in a
     // few runs of it (measured: the ordering takes about half the time).
-    let (order, graph) = breadth_first_copy(offsets, indices);
+    let (order, first_component, graph) = breadth_first_copy(offsets, indices);
     let work = Dissection {
         offsets: &graph.0,
         indices: &graph.1,
@@ -224,7 +212,11 @@ pub(crate) fn nested_dissection(offsets: &[usize], indices: &[u32]) -> Vec<u32> 
     };
     let mut perm: Vec<u32> = (0..n as u32).collect();
     if n > 0 {
-        work.dissect(Piece { vs: &mut perm, label: 0, hint: 0 });
+        // In the breadth-first numbering a search from vertex 0 meets the
+        // vertices of its component in the order 0, 1, 2, ...: the whole
+        // graph's first sweep is known without searching.
+        let known = Known { head: first_component, end: first_component };
+        work.dissect(Piece { vs: &mut perm, label: 0, hint: 0, known });
     }
     drop(work);
     let perm = postorder(&graph.0, &graph.1, perm);
@@ -232,15 +224,23 @@ pub(crate) fn nested_dissection(offsets: &[usize], indices: &[u32]) -> Vec<u32> 
 }
 
 /// The graph renumbered in breadth-first order (component by component),
-/// without self loops: the new-to-old numbering and the new CSR arrays.
-fn breadth_first_copy(offsets: &[usize], indices: &[u32]) -> (Vec<u32>, (Vec<usize>, Vec<u32>)) {
+/// without self loops: the new-to-old numbering, the size of the first
+/// component (vertex 0's), and the new CSR arrays.
+fn breadth_first_copy(
+    offsets: &[usize],
+    indices: &[u32],
+) -> (Vec<u32>, usize, (Vec<usize>, Vec<u32>)) {
     const UNSEEN: u32 = u32::MAX;
     let n = offsets.len().saturating_sub(1);
     let mut new_of = vec![UNSEEN; n];
     let mut order = Vec::with_capacity(n);
+    let mut first_component = None;
     for root in 0..n {
         if new_of[root] != UNSEEN {
             continue;
+        }
+        if root > 0 && first_component.is_none() {
+            first_component = Some(order.len());
         }
         new_of[root] = order.len() as u32;
         order.push(root as u32);
@@ -269,7 +269,7 @@ fn breadth_first_copy(offsets: &[usize], indices: &[u32]) -> (Vec<u32>, (Vec<usi
         );
         new_offsets.push(new_indices.len());
     }
-    (order, (new_offsets, new_indices))
+    (order, first_component.unwrap_or(n), (new_offsets, new_indices))
 }
 
 /// `perm` renumbered in a postorder of its elimination tree, which changes
@@ -287,6 +287,16 @@ fn postorder(offsets: &[usize], indices: &[u32], perm: Vec<u32>) -> Vec<u32> {
     let mut parent = vec![NONE; n];
     let mut ancestor = vec![NONE; n];
     for (k, &v) in perm.iter().enumerate() {
+        // `perm` jumps about the graph (leaf by leaf, then the separators):
+        // fetch the neighbour lists ahead, as the searches do.
+        if let Some(&u) = perm.get(k + 2 * AHEAD) {
+            prefetch(&offsets[u as usize]);
+        }
+        if let Some(&u) = perm.get(k + AHEAD) {
+            if let Some(first) = indices.get(offsets[u as usize]) {
+                prefetch(first);
+            }
+        }
         let k = k as u32;
         for &w in &indices[offsets[v as usize]..offsets[v as usize + 1]] {
             let mut i = inverse[w as usize];
@@ -342,33 +352,9 @@ impl Dissection<'_> {
         &self.indices[self.offsets[v as usize]..self.offsets[v as usize + 1]]
     }
 
-    /// Breadth-first search from `start` through the vertices labelled
-    /// `from`, relabelling those it reaches `to`.
-    fn bfs(&self, start: u32, from: u32, to: u32, capacity: usize) -> Levels {
-        let mut queue = Vec::with_capacity(capacity);
-        let mut starts = vec![0];
-        self.label[start as usize].store(to, Relaxed);
-        queue.push(start);
-        let mut head = 0;
-        while head < queue.len() {
-            let end = queue.len();
-            for i in head..end {
-                for &w in self.neighbours(queue[i]) {
-                    if self.label[w as usize].load(Relaxed) == from {
-                        self.label[w as usize].store(to, Relaxed);
-                        queue.push(w);
-                    }
-                }
-            }
-            head = end;
-            starts.push(end);
-        }
-        Levels { queue, starts }
-    }
-
     /// Orders a piece in place.
     fn dissect(&self, piece: Piece<'_>) {
-        let Piece { vs, label: piece, hint } = piece;
+        let Piece { vs, label: piece, hint, known } = piece;
         let len = vs.len();
         if len <= 1 {
             return;
@@ -376,17 +362,17 @@ impl Dissection<'_> {
         // Two sweeps: the far end of a search from anywhere is nearly
         // peripheral, and levels from there cut the piece across its length.
         let first = self.fresh();
-        let sweep = self.bfs(hint, piece, first, len);
-        if sweep.queue.len() < len {
+        let sweep = self.sweep(hint, piece, first, &vs[..known.end], known.head, len);
+        if sweep.len() < len {
             // Disconnected: every component is ordered on its own, one after
             // the other, with no separator. All are found here in one pass
             // (peeling one per call would recurse once per component, and
             // a matrix may have a million of them).
-            let mut components = vec![(first, hint, sweep.queue)];
+            let mut components = vec![(first, hint, sweep)];
             for &v in vs.iter() {
                 if self.label[v as usize].load(Relaxed) == piece {
                     let label = self.fresh();
-                    components.push((label, v, self.bfs(v, piece, label, 0).queue));
+                    components.push((label, v, self.sweep(v, piece, label, &[], 0, 0)));
                 }
             }
             let mut rest: &mut [u32] = vs;
@@ -394,12 +380,14 @@ impl Dissection<'_> {
                 let (head, tail) = std::mem::take(&mut rest).split_at_mut(members.len());
                 head.copy_from_slice(&members);
                 drop(members);
-                self.dissect(Piece { vs: head, label, hint });
+                // All of the component's search is known: it is `members`.
+                let known = Known { head: head.len(), end: head.len() };
+                self.dissect(Piece { vs: head, label, hint, known });
                 rest = tail;
             }
             return;
         }
-        let far_end = sweep.queue[len - 1];
+        let far_end = sweep[len - 1];
         drop(sweep);
         let second = self.fresh();
         let levels = self.bfs(far_end, first, second, len);
@@ -413,6 +401,18 @@ impl Dissection<'_> {
         let near_hint = if label(far_end) == near { far_end } else { vs[0] };
         let far_hint = levels.queue[len - 1];
         let far_hint = if label(far_hint) == far { far_hint } else { vs[n_near] };
+        // The near side's first search starts where this piece's second
+        // did, from `far_end`: up to the first level the refinement
+        // changed, it meets the same vertices in the same order (a vertex
+        // of an unchanged level is as far from `far_end` in the near side as
+        // in the piece, through the same unchanged levels), and `cut` wrote
+        // those levels first into `vs`. Only the rest is searched again.
+        let whole =
+            (0..levels.count()).find(|&j| levels.level(j).iter().any(|&v| label(v) != near));
+        let near_known = match whole {
+            Some(m) if m > 0 => Known { head: levels.starts[m - 1], end: levels.starts[m] },
+            _ => Known::default(),
+        };
         drop(levels);
         let (near_part, rest) = vs.split_at_mut(n_near);
         let far_part = &mut rest[..len - n_near - n_separator];
@@ -420,8 +420,8 @@ impl Dissection<'_> {
         // rings around it, and starting the far side at its last vertex
         // (measured) gave 5% more fill on blobs for little time.
         self.both(
-            Piece { vs: near_part, label: near, hint: near_hint },
-            Piece { vs: far_part, label: far, hint: far_hint },
+            Piece { vs: near_part, label: near, hint: near_hint, known: near_known },
+            Piece { vs: far_part, label: far, hint: far_hint, known: Known::default() },
         );
     }
 

@@ -2,6 +2,9 @@ use super::*;
 use crate::test_support::grid_laplacian;
 use crate::CsrMatrix;
 
+/// The ordering before it was made faster, to compare with.
+mod reference;
+
 fn order(a: &CsrMatrix) -> Vec<u32> {
     nested_dissection(a.row_offsets(), a.col_indices())
 }
@@ -307,4 +310,122 @@ fn random_graphs_order_to_permutations_and_bisect_cleanly() {
             assert!(separated(&offsets, &indices, near, far));
         }
     }
+}
+
+/// Asserts that the ordering and the first cut of the graph are those of
+/// [`reference`], the implementation before the searches were made faster:
+/// the speed-ups must change no permutation, hence no factor or result.
+fn same_as_reference(offsets: &[usize], indices: &[u32], what: &str) {
+    assert_eq!(
+        nested_dissection(offsets, indices),
+        reference::nested_dissection(offsets, indices),
+        "ordering of {what}"
+    );
+    let old = reference::bisection(offsets, indices).map(|b| (b.vs, b.n_near, b.n_separator));
+    let new = bisection(offsets, indices).map(|b| (b.vs, b.n_near, b.n_separator));
+    assert_eq!(new, old, "bisection of {what}");
+}
+
+/// A triangulated tube, `around` vertices around and `along` rings long,
+/// each quad split by a random diagonal.
+fn tube(around: usize, along: usize, rng: &mut Rng) -> Vec<(usize, usize)> {
+    let id = |i: usize, j: usize| j * around + i % around;
+    let mut edges = Vec::new();
+    for j in 0..along {
+        for i in 0..around {
+            edges.push((id(i, j), id(i + 1, j)));
+            if j + 1 < along {
+                edges.push((id(i, j), id(i, j + 1)));
+                if rng.below(2) == 0 {
+                    edges.push((id(i, j), id(i + 1, j + 1)));
+                } else {
+                    edges.push((id(i + 1, j), id(i, j + 1)));
+                }
+            }
+        }
+    }
+    edges
+}
+
+/// The edges renumbered by a random permutation of the `n` vertices (a
+/// mesh's numbering is not breadth-first), with a self loop on every
+/// vertex when `diagonal` (a matrix's pattern has one).
+fn shuffled(
+    n: usize,
+    edges: &[(usize, usize)],
+    diagonal: bool,
+    rng: &mut Rng,
+) -> (Vec<usize>, Vec<u32>) {
+    let mut new: Vec<usize> = (0..n).collect();
+    for i in (1..n).rev() {
+        new.swap(i, rng.below(i + 1));
+    }
+    let mut edges: Vec<(usize, usize)> = edges.iter().map(|&(a, b)| (new[a], new[b])).collect();
+    let (offsets, indices) = csr(n, &edges);
+    if !diagonal {
+        return (offsets, indices);
+    }
+    edges.clear();
+    let mut rows: Vec<Vec<u32>> = (0..n).map(|v| vec![v as u32]).collect();
+    for v in 0..n {
+        rows[v].extend(&indices[offsets[v]..offsets[v + 1]]);
+        rows[v].sort_unstable();
+    }
+    let mut with = (vec![0], Vec::new());
+    for row in rows {
+        with.1.extend(row);
+        with.0.push(with.1.len());
+    }
+    with
+}
+
+#[test]
+fn grids_order_as_the_reference_did() {
+    for (w, h) in [(1, 1), (2, 1), (7, 9), (17, 16), (60, 60), (400, 12), (25, 90), (190, 210)] {
+        let a = grid_laplacian(w, h);
+        same_as_reference(a.row_offsets(), a.col_indices(), &format!("grid {w} x {h}"));
+    }
+}
+
+#[test]
+fn random_graphs_order_as_the_reference_did() {
+    let mut rng = Rng(2024);
+    for case in 0..150 {
+        let (offsets, indices) = random_graph(&mut rng);
+        same_as_reference(&offsets, &indices, &format!("random graph {case}"));
+        // The same graph in a scattered numbering, with self loops.
+        let n = offsets.len() - 1;
+        let edges: Vec<(usize, usize)> = (0..n)
+            .flat_map(|v| indices[offsets[v]..offsets[v + 1]].iter().map(move |&w| (v, w as usize)))
+            .collect();
+        let (offsets, indices) = shuffled(n, &edges, case % 2 == 0, &mut rng);
+        same_as_reference(&offsets, &indices, &format!("shuffled random graph {case}"));
+    }
+}
+
+#[test]
+fn tubes_and_disconnected_meshes_order_as_the_reference_did() {
+    let mut rng = Rng(7);
+    // Long and short tubes, large enough to be cut in parallel and refined
+    // in full, numbered ring by ring and scattered.
+    for (around, along) in [(12, 700), (40, 40), (90, 300), (300, 30)] {
+        let n = around * along;
+        let edges = tube(around, along, &mut rng);
+        let (offsets, indices) = csr(n, &edges);
+        same_as_reference(&offsets, &indices, &format!("tube {around} x {along}"));
+        let (offsets, indices) = shuffled(n, &edges, true, &mut rng);
+        same_as_reference(&offsets, &indices, &format!("shuffled tube {around} x {along}"));
+    }
+    // Three tubes and isolated vertices, apart and interleaved.
+    let mut edges = Vec::new();
+    let mut n = 0;
+    for (around, along) in [(30, 200), (8, 50), (50, 90)] {
+        edges.extend(tube(around, along, &mut rng).into_iter().map(|(a, b)| (a + n, b + n)));
+        n += around * along;
+    }
+    n += 100;
+    let (offsets, indices) = csr(n, &edges);
+    same_as_reference(&offsets, &indices, "three tubes");
+    let (offsets, indices) = shuffled(n, &edges, true, &mut rng);
+    same_as_reference(&offsets, &indices, "three tubes, shuffled");
 }
