@@ -39,7 +39,7 @@ mod breadth_first;
 mod fiduccia_mattheyses;
 
 use crate::direct::amd_order;
-pub(crate) use breadth_first::{prefetch, AHEAD};
+pub(crate) use breadth_first::prefetch_rows_ahead;
 use breadth_first::{Known, Levels};
 use fiduccia_mattheyses::Split;
 use std::sync::atomic::{AtomicU32, Ordering::Relaxed};
@@ -287,16 +287,8 @@ fn postorder(offsets: &[usize], indices: &[u32], perm: Vec<u32>) -> Vec<u32> {
     let mut parent = vec![NONE; n];
     let mut ancestor = vec![NONE; n];
     for (k, &v) in perm.iter().enumerate() {
-        // `perm` jumps about the graph (leaf by leaf, then the separators):
-        // fetch the neighbour lists ahead, as the searches do.
-        if let Some(&u) = perm.get(k + 2 * AHEAD) {
-            prefetch(&offsets[u as usize]);
-        }
-        if let Some(&u) = perm.get(k + AHEAD) {
-            if let Some(first) = indices.get(offsets[u as usize]) {
-                prefetch(first);
-            }
-        }
+        // `perm` jumps about the graph (leaf by leaf, then the separators).
+        prefetch_rows_ahead(offsets, indices, &perm, k);
         let k = k as u32;
         for &w in &indices[offsets[v as usize]..offsets[v as usize + 1]] {
             let mut i = inverse[w as usize];

@@ -19,12 +19,12 @@ use std::sync::atomic::Ordering::Relaxed;
 /// cache (three quarters of the samples), and prefetching them halved the
 /// time (0.105 s to 0.053 s); the halves' ordering went from 0.36 to
 /// 0.29 s on one core. Prefetching the neighbours' labels too was slower.
-pub(crate) const AHEAD: usize = 8;
+const AHEAD: usize = 8;
 
 /// Asks for `x`'s cache line ahead of its use: a hint only, which changes
 /// no result.
 #[inline(always)]
-pub(crate) fn prefetch<T>(x: &T) {
+fn prefetch<T>(x: &T) {
     #[cfg(target_arch = "x86_64")]
     // SAFETY: a prefetch of any address only hints the cache (it cannot
     // fault), and this one is of a live reference; `_mm_prefetch` needs sse,
@@ -65,19 +65,27 @@ impl Levels {
     }
 }
 
+/// Prefetches what reading the rows (CSR `offsets`, `indices`) of the
+/// vertices [`AHEAD`] of `order[i]` will touch: their neighbour lists, and
+/// their offsets before that. For every walk over rows in an order that
+/// jumps about the graph: the searches' queues, the elimination tree's
+/// `perm`, a half's rows in the first cut's order.
+#[inline(always)]
+pub(crate) fn prefetch_rows_ahead(offsets: &[usize], indices: &[u32], order: &[u32], i: usize) {
+    if let Some(&u) = order.get(i + 2 * AHEAD) {
+        prefetch(&offsets[u as usize]);
+    }
+    if let Some(&u) = order.get(i + AHEAD) {
+        if let Some(first) = indices.get(offsets[u as usize]) {
+            prefetch(first);
+        }
+    }
+}
+
 impl Dissection<'_> {
-    /// Prefetches what searching the vertices queued [`AHEAD`] of `queue[i]`
-    /// will read: their neighbour lists, and their offsets before that.
+    /// [`prefetch_rows_ahead`] in this graph.
     fn prefetch_ahead(&self, queue: &[u32], i: usize) {
-        if let Some(&u) = queue.get(i + 2 * AHEAD) {
-            prefetch(&self.offsets[u as usize]);
-        }
-        if let Some(&u) = queue.get(i + AHEAD) {
-            let o = self.offsets[u as usize];
-            if o < self.indices.len() {
-                prefetch(&self.indices[o]);
-            }
-        }
+        prefetch_rows_ahead(self.offsets, self.indices, queue, i);
     }
 
     /// The vertices a breadth-first search from `start` through the
