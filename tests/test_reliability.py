@@ -22,6 +22,8 @@ import pytest
 
 import spherify as sp
 
+from _child import child_env
+
 pytestmark = pytest.mark.skipif(sys.platform == "win32", reason="POSIX signals and fork")
 
 #: Seconds a child may take to answer SIGINT. The core polls at a bounded
@@ -29,21 +31,12 @@ pytestmark = pytest.mark.skipif(sys.platform == "win32", reason="POSIX signals a
 ANSWER_SECONDS = 3.0
 
 
-def _child_env() -> dict:
-    env = dict(os.environ)
-    # The child imports the same spherify as this process.
-    package_root = str(Path(sp.__file__).resolve().parents[1])
-    env["PYTHONPATH"] = os.pathsep.join([package_root, env.get("PYTHONPATH", "")])
-    env["PYTHONUNBUFFERED"] = "1"
-    return env
-
-
 def interrupt(script: str, *, delay: float = 0.5, timeout: float = 120.0) -> Tuple[str, float]:
     """Runs ``script`` in a child, sends SIGINT ``delay`` seconds after it
     printed READY, and returns its stderr and the seconds from SIGINT to exit."""
     child = subprocess.Popen([sys.executable, "-c", textwrap.dedent(script)],
                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                             env=_child_env())
+                             env=child_env())
     try:
         assert child.stdout is not None
         line = child.stdout.readline()
@@ -194,7 +187,7 @@ FORK_SCRIPT = """
 
 def test_a_forked_child_can_use_every_call_after_the_parent_did() -> None:
     done = subprocess.run([sys.executable, "-c", textwrap.dedent(FORK_SCRIPT)],
-                          capture_output=True, text=True, timeout=180, env=_child_env())
+                          capture_output=True, text=True, timeout=180, env=child_env())
     assert done.returncode == 0 and done.stdout.strip() == "OK", done.stderr
 
 
@@ -224,7 +217,7 @@ REENTRANT_SCRIPT = """
 
 def test_a_progress_callback_calling_spherify_is_refused_not_deadlocked() -> None:
     done = subprocess.run([sys.executable, "-c", textwrap.dedent(REENTRANT_SCRIPT)],
-                          capture_output=True, text=True, timeout=120, env=_child_env())
+                          capture_output=True, text=True, timeout=120, env=child_env())
     assert done.returncode == 0 and done.stdout.strip() == "OK", done.stderr
 
 
@@ -240,7 +233,7 @@ def test_a_fifo_is_refused_without_blocking(tmp_path: Path) -> None:
             print("OK")
     """
     done = subprocess.run([sys.executable, "-c", textwrap.dedent(script)],
-                          capture_output=True, text=True, timeout=60, env=_child_env())
+                          capture_output=True, text=True, timeout=60, env=child_env())
     assert done.stdout.strip() == "OK", done.stderr
 
 

@@ -24,14 +24,9 @@ import pytest
 
 import spherify as sp
 
+from _child import child_env
+
 pytestmark = pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="needs FIFOs (POSIX)")
-
-
-def _child_env() -> Dict[str, str]:
-    env = dict(os.environ)
-    package_root = str(Path(sp.__file__).resolve().parents[1])
-    env["PYTHONPATH"] = os.pathsep.join([package_root, env.get("PYTHONPATH", "")])
-    return env
 
 
 @pytest.fixture(scope="module")
@@ -88,7 +83,7 @@ def test_a_fifo_or_a_device_is_refused_at_once_by_every_reader(
             print("OK")
     """
     done = subprocess.run([sys.executable, "-c", textwrap.dedent(script)], capture_output=True,
-                          text=True, timeout=60, env=_child_env())
+                          text=True, timeout=60, env=child_env())
     assert done.stdout.strip() == "OK", done.stderr
 
 
@@ -117,7 +112,7 @@ def test_a_file_larger_than_memory_is_an_error_not_an_abort(tmp_path: Path) -> N
             print("OK")
     """
     done = subprocess.run([sys.executable, "-c", textwrap.dedent(script)], capture_output=True,
-                          text=True, timeout=60, env=_child_env())
+                          text=True, timeout=60, env=child_env())
     assert done.stdout.strip() == "OK", (done.returncode, done.stderr[-2000:])
 
 
