@@ -168,6 +168,8 @@ def test_sigkill_in_the_middle_then_rerun_equals_an_uninterrupted_run(tmp_path: 
     wait_for_rows(journal, 3)
     os.killpg(process.pid, signal.SIGKILL)  # the batch and its workers
     process.wait()
+    if Path("/proc/self/stat").exists():
+        wait_until_group_ended(process.pid)
     finished = len(batch_module.read_journal(journal))
     assert 3 <= finished < 12, "the kill came too late to test anything"
     rerun = sp.batch(tmp_path / "in", killed, workers=1)
@@ -534,3 +536,54 @@ def test_a_batch_removes_dead_writers_temporaries_only(tmp_path: Path) -> None:
     alive.write_bytes(b"in progress")
     sp.batch(tmp_path / "in", out, executor=cf.ThreadPoolExecutor(1))
     assert not dead.exists() and alive.read_bytes() == b"in progress"
+
+
+@pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="Linux /proc shows zombies")
+def test_a_zombie_writers_temporaries_are_removed(tmp_path: Path) -> None:
+    """A killed worker whose parent died too lingers as a zombie until PID 1
+    collects it, which in a container may be never; kill(pid, 0) still
+    succeeds on a zombie, so the batch must not take it for a live writer
+    (CI once kept such a temporary after the SIGKILL test)."""
+    make_inputs(tmp_path / "in", 1)
+    out = tmp_path / "out"
+    out.mkdir()
+    child = subprocess.Popen(["true"])  # exits at once; not collected yet: a zombie
+    try:
+        deadline = time.monotonic() + 20
+        while "Z" not in process_state(child.pid) and time.monotonic() < deadline:
+            time.sleep(0.005)
+        assert process_state(child.pid) == "Z"
+        left = out / f".x.sphere.ply.tmp-{child.pid}-0"
+        left.write_bytes(b"half")
+        sp.batch(tmp_path / "in", out, executor=cf.ThreadPoolExecutor(1))
+        assert not left.exists()
+    finally:
+        child.wait()
+
+
+def process_state(pid: int) -> str:
+    """The state letter of a process from /proc/PID/stat ('' when gone)."""
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().rpartition(")")[2].split()[0]
+    except FileNotFoundError:
+        return ""
+
+
+def wait_until_group_ended(group: int) -> None:
+    """Waits (up to 20 s) until every process of the group has ended: gone,
+    or a zombie. A SIGKILL is delivered when its target next runs, so the
+    batch's worker may still be alive just after os.killpg returns."""
+    deadline = time.monotonic() + 20
+    while time.monotonic() < deadline:
+        members = []
+        for entry in Path("/proc").iterdir():
+            if entry.name.isdigit():
+                try:
+                    fields = (entry / "stat").read_text().rpartition(")")[2].split()
+                except OSError:
+                    continue
+                if int(fields[2]) == group and fields[0] not in ("Z", "X"):
+                    members.append(entry.name)
+        if not members:
+            return
+        time.sleep(0.01)

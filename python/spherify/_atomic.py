@@ -59,13 +59,32 @@ def is_stale_temporary(path: Path) -> bool:
     pid, _, counter = path.name.rpartition(TEMP_MARK)[2].partition("-")
     if not (pid.isdigit() and counter.isdigit()):
         return False
+    return not process_is_running(int(pid))
+
+
+def process_is_running(pid: int) -> bool:
+    """Whether process ``pid`` still runs. A zombie has ended: it only waits
+    for its parent to collect its exit status, which an orphan's new parent
+    (PID 1 of a container, for one) may never do; ``os.kill(pid, 0)`` still
+    succeeds on it, so Linux's ``/proc/PID/stat`` decides where it exists."""
     try:
-        os.kill(int(pid), 0)
+        stat_line = Path(f"/proc/{pid}/stat").read_text()
+    except FileNotFoundError:
+        if Path("/proc/self/stat").exists():
+            return False  # Linux: no such process
+    except OSError:
+        pass
+    else:
+        # "PID (command) STATE ...": the command may hold ") " itself.
+        state = stat_line.rpartition(")")[2].split()[:1]
+        return state not in (["Z"], ["X"])
+    try:
+        os.kill(pid, 0)
     except ProcessLookupError:
-        return True
+        return False
     except (PermissionError, OverflowError, OSError):
-        return False  # alive under another user, or not a process id we can ask about
-    return False
+        return True  # alive under another user, or not a process id we can ask about
+    return True
 
 
 def write_bytes_atomically(path: PathLike, data: bytes) -> None:

@@ -255,6 +255,21 @@ fn temporary_owner(file_name: &str) -> Option<u32> {
     (digits(pid) && digits(n)).then(|| pid.parse().ok()).flatten()
 }
 
+/// Whether process `pid` still runs, from `/proc/PID/stat` (Linux). A zombie
+/// (state `Z`, or `X` while it is being removed) has ended: it only waits for
+/// its parent to collect its exit status, which an orphan's new parent (PID 1
+/// of a container, for one) may never do. So a killed batch worker's
+/// temporaries are removed even while it lingers as a zombie.
+fn process_is_running(pid: u32) -> bool {
+    let Ok(stat) = std::fs::read_to_string(format!("/proc/{pid}/stat")) else {
+        return false;
+    };
+    // "PID (command) STATE ...": the command may itself hold ") ", so the
+    // state is the first field after the last ')'.
+    let state = stat.rsplit_once(')').and_then(|(_, rest)| rest.trim_start().chars().next());
+    !matches!(state, Some('Z' | 'X'))
+}
+
 /// Removes, from the folder of `target`, the temporaries of writers that no
 /// longer run. Only where `/proc` shows the running processes (Linux); best
 /// effort, errors are ignored (another writer may be removing the same file).
@@ -271,7 +286,7 @@ fn remove_stale_temporaries(target: &Path) {
         let name = entry.file_name();
         let Some(pid) = name.to_str().and_then(temporary_owner) else { continue };
         let is_file = entry.file_type().map(|t| t.is_file()).unwrap_or(false);
-        if is_file && !Path::new(&format!("/proc/{pid}")).exists() {
+        if is_file && !process_is_running(pid) {
             let _ = std::fs::remove_file(entry.path());
         }
     }
@@ -428,6 +443,31 @@ mod tests {
         write_file(&dir.join("out.ply"), |w| w.write_all(b"new")).unwrap();
         assert!(!dead.exists());
         assert!(alive.exists() && unrelated.exists());
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn a_zombie_writer_has_ended() {
+        if !Path::new("/proc/self").exists() {
+            return;
+        }
+        assert!(process_is_running(std::process::id()));
+        // A child that has exited and that we do not collect yet is a zombie.
+        let mut child = std::process::Command::new("true").spawn().unwrap();
+        let pid = child.id();
+        let deadline = std::time::Instant::now() + std::time::Duration::from_secs(20);
+        while process_is_running(pid) && std::time::Instant::now() < deadline {
+            std::thread::sleep(std::time::Duration::from_millis(5));
+        }
+        let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).unwrap();
+        assert!(stat.contains(") Z"), "{stat}");
+        assert!(!process_is_running(pid));
+        let dir = scratch_dir("zombie");
+        let left = dir.join(format!(".out.ply.tmp-{pid}-3"));
+        std::fs::write(&left, b"x").unwrap();
+        write_file(&dir.join("out.ply"), |w| w.write_all(b"new")).unwrap();
+        assert!(!left.exists());
+        child.wait().unwrap();
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }
