@@ -18,11 +18,20 @@ from __future__ import annotations
 
 import json
 import os
+import signal
 from pathlib import Path
 from typing import Any, Dict, List, Optional
 
 import pytest
 from hypothesis import HealthCheck, settings
+
+# The Ctrl-C tests send SIGINT to children and expect KeyboardInterrupt there.
+# A test run started in the background of a script (``cmd &``, nohup) ignores
+# SIGINT, and an ignored signal stays ignored across exec: every child would
+# ignore it too, and those tests would fail for the harness's sake. A Python
+# handler here is reset to the default in each child by exec.
+if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+    signal.signal(signal.SIGINT, signal.default_int_handler)
 
 settings.register_profile(
     "fast",
