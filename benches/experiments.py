@@ -109,8 +109,6 @@ def main() -> None:
     parser.add_argument("--out", default=str(Path(__file__).resolve().parents[1] / "docs" / "experiments.md"))
     parser.add_argument("--corpus-max", type=int, default=10_000_000,
                         help="skip corpus meshes with more vertices (default: none skipped)")
-    parser.add_argument("--physical-max", type=int, default=150_000,
-                        help="largest mesh for physical poles in Table 7.4")
     parser.add_argument("--large-max", type=int, default=1_000_000,
                         help="largest generated shape for Tables 7.4 and 7.5 (0: thesis sizes only)")
     parser.add_argument("--max-iter", type=int, default=20000)
@@ -165,12 +163,6 @@ def main() -> None:
         for poles in ["fast_graph", "physical", "graph"]:
             if poles == "graph" and mesh.n_vertices > 5000:
                 cells.append("(O(N^2 log N): skipped)")
-                continue
-            if poles == "physical" and mesh.n_vertices > args.physical_max:
-                # The exact farthest pair prunes poorly when the far points lie
-                # near a sphere: measured 0.04 s, 0.31 s, 5.0 s on bumpy blobs
-                # of 10k, 30k, 100k vertices (about N^2.3).
-                cells.append("(near-quadratic on round shapes: skipped)")
                 continue
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore", sp.SpherifyWarning)

@@ -1,17 +1,17 @@
 //! Pole selection for the theta-phi method (thesis 6.2.1-6.2.3).
 //!
 //! * [`physical`]: the farthest pair of vertices in space (eq. 6.1-6.2), found
-//!   exactly without the O(N^2) double loop of the thesis: after a few
-//!   farthest-point sweeps give a long pair (p, q) of length d, a pair longer
-//!   than d needs |x - c| + |y - c| > d for the midpoint c, so only vertices far
-//!   from c can take part; those are scanned in order of decreasing |x - c| with
-//!   the bound |x - c| + |y - c| cutting each scan short. Exact; O(N log N) in
-//!   practice, O(N^2) only for point sets whose far points all lie on a sphere
-//!   around c much larger than the rest.
+//!   exactly without the O(N^2) double loop of the thesis: a few farthest-point
+//!   sweeps give a long pair (p, q), and [`farthest_pair`] (a k-d tree search
+//!   from each vertex that can still beat it) finishes. O(N log N) in
+//!   practice, round shapes included.
 //! * [`graph`]: the exact graph diameter (eq. 6.5) by Dijkstra from every vertex,
 //!   in parallel. O(N^2 log N): minutes for 10^5 vertices.
 //! * [`fast_graph`]: two Dijkstra sweeps (eq. 6.6-6.7, after Brechbuehler et al.).
 
+mod farthest_pair;
+
+use farthest_pair::{farthest_pair, Pair};
 use rayon::prelude::*;
 use spherify_mesh::dijkstra::{dijkstra, EdgeWeights};
 use spherify_mesh::Adjacency;
@@ -59,29 +59,9 @@ pub fn physical(positions: &[[f64; 3]]) -> Option<Poles> {
     }
     let (pa, pb) = (positions[a as usize], positions[b as usize]);
     let centre = [(pa[0] + pb[0]) / 2.0, (pa[1] + pb[1]) / 2.0, (pa[2] + pb[2]) / 2.0];
-    let mut by_reach: Vec<(f64, u32)> =
-        positions.iter().enumerate().map(|(i, &p)| (dist2(p, centre).sqrt(), i as u32)).collect();
-    by_reach.sort_unstable_by(|x, y| y.0.total_cmp(&x.0).then(x.1.cmp(&y.1)));
-    let r_max = by_reach[0].0;
-    let mut pair = (a.min(b), a.max(b), best);
-    // Rounding in the radii must not prune a true winner: widen the bound a little.
-    let slack = 1.0 + 1e-12;
-    for (k, &(rx, x)) in by_reach.iter().enumerate() {
-        if (rx + r_max) * slack < pair.2.sqrt() {
-            break;
-        }
-        for &(ry, y) in &by_reach[k + 1..] {
-            if (rx + ry) * slack < pair.2.sqrt() {
-                break;
-            }
-            let d = dist2(positions[x as usize], positions[y as usize]);
-            let (lo, hi) = (x.min(y), x.max(y));
-            if d > pair.2 || (d == pair.2 && (lo, hi) < (pair.0, pair.1)) {
-                pair = (lo, hi, d);
-            }
-        }
-    }
-    Some(Poles { north: pair.0, south: pair.1, distance: pair.2.sqrt() })
+    let start = Pair { lo: a.min(b), hi: a.max(b), length2: best };
+    let pair = farthest_pair(positions, start, centre);
+    Some(Poles { north: pair.lo, south: pair.hi, distance: pair.length2.sqrt() })
 }
 
 /// Two sweeps (thesis eq. 6.6-6.7): the farthest vertex n from `start`, then the
@@ -169,6 +149,7 @@ pub fn graph(
 
 #[cfg(test)]
 mod tests {
+    use super::farthest_pair::{farthest_pair, Pair};
     use super::*;
     use spherify_mesh::lcg::Lcg;
 
@@ -208,6 +189,118 @@ mod tests {
             assert_eq!((poles.north, poles.south), (i, j), "trial {trial}");
         }
         assert!(physical(&[[0.0; 3]]).is_none());
+    }
+
+    #[test]
+    fn physical_matches_brute_force_on_awkward_sets() {
+        // Bumpy spheres far from the origin, points at the centre, two
+        // clusters, a segment, repeated points: every branch of the search.
+        let mut rng = Lcg::new(29);
+        for trial in 0..40 {
+            let n = 200 + 97 * trial;
+            let family = trial % 5;
+            let shift = [0.0, 1e3, 1e6, 1e9][trial % 4];
+            let mut p: Vec<[f64; 3]> = (0..n)
+                .map(|i| {
+                    let v = [rng.next_f64() - 0.5, rng.next_f64() - 0.5, rng.next_f64() - 0.5];
+                    let r = dist2(v, [0.0; 3]).sqrt().max(1e-9);
+                    let u = [v[0] / r, v[1] / r, v[2] / r];
+                    let s = match family {
+                        0 => 1.0 + 0.05 * rng.next_f64(),         // a bumpy sphere
+                        1 if i % 7 == 0 => 1e-3 * rng.next_f64(), // some points at the centre
+                        1 => 1.0,
+                        2 => 0.1 * rng.next_f64(), // two small clusters far apart
+                        3 => 1.0,                  // a segment (below)
+                        _ => 1.0,                  // (repeated below)
+                    };
+                    let mut q = [s * u[0], s * u[1], s * u[2]];
+                    if family == 2 {
+                        q[0] += if i % 2 == 0 { 5.0 } else { -5.0 };
+                    }
+                    if family == 3 {
+                        q = [rng.next_f64(), 0.0, 0.0];
+                    }
+                    [q[0] + shift, q[1] - shift, q[2] + 0.5 * shift]
+                })
+                .collect();
+            if family == 4 {
+                let copies: Vec<[f64; 3]> = p.iter().step_by(3).copied().collect();
+                p.extend(copies);
+            }
+            let poles = physical(&p).unwrap();
+            let (i, j, d) = brute_force(&p);
+            assert_eq!(
+                (poles.north, poles.south, poles.distance),
+                (i, j, d.sqrt()),
+                "trial {trial}"
+            );
+        }
+    }
+
+    #[test]
+    fn farthest_pair_is_exact_from_any_start_and_centre() {
+        // The bound holds for any centre and any start pair, however poor:
+        // a centre outside the set, on a point, or far away makes points
+        // central, or as far from the centre as the pair is long.
+        let mut rng = Lcg::new(41);
+        for trial in 0..300 {
+            let n = 2 + trial % 150;
+            let p: Vec<[f64; 3]> = (0..n)
+                .map(|_| {
+                    let v = [rng.next_f64() - 0.5, rng.next_f64() - 0.5, rng.next_f64() - 0.5];
+                    let r = if trial % 2 == 0 { dist2(v, [0.0; 3]).sqrt() } else { 1.0 };
+                    [v[0] / r, 0.3 * v[1] / r, v[2] / r]
+                })
+                .collect();
+            let (a, b) = ((trial * 7) % n, (trial * 13 + 1) % n);
+            let start =
+                Pair { lo: a.min(b) as u32, hi: a.max(b) as u32, length2: dist2(p[a], p[b]) };
+            let centre = match trial % 3 {
+                0 => p[trial % n],
+                1 => [3.0 * rng.next_f64(), -2.0, 0.5],
+                _ => [0.0; 3],
+            };
+            let got = farthest_pair(&p, start, centre);
+            let (i, j, d) = brute_force(&p);
+            let want = if a == b && d == 0.0 { (start.lo, start.hi, 0.0) } else { (i, j, d) };
+            assert_eq!((got.lo, got.hi, got.length2), want, "trial {trial}");
+        }
+    }
+
+    #[test]
+    fn physical_on_round_shapes_matches_brute_force() {
+        // Large round point sets: every point is a candidate, and exact ties
+        // (centrally symmetric sets) must go to the smallest index pair.
+        let mut rng = Lcg::new(11);
+        for (trial, n) in [400usize, 1500, 3000].into_iter().enumerate() {
+            let mut p: Vec<[f64; 3]> = (0..n)
+                .map(|_| {
+                    let v = [rng.next_f64() - 0.5, rng.next_f64() - 0.5, rng.next_f64() - 0.5];
+                    let r = dist2(v, [0.0; 3]).sqrt();
+                    [v[0] / r, v[1] / r, v[2] / r]
+                })
+                .collect();
+            if trial > 0 {
+                // Add the antipode of every point: many pairs of length exactly 2.
+                let mirrored: Vec<[f64; 3]> = p.iter().map(|v| [-v[0], -v[1], -v[2]]).collect();
+                p.extend(mirrored);
+            }
+            let poles = physical(&p).unwrap();
+            let (i, j, d) = brute_force(&p);
+            assert_eq!((poles.north, poles.south, poles.distance), (i, j, d.sqrt()), "n {n}");
+        }
+        // The eight corners of a cube: four diagonals of the same length.
+        let cube: Vec<[f64; 3]> = (0..8)
+            .map(|k| [(k & 1) as f64, ((k >> 1) & 1) as f64, ((k >> 2) & 1) as f64])
+            .collect();
+        let poles = physical(&cube).unwrap();
+        assert_eq!((poles.north, poles.south), (0, 7));
+        // The sweeps from point 0 end on the diagonal (3, 4); the other
+        // diagonal, (1, 2), is exactly as long and has smaller indices.
+        let square =
+            [[0.0, 0.5, 0.0], [1.0, 0.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, -1.0, 0.0]];
+        let poles = physical(&square).unwrap();
+        assert_eq!((poles.north, poles.south, poles.distance), (1, 2, 2.0));
     }
 
     /// A path graph 0 - 1 - ... - (n-1) with a spur: diameter between the ends.
