@@ -292,3 +292,30 @@ def test_ctrl_c_inside_a_long_tutte_solve_is_answered_at_once() -> None:
     assert_keyboard_interrupt(err, seconds)
     assert seconds < 1.5, f"SIGINT answered after {seconds:.1f} s"
 
+
+
+HARMONICS_CALLS = {
+    # Each one call of about 30 s on this machine's build: O(L^3) and
+    # O(k L^2) work inside the core, which must poll for Ctrl-C itself.
+    "fit": "sp.harmonics.fit(m, 2000)",
+    "evaluate": "h.evaluate(q)",
+}
+
+
+@pytest.mark.parametrize("name", sorted(HARMONICS_CALLS))
+def test_ctrl_c_inside_one_long_harmonics_call_is_answered(name: str) -> None:
+    """A transform of degree 2000, or an evaluation of degree 600 at 200k
+    points, is one core call of half a minute; before the core polled
+    inside them, Ctrl-C waited for the end (31 s and 29 s measured)."""
+    err, seconds = interrupt(f"""
+        import numpy as np
+        import spherify as sp
+        m = sp.embed(sp.datasets.bumpy_blob(n_vertices=2000), "theta_phi")
+        h = sp.harmonics.fit(m, 600) if "{name}" == "evaluate" else None
+        q = sp.datasets.icosphere(7).vertices
+        q = np.concatenate([q] * 2)
+        print("READY", flush=True)
+        {HARMONICS_CALLS[name]}
+    """, delay=1.0)
+    assert_keyboard_interrupt(err, seconds)
+    assert seconds < ANSWER_SECONDS, f"SIGINT answered after {seconds:.1f} s"

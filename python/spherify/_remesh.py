@@ -22,6 +22,9 @@ __all__ = ["remesh", "remesh_map", "surface_distance"]
 
 KINDS = ("icosphere",)
 
+#: Random points per chunk of :func:`surface_distance`.
+_CHUNK = 1 << 20
+
 
 def _level(level: object) -> int:
     if isinstance(level, bool) or not isinstance(level, (int, np.integer)) or not 0 <= level <= 10:
@@ -100,12 +103,28 @@ def surface_distance(a: SphereMap, b: SphereMap, *, samples: int = 100_000,
     if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)) or samples < 0:
         raise MeshError(f"samples must be an integer >= 0, got {samples!r}")
     rng = np.random.default_rng(seed)
-    p = rng.normal(size=(int(samples), 3))
-    p /= np.linalg.norm(p, axis=1)[:, None]
-    points = np.concatenate([p, a.points, b.points])
-    _, _, xa = a.to_surface(points)
-    _, _, xb = b.to_surface(points)
     diagonal = float(np.linalg.norm(np.ptp(a.mesh.vertices, axis=0)))
-    d = np.linalg.norm(xa - xb, axis=1) / diagonal
-    return {"max": float(d.max()), "rms": float(np.sqrt(np.mean(d * d))),
-            "diagonal": diagonal, "samples": float(len(points))}
+    largest, squares = 0.0, 0.0
+
+    def compare(points: np.ndarray) -> None:
+        nonlocal largest, squares
+        _, _, xa = a.to_surface(points)
+        _, _, xb = b.to_surface(points)
+        d = np.linalg.norm(xa - xb, axis=1) / diagonal
+        if len(d):
+            largest = max(largest, float(d.max()))
+            squares += float(np.dot(d, d))
+
+    # The random points in chunks (the same stream as one draw): memory stays
+    # bounded at any ``samples``, and Ctrl-C is answered between chunks.
+    left = int(samples)
+    while left > 0:
+        p = rng.normal(size=(min(left, _CHUNK), 3))
+        p /= np.linalg.norm(p, axis=1)[:, None]
+        compare(p)
+        left -= len(p)
+    compare(np.asarray(a.points, dtype=np.float64))
+    compare(np.asarray(b.points, dtype=np.float64))
+    count = int(samples) + len(a.points) + len(b.points)
+    return {"max": largest, "rms": float(np.sqrt(squares / count)),
+            "diagonal": diagonal, "samples": float(count)}

@@ -105,7 +105,8 @@ class Harmonics:
         Returns
         -------
         (k, 3) float64
-            O(lmax**2) per point, in parallel, without the GIL; deterministic.
+            O(lmax**2) per point, in parallel, without the GIL; deterministic;
+            Ctrl-C stops it.
 
         Raises
         ------
@@ -187,7 +188,7 @@ def fit(m: SphereMap, lmax: int, *, oversample: int = 1) -> Harmonics:
     O(lmax**3)); no matrix of harmonics at the vertices is formed. The grid
     integrates harmonics up to ``lmax`` exactly; ``oversample > 1`` reduces
     the aliasing of the surface's finer detail into the coefficients. The GIL
-    is released throughout. Deterministic.
+    is released throughout, and Ctrl-C stops it. Deterministic.
 
     Parameters
     ----------

@@ -4,7 +4,7 @@
 use numpy::{PyArray2, PyReadonlyArrayDyn};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use spherify_sphere::harmonics::{evaluate, fit, HarmonicsError};
+use spherify_sphere::harmonics::{evaluate_with, fit_with, HarmonicsError};
 
 use crate::convert::{rows, to_numpy};
 use crate::errors::{mesh_error, point_map_error};
@@ -20,7 +20,8 @@ fn harmonics_error(py: Python<'_>, err: HarmonicsError) -> PyErr {
 /// harmonics_fit(map, lmax, oversample=1) -> (coefficients ((lmax+1)^2, 3) float64, info dict).
 ///
 /// MapError when the map is not a certified bijection; MeshError for bad
-/// parameters. The GIL is released for the sampling and the transform.
+/// parameters. The GIL is released for the sampling and the transform, and
+/// Ctrl-C stops both.
 #[pyfunction]
 #[pyo3(signature = (map, lmax, oversample=1))]
 pub fn harmonics_fit<'py>(
@@ -30,8 +31,10 @@ pub fn harmonics_fit<'py>(
     oversample: usize,
 ) -> PyResult<(Bound<'py, PyArray2<f64>>, Bound<'py, PyDict>)> {
     let point_map = map.point_map(py)?;
-    let (coefficients, info) = crate::pool::detach(py, || fit(point_map, lmax, oversample))?
-        .map_err(|e| harmonics_error(py, e))?;
+    // Through progress::run so that Ctrl-C stops a transform of high degree.
+    let (coefficients, info) =
+        crate::progress::run(py, None, |go_on| fit_with(point_map, lmax, oversample, go_on))?
+            .map_err(|e| harmonics_error(py, e))?;
     let d = PyDict::new(py);
     d.set_item("n_theta", info.n_theta)?;
     d.set_item("n_phi", info.n_phi)?;
@@ -48,7 +51,8 @@ pub fn harmonics_evaluate<'py>(
 ) -> PyResult<Bound<'py, PyArray2<f64>>> {
     let coefficients = rows::<f64, 3>(py, &coefficients, "coefficients")?;
     let points = rows::<f64, 3>(py, &points, "points")?;
-    let values = crate::pool::detach(py, || evaluate(&coefficients, &points))?
-        .map_err(|e| harmonics_error(py, e))?;
+    let values =
+        crate::progress::run(py, None, |go_on| evaluate_with(&coefficients, &points, go_on))?
+            .map_err(|e| harmonics_error(py, e))?;
     Ok(to_numpy(py, &values))
 }

@@ -18,6 +18,8 @@
 //! `sqrt 2 P(l, |m|) sin(|m| phi)` for m < 0, orthonormal on the unit sphere,
 //! theta from the north pole (0, 0, 1), phi from the x axis towards y (6.27).
 
+use std::sync::atomic::{AtomicBool, Ordering};
+
 use rayon::prelude::*;
 
 use crate::gauss_legendre::gauss_legendre;
@@ -45,6 +47,42 @@ pub enum HarmonicsError {
     NotOnSphere { row: usize, point: [f64; 3], norm: f64 },
     #[error(transparent)]
     Map(#[from] PointMapError),
+    /// `progress(0, 0)` asked to stop (Ctrl-C from Python).
+    #[error("stopped on request")]
+    Cancelled,
+}
+
+/// Polls `progress(0, 0)` from parallel work: once it says stop, every
+/// later poll says so too without asking again.
+struct Poll<'a> {
+    progress: &'a (dyn Fn(usize, usize) -> bool + Sync),
+    stopped: AtomicBool,
+}
+
+impl<'a> Poll<'a> {
+    fn new(progress: &'a (dyn Fn(usize, usize) -> bool + Sync)) -> Self {
+        Poll { progress, stopped: AtomicBool::new(false) }
+    }
+
+    /// Whether to go on; polled before each piece of a few milliseconds.
+    fn go_on(&self) -> bool {
+        if self.stopped.load(Ordering::Relaxed) {
+            return false;
+        }
+        let go_on = (self.progress)(0, 0);
+        if !go_on {
+            self.stopped.store(true, Ordering::Relaxed);
+        }
+        go_on
+    }
+
+    fn result<T>(&self, value: T) -> Result<T, HarmonicsError> {
+        if self.stopped.load(Ordering::Relaxed) {
+            Err(HarmonicsError::Cancelled)
+        } else {
+            Ok(value)
+        }
+    }
 }
 
 /// The sampling grid of a transform up to degree `lmax`.
@@ -115,6 +153,21 @@ impl Grid {
     /// The coefficients of the function with `values` at [`Grid::points`]
     /// (in that order), three channels. O(L^3), in parallel, deterministic.
     pub fn analyse(&self, values: &[[f64; 3]]) -> Vec<[f64; 3]> {
+        match self.analyse_with(values, &|_, _| true) {
+            Ok(coefficients) => coefficients,
+            Err(_) => unreachable!("a progress closure that never stops"),
+        }
+    }
+
+    /// [`Grid::analyse`], polling `progress(0, 0)` before each ring's and
+    /// each order's sums (milliseconds each at lmax 2000) and stopping with
+    /// [`HarmonicsError::Cancelled`] when it says so.
+    pub fn analyse_with(
+        &self,
+        values: &[[f64; 3]],
+        progress: &(dyn Fn(usize, usize) -> bool + Sync),
+    ) -> Result<Vec<[f64; 3]>, HarmonicsError> {
+        let poll = Poll::new(progress);
         let (lmax, n_phi) = (self.lmax, self.n_phi);
         let (cos_phi, sin_phi) = self.trig_table();
         // Per ring and order: sum_k f(phi_k) cos(m phi_k) and sin(m phi_k);
@@ -122,6 +175,9 @@ impl Grid {
         let rings: Vec<Vec<([f64; 3], [f64; 3])>> = values
             .par_chunks(n_phi)
             .map(|ring| {
+                if !poll.go_on() {
+                    return Vec::new();
+                }
                 (0..=lmax)
                     .map(|m| {
                         let (mut c, mut s) = ([0.0; 3], [0.0; 3]);
@@ -137,6 +193,7 @@ impl Grid {
                     .collect()
             })
             .collect();
+        let rings = poll.result(rings)?;
         let legendre = Legendre::new(lmax);
         let starts: Vec<_> = self.x.par_iter().map(|&x| legendre.sectorals(sin_of(x))).collect();
         let dphi = 2.0 * std::f64::consts::PI / n_phi as f64;
@@ -149,6 +206,9 @@ impl Grid {
             .map(|m| {
                 let (mut cos_part, mut sin_part) =
                     (vec![[0.0; 3]; lmax + 1 - m], vec![[0.0; 3]; lmax + 1 - m]);
+                if !poll.go_on() {
+                    return (cos_part, sin_part);
+                }
                 for (j, &x) in self.x.iter().enumerate() {
                     let w = self.weights[j];
                     let (c, s) = (rings[j][m].0.map(|v| w * v), rings[j][m].1.map(|v| w * v));
@@ -162,6 +222,7 @@ impl Grid {
                 (cos_part, sin_part)
             })
             .collect();
+        let orders = poll.result(orders)?;
         let mut coefficients = vec![[0.0; 3]; (lmax + 1) * (lmax + 1)];
         let root2 = std::f64::consts::SQRT_2;
         for (m, (cos_part, sin_part)) in orders.iter().enumerate() {
@@ -175,7 +236,7 @@ impl Grid {
                 }
             }
         }
-        coefficients
+        Ok(coefficients)
     }
 }
 
@@ -204,15 +265,27 @@ pub fn fit(
     lmax: usize,
     oversample: usize,
 ) -> Result<(Vec<[f64; 3]>, FitInfo), HarmonicsError> {
+    fit_with(map, lmax, oversample, &|_, _| true)
+}
+
+/// [`fit`], polling `progress(0, 0)` while it samples and transforms and
+/// stopping with [`HarmonicsError::Cancelled`] (or the point map's
+/// `Cancelled`) when it says so.
+pub fn fit_with(
+    map: &PointMap,
+    lmax: usize,
+    oversample: usize,
+    progress: &(dyn Fn(usize, usize) -> bool + Sync),
+) -> Result<(Vec<[f64; 3]>, FitInfo), HarmonicsError> {
     if let Some(why) = map.not_bijective() {
         return Err(PointMapError::NotBijective(why.to_string()).into());
     }
     let started = std::time::Instant::now();
     let grid = Grid::new(lmax, oversample)?;
     let points = grid.points();
-    let xyz = map.to_surface(&points)?.xyz;
+    let xyz = map.to_surface_with(&points, progress)?.xyz;
     let sampled = started.elapsed().as_secs_f64();
-    let coefficients = grid.analyse(&xyz);
+    let coefficients = grid.analyse_with(&xyz, progress)?;
     let seconds =
         vec![("sample", sampled), ("transform", started.elapsed().as_secs_f64() - sampled)];
     Ok((coefficients, FitInfo { n_theta: grid.x.len(), n_phi: grid.n_phi, seconds }))
@@ -237,6 +310,17 @@ pub fn evaluate(
     coefficients: &[[f64; 3]],
     points: &[[f64; 3]],
 ) -> Result<Vec<[f64; 3]>, HarmonicsError> {
+    evaluate_with(coefficients, points, &|_, _| true)
+}
+
+/// [`evaluate`], polling `progress(0, 0)` before each group of points and
+/// stopping with [`HarmonicsError::Cancelled`] when it says so.
+pub fn evaluate_with(
+    coefficients: &[[f64; 3]],
+    points: &[[f64; 3]],
+    progress: &(dyn Fn(usize, usize) -> bool + Sync),
+) -> Result<Vec<[f64; 3]>, HarmonicsError> {
+    let poll = Poll::new(progress);
     let lmax = degree_of(coefficients.len())?;
     if lmax > MAX_DEGREE {
         return Err(HarmonicsError::InvalidParameter {
@@ -268,10 +352,18 @@ pub fn evaluate(
         })
         .collect::<Result<_, _>>()?;
     let rows = ColumnRows { cos: &cos_rows, sin: &sin_rows };
-    Ok(unit
+    let values = unit
         .par_chunks(LANES)
-        .flat_map_iter(|chunk| evaluate_lanes(&legendre, &rows, chunk))
-        .collect())
+        .flat_map_iter(|chunk| {
+            // A few milliseconds per group at lmax 2000 (O(L^2) per point).
+            if poll.go_on() {
+                evaluate_lanes(&legendre, &rows, chunk)
+            } else {
+                Vec::new()
+            }
+        })
+        .collect();
+    poll.result(values)
 }
 
 /// Points evaluated together: their recurrences are independent, so running
@@ -388,6 +480,25 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn a_stop_request_cancels_analysis_and_evaluation() {
+        let lmax = 40;
+        let coefficients = random_coefficients(lmax, 3);
+        let grid = Grid::new(lmax, 1).unwrap();
+        let points = grid.points();
+        // Stop at the fifth poll: the work polls many times more than that.
+        let polls = std::sync::atomic::AtomicUsize::new(0);
+        let stop_soon = |_: usize, _: usize| polls.fetch_add(1, Ordering::Relaxed) < 5;
+        let stopped = evaluate_with(&coefficients, &points, &stop_soon);
+        assert_eq!(stopped, Err(HarmonicsError::Cancelled));
+        let values = evaluate(&coefficients, &points).unwrap();
+        polls.store(0, Ordering::Relaxed);
+        assert_eq!(grid.analyse_with(&values, &stop_soon), Err(HarmonicsError::Cancelled));
+        // Going on gives the same bits as the call without polls.
+        assert_eq!(evaluate_with(&coefficients, &points, &|_, _| true).unwrap(), values);
+        assert_eq!(grid.analyse_with(&values, &|_, _| true).unwrap(), grid.analyse(&values));
     }
 
     #[test]
