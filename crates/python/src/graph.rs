@@ -3,18 +3,28 @@
 use numpy::{IntoPyArray, PyArray1};
 use pyo3::prelude::*;
 use spherify_mesh::dijkstra::{self as paths, EdgeWeights};
-use spherify_mesh::Adjacency;
+use spherify_mesh::{Adjacency, Mesh};
+use std::sync::Arc;
 
 use crate::errors::mesh_error;
 use crate::mesh::CoreMesh;
 
-fn weights<'a>(py: Python<'_>, mesh: &'a CoreMesh, name: &str) -> PyResult<EdgeWeights<'a>> {
+/// Whether edges weigh their length (`"length"`) or 1 (`"uniform"`).
+fn by_length(py: Python<'_>, name: &str) -> PyResult<bool> {
     match name {
-        "uniform" => Ok(EdgeWeights::Uniform),
-        "length" => Ok(EdgeWeights::Length(mesh.mesh.positions())),
+        "uniform" => Ok(false),
+        "length" => Ok(true),
         other => {
             Err(mesh_error(py, format!("weights must be 'length' or 'uniform', got {other:?}")))
         }
+    }
+}
+
+fn weights(mesh: &Mesh, by_length: bool) -> EdgeWeights<'_> {
+    if by_length {
+        EdgeWeights::Length(mesh.positions())
+    } else {
+        EdgeWeights::Uniform
     }
 }
 
@@ -42,10 +52,13 @@ pub fn dijkstra<'py>(
     weights: &str,
 ) -> PyResult<Paths<'py>> {
     let source = check_vertex(py, mesh, source, "source")?;
-    let w = self::weights(py, mesh, weights)?;
-    let paths = crate::pool::detach(py, || {
-        let graph = Adjacency::from_faces(mesh.mesh.n_vertices(), mesh.mesh.faces());
-        paths::dijkstra(&graph, source, w)
+    let by_length = by_length(py, weights)?;
+    // Detachable: at 10^7 vertices a search takes seconds and cannot poll;
+    // Ctrl-C leaves it to finish in the background (crate::progress).
+    let shared = Arc::clone(&mesh.mesh);
+    let paths = crate::progress::run_detachable(py, None, move |_| {
+        let graph = Adjacency::from_faces(shared.n_vertices(), shared.faces());
+        paths::dijkstra(&graph, source, self::weights(&shared, by_length))
     })?;
     // The source was checked above, so the search always runs.
     let paths = paths.ok_or_else(|| mesh_error(py, "source vertex out of range"))?;
@@ -70,10 +83,11 @@ pub fn shortest_path<'py>(
 ) -> PyResult<(f64, Bound<'py, PyArray1<i64>>)> {
     let source = check_vertex(py, mesh, source, "source")?;
     let target = check_vertex(py, mesh, target, "target")?;
-    let w = self::weights(py, mesh, weights)?;
-    let found = crate::pool::detach(py, || {
-        let graph = Adjacency::from_faces(mesh.mesh.n_vertices(), mesh.mesh.faces());
-        paths::dijkstra_to(&graph, source, target, w)
+    let by_length = by_length(py, weights)?;
+    let shared = Arc::clone(&mesh.mesh);
+    let found = crate::progress::run_detachable(py, None, move |_| {
+        let graph = Adjacency::from_faces(shared.n_vertices(), shared.faces());
+        paths::dijkstra_to(&graph, source, target, self::weights(&shared, by_length))
     })?;
     match found {
         Some((length, path)) => {

@@ -1,5 +1,7 @@
 //! `check`, `check_raw` and `orient`: reports become `spherify.MeshReport`.
 
+use std::sync::Arc;
+
 use numpy::PyReadonlyArrayDyn;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList, PyTuple};
@@ -12,7 +14,10 @@ use crate::mesh::CoreMesh;
 /// check(mesh) -> MeshReport.
 #[pyfunction]
 pub fn check<'py>(py: Python<'py>, mesh: &CoreMesh) -> PyResult<Bound<'py, PyAny>> {
-    let report = crate::pool::detach(py, || validate::check(&mesh.mesh))?;
+    // Detachable: at 10^7 vertices a check takes seconds and cannot poll;
+    // Ctrl-C leaves it to finish in the background (crate::progress).
+    let shared = Arc::clone(&mesh.mesh);
+    let report = crate::progress::run_detachable(py, None, move |_| validate::check(&shared))?;
     report_to_py(py, &report)
 }
 
@@ -26,15 +31,19 @@ pub fn check_raw<'py>(
 ) -> PyResult<Bound<'py, PyAny>> {
     let positions = rows::<f64, 3>(py, &vertices, "vertices")?;
     let faces = rows::<i64, 3>(py, &faces, "faces")?;
-    let report = crate::pool::detach(py, || validate::check_raw(&positions, &faces))?;
+    let report = crate::progress::run_detachable(py, None, move |_| {
+        validate::check_raw(&positions, &faces)
+    })?;
     report_to_py(py, &report)
 }
 
 /// orient(mesh) -> (CoreMesh, info dict); raises TopologyError.
 #[pyfunction]
 pub fn orient<'py>(py: Python<'py>, mesh: &CoreMesh) -> PyResult<(CoreMesh, Bound<'py, PyDict>)> {
-    let (oriented, info) = crate::pool::detach(py, || orient_mod::orient(&mesh.mesh))?
-        .map_err(|e| to_py(py, e.into()))?;
+    let shared = Arc::clone(&mesh.mesh);
+    let (oriented, info) =
+        crate::progress::run_detachable(py, None, move |_| orient_mod::orient(&shared))?
+            .map_err(|e| to_py(py, e.into()))?;
     let dict = PyDict::new(py);
     dict.set_item("flipped_faces", info.flipped_faces)?;
     dict.set_item("components", info.components)?;
