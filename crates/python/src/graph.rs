@@ -53,10 +53,11 @@ pub fn dijkstra<'py>(
 ) -> PyResult<Paths<'py>> {
     let source = check_vertex(py, mesh, source, "source")?;
     let by_length = by_length(py, weights)?;
-    // Detachable: at 10^7 vertices a search takes seconds and cannot poll;
-    // Ctrl-C leaves it to finish in the background (crate::progress).
+    // At 10^7 vertices a search takes seconds and cannot poll: Ctrl-C leaves
+    // it to finish in the background (crate::progress::run_sized).
     let shared = Arc::clone(&mesh.mesh);
-    let paths = crate::progress::run_detachable(py, None, move |_| {
+    let size = shared.n_faces();
+    let paths = crate::progress::run_sized(py, size, move || {
         let graph = Adjacency::from_faces(shared.n_vertices(), shared.faces());
         paths::dijkstra(&graph, source, self::weights(&shared, by_length))
     })?;
@@ -85,7 +86,8 @@ pub fn shortest_path<'py>(
     let target = check_vertex(py, mesh, target, "target")?;
     let by_length = by_length(py, weights)?;
     let shared = Arc::clone(&mesh.mesh);
-    let found = crate::progress::run_detachable(py, None, move |_| {
+    let size = shared.n_faces();
+    let found = crate::progress::run_sized(py, size, move || {
         let graph = Adjacency::from_faces(shared.n_vertices(), shared.faces());
         paths::dijkstra_to(&graph, source, target, self::weights(&shared, by_length))
     })?;

@@ -185,6 +185,26 @@ pub fn run<R: Send>(
     state.finish(py, result)
 }
 
+/// Input size (vertices or faces) from which a linear-time call without
+/// polls can take a second: from here on [`run_sized`] makes it detachable.
+const DETACH_FROM: usize = 1 << 20;
+
+/// A call that cannot poll and whose time grows with `size`: below
+/// [`DETACH_FROM`] it runs as [`crate::pool::detach`] does (milliseconds; a
+/// thread of its own per call would cost more than the work), from there on
+/// through [`run_detachable`], so that Ctrl-C is answered at once.
+pub fn run_sized<R: Send + 'static>(
+    py: Python<'_>,
+    size: usize,
+    work: impl FnOnce() -> R + Send + 'static,
+) -> PyResult<R> {
+    if size < DETACH_FROM {
+        crate::pool::detach(py, work)
+    } else {
+        run_detachable(py, None, move |_| work())
+    }
+}
+
 /// How long [`run_detachable`] waits for stopped work before it returns.
 const ABANDON_AFTER: Duration = Duration::from_millis(300);
 

@@ -14,10 +14,11 @@ use crate::mesh::CoreMesh;
 /// check(mesh) -> MeshReport.
 #[pyfunction]
 pub fn check<'py>(py: Python<'py>, mesh: &CoreMesh) -> PyResult<Bound<'py, PyAny>> {
-    // Detachable: at 10^7 vertices a check takes seconds and cannot poll;
-    // Ctrl-C leaves it to finish in the background (crate::progress).
+    // At 10^7 vertices a check takes seconds and cannot poll: Ctrl-C leaves
+    // it to finish in the background (crate::progress::run_sized).
     let shared = Arc::clone(&mesh.mesh);
-    let report = crate::progress::run_detachable(py, None, move |_| validate::check(&shared))?;
+    let size = shared.n_faces();
+    let report = crate::progress::run_sized(py, size, move || validate::check(&shared))?;
     report_to_py(py, &report)
 }
 
@@ -31,9 +32,9 @@ pub fn check_raw<'py>(
 ) -> PyResult<Bound<'py, PyAny>> {
     let positions = rows::<f64, 3>(py, &vertices, "vertices")?;
     let faces = rows::<i64, 3>(py, &faces, "faces")?;
-    let report = crate::progress::run_detachable(py, None, move |_| {
-        validate::check_raw(&positions, &faces)
-    })?;
+    let size = faces.len();
+    let report =
+        crate::progress::run_sized(py, size, move || validate::check_raw(&positions, &faces))?;
     report_to_py(py, &report)
 }
 
@@ -41,8 +42,9 @@ pub fn check_raw<'py>(
 #[pyfunction]
 pub fn orient<'py>(py: Python<'py>, mesh: &CoreMesh) -> PyResult<(CoreMesh, Bound<'py, PyDict>)> {
     let shared = Arc::clone(&mesh.mesh);
+    let size = shared.n_faces();
     let (oriented, info) =
-        crate::progress::run_detachable(py, None, move |_| orient_mod::orient(&shared))?
+        crate::progress::run_sized(py, size, move || orient_mod::orient(&shared))?
             .map_err(|e| to_py(py, e.into()))?;
     let dict = PyDict::new(py);
     dict.set_item("flipped_faces", info.flipped_faces)?;
