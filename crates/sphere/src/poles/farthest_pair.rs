@@ -238,9 +238,9 @@ pub(crate) fn farthest_pair(positions: &[[f64; 3]], start: Pair, centre: [f64; 3
     }
 
     // Every other pair: each candidate x searches the tree around its
-    // antipodal direction. In the tree's order, so
-    // that consecutive searches walk the same nodes; in parallel, each task
-    // with its own best, merged by the total order of `offer`.
+    // antipodal direction. In the tree's order, so that consecutive searches
+    // walk the same nodes; in parallel, each task with its own best, merged
+    // by the total order of `offer`.
     let search = |x: &Item, best: &mut Pair, stack: &mut Vec<usize>| {
         let d = short(best);
         let (p, r_x) = (x.position, x.reach);
@@ -251,13 +251,14 @@ pub(crate) fn farthest_pair(positions: &[[f64; 3]], start: Pair, centre: [f64; 3
         let target = [-u[0], -u[1], -u[2]];
         // The bound from the law of cosines, for the node's largest r_y
         // taken `blur` larger (see the module's comment), widened by its
-        // error: r_x is off by up to blur, and the bound's slope in r_x is
-        // at most (r_x^2 + D^2) / (r_x^2 r_y) where r_y >= r_x; its own
-        // rounding is a few ulps of (r_x + r_y)^2 / (r_x r_y).
+        // error: r_x is off by up to blur, and the bound's slope in r_x,
+        // (r_x^2 - r_y^2 + D^2) / (r_x^2 r_y), is at most
+        // (r_x^2 + r_y^2 + D^2) / (r_x^2 r_y) in size; its own rounding is
+        // a few ulps of (r_x + r_y)^2 / (r_x r_y).
         let radius = |reach: f64| {
             let ry = reach + blur;
             let bound = ((r_x + ry) * (r_x + ry) - d * d) / (r_x * ry);
-            let slack = (r_x * r_x + d * d) / (r_x * r_x * ry) * 2.0 * blur
+            let slack = (r_x * r_x + ry * ry + d * d) / (r_x * r_x * ry) * 2.0 * blur
                 + 8.0 * f64::EPSILON * (r_x + ry) * (r_x + ry) / (r_x * ry);
             (bound.max(0.0) + slack).sqrt() + direction_slack
         };
