@@ -272,22 +272,35 @@ def test_ctrl_c_inside_one_long_factorisation_is_answered_at_once(delay: float) 
     assert seconds < 1.5, f"SIGINT answered after {seconds:.1f} s"
 
 
+#: Lines of a child script that make ``grid``, a k x k grid of triangles (a
+#: disk) for the script's ``k``, with numpy alone: millions of vertices in
+#: seconds.
+GRID = """
+i, j = np.meshgrid(np.arange(k), np.arange(k), indexing="ij")
+V = np.c_[i.ravel(), j.ravel(), np.zeros(k * k)].astype(float)
+a = (i[:-1, :-1] * k + j[:-1, :-1]).ravel()
+F = np.r_[np.c_[a, a + k, a + 1], np.c_[a + 1, a + k, a + k + 1]]
+grid = sp.Mesh(V, F)
+"""
+
+
+def indented(lines: str) -> str:
+    """``lines`` for a place 8 spaces in within a child script's text."""
+    return textwrap.indent(lines.strip(), " " * 8).strip()
+
+
 @pytest.mark.slow
 def test_ctrl_c_inside_a_long_tutte_solve_is_answered_at_once() -> None:
     """sp.tutte on a million-vertex disk spends seconds in one sparse
     factorisation: it too leaves that step to finish in the background and
     raises at once (item 2; slow: the mesh takes seconds to make)."""
-    err, seconds = interrupt("""
+    err, seconds = interrupt(f"""
         import numpy as np
         import spherify as sp
         k = 1000
-        i, j = np.meshgrid(np.arange(k), np.arange(k), indexing="ij")
-        V = np.c_[i.ravel(), j.ravel(), np.zeros(k * k)].astype(float)
-        a = (i[:-1, :-1] * k + j[:-1, :-1]).ravel()
-        F = np.r_[np.c_[a, a + k, a + 1], np.c_[a + 1, a + k, a + k + 1]]
-        mesh = sp.Mesh(V, F)
+        {indented(GRID)}
         print("READY", flush=True)
-        sp.tutte(mesh)
+        sp.tutte(grid)
     """, delay=1.0, timeout=300)
     assert_keyboard_interrupt(err, seconds)
     assert seconds < 1.5, f"SIGINT answered after {seconds:.1f} s"
@@ -322,8 +335,8 @@ def test_ctrl_c_inside_one_long_harmonics_call_is_answered(name: str) -> None:
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("call", ["sp.dijkstra(g, 0)", "sp.shortest_path(g, 0, k * k - 1)",
-                                  "sp.check(g)", "sp.orient(g)", "sp.quality(g, P)"])
+@pytest.mark.parametrize("call", ["sp.dijkstra(grid, 0)", "sp.shortest_path(grid, 0, k * k - 1)",
+                                  "sp.check(grid)", "sp.orient(grid)", "sp.quality(grid, P)"])
 def test_ctrl_c_inside_one_linear_call_on_a_huge_mesh_is_answered_at_once(call: str) -> None:
     """On a 9M-vertex grid one search, check, orientation or quality takes a
     second or more and cannot poll: like embed, it is left to finish in the
@@ -334,11 +347,7 @@ def test_ctrl_c_inside_one_linear_call_on_a_huge_mesh_is_answered_at_once(call: 
         import numpy as np
         import spherify as sp
         k = 3000
-        i, j = np.meshgrid(np.arange(k), np.arange(k), indexing="ij")
-        V = np.c_[i.ravel(), j.ravel(), np.zeros(k * k)].astype(float)
-        a = (i[:-1, :-1] * k + j[:-1, :-1]).ravel()
-        F = np.r_[np.c_[a, a + k, a + 1], np.c_[a + 1, a + k, a + k + 1]]
-        g = sp.Mesh(V, F)
+        {indented(GRID)}
         if "P)" in "{call}":
             P = np.c_[V[:, :2] / k, np.ones(len(V))]
             P /= np.linalg.norm(P, axis=1)[:, None]
