@@ -155,7 +155,8 @@ def main() -> None:
 
     add("\n## Pole selection (cf. Table 7.4)\n")
     add("Seconds of the pole stage of `sp.embed(mesh, 'theta_phi', poles=...)` for each pole "
-        "choice (thesis 6.2.1-6.2.3; the symmetry method of 6.2.5 is not implemented yet).\n")
+        "choice (thesis 6.2.1-6.2.3; for the symmetry method of 6.2.5 see "
+        "`benches/symmetry_poles.py`).\n")
     add("| mesh | V | fast_graph s | physical s | graph s |")
     add("|---|---:|---:|---:|---:|")
     for label, mesh in timing_meshes:
