@@ -22,6 +22,7 @@ import pytest
 
 import spherify as sp
 from spherify import _batch as batch_module
+from spherify import _batch_pool as batch_pool
 from spherify._batch_task import reset_peak_memory
 
 cli = pytest.importorskip("spherify.cli")
@@ -245,6 +246,18 @@ def child_pids() -> List[int]:
     return pids
 
 
+def cpu_seconds(pid: int) -> float:
+    """CPU time a running process has used, from /proc (0 when it is gone
+    or a zombie: an earlier test's killed worker)."""
+    try:
+        fields = Path(f"/proc/{pid}/stat").read_text().rpartition(")")[2].split()
+    except OSError:
+        return 0.0
+    if fields[0] in ("Z", "X"):
+        return 0.0
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")  # utime + stime
+
+
 @pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="finds the workers in /proc")
 def test_a_worker_killed_during_one_mesh(tmp_path: Path) -> None:
     slow_inputs(tmp_path / "in")
@@ -252,10 +265,14 @@ def test_a_worker_killed_during_one_mesh(tmp_path: Path) -> None:
     killed: List[int] = []
 
     def killer() -> None:
+        # The worker is deep in the slow mesh once it has used 3 s of CPU
+        # (a quick one and the start-up take a fraction of that). Not "once
+        # the quick one's row is in the journal": writing it shares the
+        # worker's core threads with the slow one's parallel pole search and
+        # may wait for all of it (CI once killed the worker after that).
         deadline = time.monotonic() + 120
         while time.monotonic() < deadline:
-            if journal.exists() and len(batch_module.read_journal(journal)) == 1:
-                time.sleep(0.5)  # the worker has taken the slow mesh
+            if any(cpu_seconds(pid) >= 3.0 for pid in child_pids()):
                 for pid in child_pids():
                     os.kill(pid, signal.SIGKILL)
                     killed.append(pid)
@@ -587,3 +604,26 @@ def wait_until_group_ended(group: int) -> None:
         if not members:
             return
         time.sleep(0.01)
+
+
+def test_a_timeout_blames_the_mesh_being_mapped_not_the_one_waiting_to_be_written(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """A mesh's writing shares the worker's core threads with the next
+    mesh's map and may wait behind it; the timeout must then fall on the
+    mesh being mapped (before, the one being written ran out its time first,
+    from its give, and a 300-vertex mesh was recorded as a Timeout)."""
+    clock = [100.0]
+    monkeypatch.setattr(batch_pool.time, "monotonic", lambda: clock[0])
+    worker = batch_pool.Worker.__new__(batch_pool.Worker)  # no process: the bookkeeping only
+    quick, slow = object(), object()
+    worker.tasks, worker.mapping = [(quick, clock[0])], quick
+    clock[0] += 0.5
+    worker.mapped()  # quick is written from now on ...
+    worker.tasks.append((slow, clock[0]))  # ... while slow is mapped
+    worker.mapping = slow
+    clock[0] += 3.9
+    assert worker.late(4.0) is None
+    clock[0] += 0.2  # both past 4 s since: the one being mapped is to blame
+    assert worker.late(4.0) is slow
+    worker.mapping = None  # slow mapped too: then the writing is late
+    assert worker.late(4.0) is quick

@@ -164,10 +164,26 @@ class Worker:
         """A row came for the input ``name``."""
         self.tasks = [(t, s) for t, s in self.tasks if t.input != name]
 
-    def late(self, timeout: float) -> Optional[Task]:
-        """A mesh it holds that has run past ``timeout`` seconds, if any."""
+    def mapped(self) -> None:
+        """The mesh being mapped is mapped; it is written next. Its clock
+        starts again: the timeout holds for the writing on its own. The
+        writing shares the worker's core threads with the next mesh's map,
+        and can wait behind a long parallel step of it; from the give on,
+        the mesh being written would run out its time first and be blamed
+        for the next one's."""
         now = time.monotonic()
-        return next((t for t, s in self.tasks if now - s >= timeout), None)
+        self.tasks = [(t, now if t is self.mapping else s) for t, s in self.tasks]
+        self.mapping = None
+
+    def late(self, timeout: float) -> Optional[Task]:
+        """A mesh it holds that has run past ``timeout`` seconds, if any:
+        the one being mapped first (a mesh being written may be waiting
+        for it, see :meth:`mapped`)."""
+        now = time.monotonic()
+        overdue = [t for t, s in self.tasks if now - s >= timeout]
+        if self.mapping is not None and self.mapping in overdue:
+            return self.mapping
+        return overdue[0] if overdue else None
 
     def receive(self) -> Optional[Any]:
         """The next message, or None when the worker died (its end closed)."""
@@ -282,7 +298,7 @@ class LocalPool:
                         elif message[0] == "ready":
                             w.ready = True
                         elif message[0] == "mapped":
-                            w.mapping = None
+                            w.mapped()
                         else:
                             rows.append(message[1])
                             w.finished(message[1]["input"])
