@@ -68,10 +68,10 @@ def cpu_seconds() -> float:
 
 LOOP_ONE_CORE = """
 import sys, time, spherify as sp
-paths = sys.argv[1:]
+method, paths = sys.argv[1], sys.argv[2:]
 start = time.perf_counter()
 for path in paths:
-    sp.embed(sp.load(path), "theta_phi")
+    sp.embed(sp.load(path), method)
 print(time.perf_counter() - start)
 """
 
@@ -84,12 +84,12 @@ def pinned_to_one_core() -> Set[int]:
     return cores
 
 
-def loop_on_one_core(paths: List[Path]) -> float:
+def loop_on_one_core(paths: List[Path], method: str) -> float:
     """Seconds of the load + embed loop in a child pinned to one core."""
     cores = pinned_to_one_core()
     try:
         env = dict(os.environ, RAYON_NUM_THREADS="1")
-        done = subprocess.run([sys.executable, "-c", LOOP_ONE_CORE, *map(str, paths)], env=env,
+        done = subprocess.run([sys.executable, "-c", LOOP_ONE_CORE, method, *map(str, paths)], env=env,
                               check=True, capture_output=True, text=True)
     finally:
         os.sched_setaffinity(0, cores)
@@ -105,6 +105,10 @@ def main() -> None:
     parser.add_argument("--workers", type=int, nargs="+", default=[1, 2])
     parser.add_argument("--rounds", type=int, default=4,
                         help="split the meshes into this many rounds, each running every phase")
+    parser.add_argument("--method", default="theta_phi", choices=sp.methods(),
+                        help="the method of every phase (default: theta_phi, the method of "
+                             "the tables in docs/benchmarks.md; the batch's own default is "
+                             "progressive)")
     parser.add_argument("--cores", action="store_true",
                         help="add the loop and a 1-worker batch pinned to one core (Linux)")
     args = parser.parse_args()
@@ -140,27 +144,29 @@ def main() -> None:
                 start, used = time.perf_counter(), cpu_seconds()
                 inner: Optional[float] = None
                 if phase == "loop_core1":
-                    inner = loop_on_one_core(group)
+                    inner = loop_on_one_core(group, args.method)
                 elif phase == "batch1_core1":
                     cores = pinned_to_one_core()
                     try:
-                        result = sp.batch(group, Path(tmp) / f"{phase}-{r}", workers=1)
+                        result = sp.batch(group, Path(tmp) / f"{phase}-{r}", workers=1,
+                                          method=args.method)
                     finally:
                         os.sched_setaffinity(0, cores)
                     rows[phase].extend(result.rows)
                 elif phase == "loop":
                     for path in group:
-                        sp.embed(sp.load(path), "theta_phi")
+                        sp.embed(sp.load(path), args.method)
                 elif phase == "loop_write":
                     written = Path(tmp) / f"loop{r}"
                     written.mkdir()
                     for path in group:
-                        m = sp.embed(sp.load(path), "theta_phi")
+                        m = sp.embed(sp.load(path), args.method)
                         sp.save(sp.Mesh(m.points, m.mesh.faces), written / f"{path.stem}.sphere.ply")
                         m.save(written / f"{path.stem}.spheremap.npz")
                 else:
                     workers = int(phase[5:])
-                    result = sp.batch(group, Path(tmp) / f"{phase}-{r}", workers=workers)
+                    result = sp.batch(group, Path(tmp) / f"{phase}-{r}", workers=workers,
+                                      method=args.method)
                     rows[phase].extend(result.rows)
                 wall[phase] += time.perf_counter() - start if inner is None else inner
                 cpu[phase] += cpu_seconds() - used

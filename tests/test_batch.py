@@ -86,11 +86,13 @@ def test_mixed_batch_certifies_the_good_and_records_the_bad(tmp_path: Path,
     rows = by_name(result.rows)
     for path in good:
         row = rows[path.name]
-        assert row["status"] == "done" and row["certified"] and row["tp_valid"], row
+        # The default method is sp.embed's (progressive): certified means valid.
+        assert row["status"] == "done" and row["certified"] and row["valid"], row
+        assert row["method"] == "progressive" and row["tp_valid"] is None
         assert row["sha256"] == batch_module.content_hash(path)
         assert Path(row["sphere"]).is_file() and Path(row["spheremap"]).is_file()
         m = sp.load_map(row["spheremap"])
-        assert m.tp_valid and m.mesh.n_vertices == row["n_vertices"]
+        assert m.valid and m.mesh.n_vertices == row["n_vertices"]
     for name, error_type in bad.items():
         assert rows[name]["status"] == "failed" and rows[name]["error_type"] == error_type, rows[name]
         assert rows[name]["error"]
@@ -139,8 +141,11 @@ def test_a_rerun_skips_what_is_done_and_redoes_what_changed(tmp_path: Path) -> N
     third = sp.batch(tmp_path / "in", out, workers=2)
     assert third.skipped == 5
     assert by_name(third.rows)[inputs[0].name]["n_vertices"] == sp.load(inputs[0]).n_vertices
-    fourth = sp.batch(tmp_path / "in", out, workers=2, weights="mean_value")
-    assert fourth.skipped == 0
+    fourth = sp.batch(tmp_path / "in", out, workers=2, method="theta_phi")
+    assert fourth.skipped == 0 and fourth.counts["certified"] == 6  # (and the garbage)
+    assert all(r["tp_valid"] for r in fourth.rows if r["status"] == "done")
+    fifth = sp.batch(tmp_path / "in", out, workers=2, method="theta_phi", weights="mean_value")
+    assert fifth.skipped == 0
 
 
 KILL_SCRIPT = """
@@ -225,7 +230,8 @@ def slow_inputs(folder: Path) -> List[Path]:
 
 def test_a_mesh_past_its_timeout_is_recorded_and_the_others_are_done(tmp_path: Path) -> None:
     slow_inputs(tmp_path / "in")
-    result = sp.batch(tmp_path / "in", tmp_path / "out", workers=1, timeout=4.0, poles="graph")
+    result = sp.batch(tmp_path / "in", tmp_path / "out", workers=1, timeout=4.0,
+                      method="theta_phi", poles="graph")
     rows = by_name(result.rows)
     assert rows["b_slow.ply"]["error_type"] == "Timeout"
     assert rows["a_quick.ply"]["certified"] and rows["c_quick.ply"]["certified"]
@@ -281,7 +287,8 @@ def test_a_worker_killed_during_one_mesh(tmp_path: Path) -> None:
 
     thread = threading.Thread(target=killer)
     thread.start()
-    result = sp.batch(tmp_path / "in", tmp_path / "out", workers=1, poles="graph")
+    result = sp.batch(tmp_path / "in", tmp_path / "out", workers=1, method="theta_phi",
+                      poles="graph")
     thread.join()
     assert killed
     rows = by_name(result.rows)
@@ -377,7 +384,7 @@ def test_a_timeout_holds_under_a_process_pool_executor(tmp_path: Path) -> None:
     start = time.monotonic()
     with cf.ProcessPoolExecutor(1, mp_context=context) as pool:
         result = sp.batch(tmp_path / "in", tmp_path / "out", executor=pool, timeout=4.0,
-                          poles="graph")
+                          method="theta_phi", poles="graph")
         elapsed = time.monotonic() - start
     assert_only_the_slow_mesh_timed_out(result.rows, elapsed)
     assert not list((tmp_path / "out").glob("b_slow*"))
@@ -391,7 +398,7 @@ def test_a_timeout_holds_on_a_dask_local_cluster(tmp_path: Path) -> None:
             distributed.Client(cluster) as client:
         start = time.monotonic()
         result = sp.batch(tmp_path / "in", tmp_path / "out", executor=client, timeout=4.0,
-                          poles="graph")
+                          method="theta_phi", poles="graph")
         elapsed = time.monotonic() - start
     assert_only_the_slow_mesh_timed_out(result.rows, elapsed)
 
@@ -439,7 +446,7 @@ def test_an_output_damaged_after_its_row_was_written_is_redone(tmp_path: Path) -
     again = sp.batch(tmp_path / "in", out, workers=1)
     assert again.skipped == 1
     assert sphere.read_bytes() == good
-    assert sp.load_map(spheremap).tp_valid
+    assert sp.load_map(spheremap).valid
 
 
 def test_any_executor_gives_the_same_outputs(tmp_path: Path) -> None:
@@ -476,6 +483,33 @@ def test_cli_batch_exit_status(tmp_path: Path, capsys: pytest.CaptureFixture[str
     assert "3 already done" in out and "broken.obj: FormatError" in out
     assert cli.main(["batch", str(tmp_path / "missing"), "-o", str(tmp_path / "out")]) == 2
     assert cli.main(["batch", str(tmp_path / "in"), "-o", str(tmp_path / "o2"), "--workers", "0"]) == 2
+
+
+def test_the_default_method_is_embeds_and_stray_options_are_refused_at_once(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    # sp.batch and spherify batch map as sp.embed and spherify map do. The
+    # theta-phi options the batch took before that switch would make every
+    # mesh fail alike: they are refused before anything starts or is written.
+    make_inputs(tmp_path / "in", 2)
+    out = tmp_path / "out"
+    for options in ({"poles": "graph"}, {"method": "progressive", "weights": "chord"}):
+        with pytest.raises(sp.MeshError, match="theta-phi option.*method='theta_phi'"):
+            sp.batch(tmp_path / "in", out, **options)
+    with pytest.raises(sp.MeshError, match="unknown method 'tetha_phi'"):
+        sp.batch(tmp_path / "in", out, method="tetha_phi")
+    assert not out.exists()
+    assert cli.main(["batch", str(tmp_path / "in"), "-o", str(out), "--poles", "graph"]) == 2
+    assert "add --method theta_phi" in capsys.readouterr().err
+    assert not out.exists()
+    # The CLI with no options and sp.batch with none share their rows; so do
+    # the CLI's theta-phi flags and sp.batch's keywords.
+    assert cli.main(["batch", str(tmp_path / "in"), "-o", str(out)]) == 0
+    assert "2 certified" in capsys.readouterr().out
+    again = sp.batch(tmp_path / "in", out)
+    assert again.skipped == 2 and {r["method"] for r in again.rows} == {"progressive"}
+    assert cli.main(["batch", str(tmp_path / "in"), "-o", str(out), "--method", "theta_phi",
+                     "--poles", "physical"]) == 0
+    assert sp.batch(tmp_path / "in", out, method="theta_phi", poles="physical").skipped == 2
 
 
 def test_folders_skip_outputs_and_temporaries(tmp_path: Path) -> None:

@@ -22,7 +22,7 @@ def test_harmonics_writes_the_rebuilt_surface_and_the_coefficients(
     assert "lmax 12" in text and "wrote" in text
     rebuilt = sp.load(out)
     mesh = sp.datasets.make("bumpy_blob", 800)
-    m = sp.embed(mesh, "theta_phi")  # the applications' --method default
+    m = sp.embed(mesh, "progressive")  # the applications' --method default
     want = sp.harmonics.fit(m, 12).lowpass(6).to_mesh(m)
     np.testing.assert_allclose(rebuilt.vertices, want.vertices, atol=1e-12)
     assert np.array_equal(rebuilt.faces, want.faces)
@@ -58,7 +58,7 @@ def test_remesh_writes_an_icosphere_mesh_on_the_surface(
     text = capsys.readouterr().out
     assert "icosphere level 3: 642 vertices" in text and "distance to the input" in text
     r = sp.load(out)
-    m = sp.embed(sp.datasets.make("bumpy_blob", 800), "theta_phi")  # --method default
+    m = sp.embed(sp.datasets.make("bumpy_blob", 800), "progressive")  # --method default
     np.testing.assert_allclose(r.vertices, sp.remesh(m, level=3).vertices, atol=1e-12)
 
 
@@ -86,8 +86,8 @@ def test_morph_writes_the_frames_from_a_to_b(
     assert [f.name for f in frames] == ["frame_000.ply", "frame_001.ply", "frame_002.ply"]
     a = sp.datasets.make("bumpy_blob", 600)
     np.testing.assert_allclose(sp.load(frames[0]).vertices, a.vertices, atol=1e-12)
-    m_a = sp.embed(a, "theta_phi")  # the applications' --method default
-    m_b = sp.embed(sp.datasets.make("ellipsoid", 600), "theta_phi")
+    m_a = sp.embed(a, "progressive")  # the applications' --method default
+    m_b = sp.embed(sp.datasets.make("ellipsoid", 600), "progressive")
     np.testing.assert_allclose(sp.load(frames[2]).vertices, sp.morph(m_a, m_b).at(1).vertices,
                                atol=1e-12)
 

@@ -207,7 +207,9 @@ def add_commands(sub: Any, load: Callable[[argparse.Namespace], Mesh],
         p.add_argument("mesh", nargs="?", help="mesh file (.obj .off .ply .stl)")
         p.add_argument("--dataset", choices=datasets.names(), help="use a generated shape instead")
         p.add_argument("--n-vertices", type=int, default=5000, help="size of the generated shape")
-        p.add_argument("--method", default="theta_phi", choices=methods())
+        p.add_argument("--method", default="progressive", choices=methods(),
+                       help="the spherical map the application works through (default: "
+                            "progressive, certified on every mesh tried; theta_phi is faster)")
         p.add_argument("-o", "--output", required=True, help="output mesh file")
         return p
 

@@ -17,9 +17,10 @@
     spherify check MESH            load, validate, orient and print the report
     spherify orient MESH -o OUT    write a consistently, outward-oriented copy
     spherify harmonics ...         the applications of thesis ch. 8: see
-                                   ``spherify <command> --help`` and _cli_apps.py
-    spherify batch INPUT... -o OUTDIR [--method M] [--workers N] [--timeout S]
-                   [--scheduler tcp://...]
+                                   ``spherify <command> --help`` and _cli_apps.py;
+                                   they map with the same default, --method to change
+    spherify batch INPUT... -o OUTDIR [--method M] [the method's options as for map]
+                   [--workers N] [--timeout S] [--scheduler tcp://...]
                                    map many meshes (files, folders, lists of paths),
                                    resumably; OUTDIR/journal.jsonl and summary.csv
 
@@ -192,10 +193,12 @@ METHOD_OPTIONS = {"poles": ("theta_phi", "fast_graph"), "weights": ("theta_phi",
                   "symmetry_eps": ("theta_phi", None), "energy": ("progressive", "isometric")}
 
 
-def _method_options(args: argparse.Namespace) -> Dict[str, Any]:
+def _method_options(args: argparse.Namespace, defaults: bool = True) -> Dict[str, Any]:
     """The options of ``args.method``, refusing (UsageError, exit 2) an
     option of another method: under the default method a ``--poles`` would
-    otherwise be ignored, and the map would not be the one asked for."""
+    otherwise be ignored, and the map would not be the one asked for. With
+    ``defaults=False`` only the options given (a batch's journal records
+    them, and ``sp.batch`` with the same options must reuse its rows)."""
     method = args.method or "progressive"
     stray = [name for name, (owner, _) in METHOD_OPTIONS.items()
              if getattr(args, name) is not None and owner != method]
@@ -217,8 +220,10 @@ def _method_options(args: argparse.Namespace) -> Dict[str, Any]:
     options: Dict[str, Any] = {}
     for name, (owner, default) in METHOD_OPTIONS.items():
         value = getattr(args, name)
-        if owner == method and (value is not None or default is not None):
-            options[name] = default if value is None else value
+        if owner == method and value is not None:
+            options[name] = value
+        elif owner == method and defaults and default is not None:
+            options[name] = default
     return options
 
 
@@ -301,11 +306,10 @@ def _cmd_map(args: argparse.Namespace) -> int:
 
 def _cmd_batch(args: argparse.Namespace) -> int:
     from ._batch import batch
-    options: Dict[str, Any] = {}
-    if args.method == "theta_phi":
-        options = {"poles": args.poles, "weights": args.weights}
+    options = _method_options(args, defaults=False)
     try:
-        result = batch(args.inputs, args.output, method=args.method, workers=args.workers,
+        result = batch(args.inputs, args.output, method=args.method or "progressive",
+                       workers=args.workers,
                        timeout=args.timeout, scheduler=args.scheduler,
                        progress=args.progress or sys.stderr.isatty(), **options)
     except KeyboardInterrupt:
@@ -321,6 +325,25 @@ def _cmd_batch(args: argparse.Namespace) -> int:
         elif not row.get("certified"):
             print(f"not certified: {row['input']}")
     return 0 if result.all_certified else 1
+
+
+def _add_method_flags(p: argparse.ArgumentParser, names: Dict[str, Any]) -> None:
+    """--method and the options of each method (:data:`METHOD_OPTIONS`), the
+    same for ``map`` and ``batch``."""
+    p.add_argument("--method", default=None, choices=methods(),
+                   help="the spherical method (default: progressive, a certified "
+                        "low-distortion map of every mesh; theta_phi is the fastest)")
+    p.add_argument("--poles", default=None, choices=names["poles"],
+                   help="--method theta_phi: how to choose the poles and the cut "
+                        "(default: fast_graph)")
+    p.add_argument("--symmetry-eps", type=float, default=None,
+                   help="--method theta_phi --poles symmetry: band half-width around "
+                        "the plane in mesh units (default: automatic)")
+    p.add_argument("--weights", default=None, choices=names["theta_phi_weights"],
+                   help="--method theta_phi: the Tutte weights (default: uniform)")
+    p.add_argument("--energy", default=None, choices=names["energies"],
+                   help="--method progressive: the distortion energy it lowers "
+                        "(default: isometric)")
 
 
 def main(argv: Optional[List[str]] = None) -> int:
@@ -340,30 +363,15 @@ def main(argv: Optional[List[str]] = None) -> int:
         if name in ("orient", "map"):
             p.add_argument("-o", "--output", required=True, help="output mesh file")
         if name == "map":
-            p.add_argument("--method", default=None, choices=methods(),
-                           help="the spherical method (default: progressive, a certified "
-                                "low-distortion map of every mesh; theta_phi is the fastest)")
-            p.add_argument("--poles", default=None, choices=names["poles"],
-                           help="--method theta_phi: how to choose the poles and the cut "
-                                "(default: fast_graph)")
-            p.add_argument("--symmetry-eps", type=float, default=None,
-                           help="--method theta_phi --poles symmetry: band half-width around "
-                                "the plane in mesh units (default: automatic)")
+            _add_method_flags(p, names)
             p.add_argument("--progress", action="store_true",
                            help="--method progressive and --poles graph: show a progress bar "
                                 "even when stderr is not a terminal")
-            p.add_argument("--weights", default=None, choices=names["theta_phi_weights"],
-                           help="--method theta_phi: the Tutte weights (default: uniform)")
-            p.add_argument("--energy", default=None, choices=names["energies"],
-                           help="--method progressive: the distortion energy it lowers "
-                                "(default: isometric)")
         p.set_defaults(func=func)
     p = sub.add_parser("batch", help="map many meshes, in parallel and resumably")
     p.add_argument("inputs", nargs="+", help="mesh files, folders, or .txt files of paths")
     p.add_argument("-o", "--output", required=True, help="output folder")
-    p.add_argument("--method", default="theta_phi", choices=methods())
-    p.add_argument("--poles", default="fast_graph", choices=names["poles"])
-    p.add_argument("--weights", default="uniform", choices=names["theta_phi_weights"])
+    _add_method_flags(p, names)
     p.add_argument("--workers", type=int, default=None, help="local processes (default: cores)")
     p.add_argument("--timeout", type=float, default=None, help="seconds per mesh")
     p.add_argument("--scheduler", default=None, help="Dask scheduler address, tcp://host:port")
