@@ -4,6 +4,9 @@ repair, 2 for unreadable input or bad arguments."""
 
 from __future__ import annotations
 
+import os
+import subprocess
+import sys
 from pathlib import Path
 from typing import List
 
@@ -231,3 +234,25 @@ def test_the_cli_offers_the_core_s_choices(tmp_path: Path) -> None:
     with pytest.raises(SystemExit):
         cli.main(["map", "--dataset", "icosphere", "-o", str(tmp_path / "x.ply"),
                   "--poles", "nowhere"])
+
+
+@pytest.mark.parametrize("buffered", [False, True])
+def test_a_reader_that_leaves_does_not_stop_the_job(tmp_path: Path, buffered: bool) -> None:
+    # `spherify map ... | head -1`: the reader closes the pipe early. The
+    # command still writes its files and exits with the job's status, with
+    # nothing on stderr (a print after the close raised BrokenPipeError and
+    # the files were never written).
+    from _child import child_env
+    env = child_env()
+    if buffered:
+        env.pop("PYTHONUNBUFFERED")  # the interpreter's last flush hits the closed pipe
+    out = tmp_path / "sphere.ply"
+    read, write_end = os.pipe()
+    os.close(read)  # the reader has left before the first line
+    done = subprocess.run([sys.executable, "-m", "spherify", "map", "--dataset", "bumpy_blob",
+                           "--n-vertices", "400", "-o", str(out)], env=env, stdout=write_end,
+                          stderr=subprocess.PIPE, text=True, timeout=120)
+    os.close(write_end)
+    assert done.returncode == 0 and done.stderr == ""
+    assert sp.load(out).n_vertices == sp.datasets.make("bumpy_blob", 400).n_vertices
+    assert out.with_suffix(".npz").is_file()

@@ -64,6 +64,51 @@ class UsageError(SpherifyError):
     """Bad arguments, found before any work is done (exit status 2)."""
 
 
+class _ReaderMayLeave(io.TextIOBase):
+    """Standard output that goes quiet when its reader leaves. With
+    ``spherify map ... | head -3`` the pipe closes after three lines; a
+    ``print`` after that raised BrokenPipeError and the command stopped
+    before it wrote its files. Now the command finishes its job and exits
+    with the job's status; what it would have printed is dropped."""
+
+    def __init__(self, stream: Any) -> None:
+        super().__init__()
+        self._stream = stream
+        self._gone = False
+
+    def _reader_left(self) -> None:
+        self._gone = True
+        try:
+            # The interpreter flushes the real stdout at exit: let that go
+            # nowhere instead of raising again.
+            devnull = os.open(os.devnull, os.O_WRONLY)
+            os.dup2(devnull, self._stream.fileno())
+            os.close(devnull)
+        except (OSError, ValueError, io.UnsupportedOperation):
+            pass  # not a file descriptor (a captured stream): nothing to flush
+
+    def write(self, text: str) -> int:
+        if not self._gone:
+            try:
+                return int(self._stream.write(text))
+            except BrokenPipeError:
+                self._reader_left()
+        return len(text)
+
+    def flush(self) -> None:
+        if not self._gone:
+            try:
+                self._stream.flush()
+            except BrokenPipeError:
+                self._reader_left()
+
+    def isatty(self) -> bool:
+        return bool(self._stream.isatty())
+
+    def fileno(self) -> int:
+        return int(self._stream.fileno())
+
+
 def _n_vertices(text: str) -> int:
     try:
         n = int(text)
@@ -380,11 +425,15 @@ def main(argv: Optional[List[str]] = None) -> int:
     p.set_defaults(func=_cmd_batch)
     _cli_apps.add_commands(sub, _load, _save_npz, datasets)
     args = parser.parse_args(argv)
+    stdout, sys.stdout = sys.stdout, _ReaderMayLeave(sys.stdout)
     try:
         return int(args.func(args))
     except (SpherifyError, OSError) as err:
         print(f"spherify: error: {err}", file=sys.stderr)
         return 2
+    finally:
+        sys.stdout.flush()
+        sys.stdout = stdout
 
 
 if __name__ == "__main__":
