@@ -512,6 +512,21 @@ def test_the_default_method_is_embeds_and_stray_options_are_refused_at_once(
     assert sp.batch(tmp_path / "in", out, method="theta_phi", poles="physical").skipped == 2
 
 
+def test_a_folder_without_meshes_is_named_and_an_empty_batch_is_not_a_success(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    # A wrong folder gave "0 meshes: 0 certified" and exit status 0.
+    (tmp_path / "notes").mkdir()
+    (tmp_path / "notes" / "readme.txt.bak").write_text("no meshes here\n")
+    make_inputs(tmp_path / "in", 1)
+    with pytest.warns(sp.SpherifyWarning, match=r"folder .*notes holds no mesh file") as caught:
+        result = sp.batch([tmp_path / "notes", tmp_path / "in"], tmp_path / "out")
+    assert len(caught) == 1 and caught[0].filename == __file__  # points at the caller
+    assert result.counts["meshes"] == 1 and result.all_certified
+    assert cli.main(["batch", str(tmp_path / "notes"), "-o", str(tmp_path / "o2")]) == 1
+    err = capsys.readouterr().err
+    assert "spherify: warning: batch input folder" in err and "no mesh to map" in err
+
+
 def test_folders_skip_outputs_and_temporaries(tmp_path: Path) -> None:
     make_inputs(tmp_path / "in", 2)
     sp.batch(tmp_path / "in", tmp_path / "in" / "out", workers=1)

@@ -46,6 +46,7 @@ import json
 import os
 import sys
 import time
+import warnings
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -56,7 +57,7 @@ from ._files import file_errors, special_kind
 from ._batch_pool import LocalPool, executor_rows, usable_cores
 from ._batch_task import COLUMNS, QUALITY, Task, file_matches, run_task
 from ._embed import THETA_PHI_OPTIONS, methods
-from ._errors import FileError, MeshError
+from ._errors import FileError, MeshError, SpherifyWarning
 
 PathLike = Union[str, "os.PathLike[str]"]
 
@@ -83,12 +84,18 @@ def expand_inputs(inputs: Iterable[PathLike]) -> List[Path]:
     ``.txt`` / ``.lst`` files read as one path per line (relative to the list's
     folder; blank lines and ``#`` comments skipped). Sorted within a folder,
     duplicates dropped, order otherwise kept. MeshError for a path that does
-    not exist."""
+    not exist; a SpherifyWarning for a folder without a mesh file (a wrong
+    folder would otherwise give an empty batch that reports success)."""
     found: List[Path] = []
     for item in inputs:
         path = Path(os.fspath(item))
         if path.is_dir():
-            found.extend(sorted(p for p in path.rglob("*") if p.is_file() and _is_mesh_file(p)))
+            meshes = sorted(p for p in path.rglob("*") if p.is_file() and _is_mesh_file(p))
+            if not meshes:
+                warnings.warn(f"batch input folder {path} holds no mesh file (searched with its "
+                              f"subfolders for {', '.join(MESH_SUFFIXES)} and FreeSurfer "
+                              "surfaces such as lh.pial)", SpherifyWarning, stacklevel=4)
+            found.extend(meshes)
         elif path.suffix.lower() in LIST_SUFFIXES and path.is_file():
             lines = path.read_text(encoding="utf-8").splitlines()
             listed = [path.parent / line.strip() for line in lines
@@ -319,6 +326,11 @@ def batch(paths: Union[PathLike, Iterable[PathLike]], out_dir: PathLike, executo
     KeyboardInterrupt
         After Ctrl-C, once the workers are stopped; the journal holds every
         mesh that finished, and a rerun resumes.
+
+    Warns
+    -----
+    SpherifyWarning
+        A folder among ``paths`` holds no mesh file.
     """
     if isinstance(paths, (str, os.PathLike)):
         paths = [paths]

@@ -352,11 +352,18 @@ def _cmd_map(args: argparse.Namespace) -> int:
 def _cmd_batch(args: argparse.Namespace) -> int:
     from ._batch import batch
     options = _method_options(args, defaults=False)
+
+    def show(message: Any, *_: Any, **__: Any) -> None:  # (a folder without meshes, ...)
+        print(f"spherify: warning: {message}", file=sys.stderr)
+
     try:
-        result = batch(args.inputs, args.output, method=args.method or "progressive",
-                       workers=args.workers,
-                       timeout=args.timeout, scheduler=args.scheduler,
-                       progress=args.progress or sys.stderr.isatty(), **options)
+        with warnings.catch_warnings():
+            warnings.simplefilter("always", SpherifyWarning)  # shown, never raised
+            warnings.showwarning = show
+            result = batch(args.inputs, args.output, method=args.method or "progressive",
+                           workers=args.workers, timeout=args.timeout,
+                           scheduler=args.scheduler,
+                           progress=args.progress or sys.stderr.isatty(), **options)
     except KeyboardInterrupt:
         print(f"interrupted: {args.output}/journal.jsonl holds every mesh that finished; "
               "run the same command again to resume", file=sys.stderr)
@@ -369,6 +376,9 @@ def _cmd_batch(args: argparse.Namespace) -> int:
             print(f"failed: {row['input']}: {row['error_type']}: {row['error']}")
         elif not row.get("certified"):
             print(f"not certified: {row['input']}")
+    if c["meshes"] == 0:
+        print("spherify: error: no mesh to map in the inputs given", file=sys.stderr)
+        return 1
     return 0 if result.all_certified else 1
 
 
