@@ -3,9 +3,12 @@ surfaces and GIfTI (through nibabel), and meshes from trimesh-like objects."""
 
 from __future__ import annotations
 
+import io
+import struct
 import sys
 import types
 from pathlib import Path
+from typing import Tuple
 
 import numpy as np
 import pytest
@@ -79,6 +82,59 @@ def test_bad_npz_files_name_the_file(tmp_path: Path) -> None:
         sp.load(tmp_path / "V.npy")
     with pytest.raises(FileNotFoundError):
         sp.load(tmp_path / "missing.npz")
+
+
+def damage_zip(data: bytes, local: Tuple[int, int], central: Tuple[int, int]) -> bytes:
+    """``data`` (a zip archive) with the 16-bit field at byte ``local[0]`` of
+    every local file header set to ``local[1]``, and likewise ``central`` in
+    every central directory entry."""
+    out = bytearray(data)
+    for signature, (offset, value) in ((b"PK\x03\x04", local), (b"PK\x01\x02", central)):
+        at = out.find(signature)
+        while at >= 0:
+            struct.pack_into("<H", out, at + offset, value)
+            at = out.find(signature, at + 4)
+    return bytes(out)
+
+
+#: Header fields a damaged .npz can hold, and what zipfile then raised
+#: before the readers caught it (found by mutating files, 2026-12-02).
+DAMAGED_ZIPS = {
+    "version": ((4, 0x70), (6, 0x70)),  # NotImplementedError: zip file version 11.2
+    "method": ((8, 99), (10, 99)),  # NotImplementedError: compression method
+    "bzip2": ((8, 12), (10, 12)),  # OSError without errno: was a FileError
+    "encrypted": ((6, 1), (8, 1)),  # RuntimeError: password required
+}
+
+
+@pytest.mark.parametrize("damage", sorted(DAMAGED_ZIPS))
+def test_a_damaged_zip_header_is_a_format_error_naming_the_file(tmp_path: Path,
+                                                               damage: str) -> None:
+    mesh = blob()
+    good, bad = tmp_path / "good.npz", tmp_path / "bad.npz"
+    sp.save(mesh, good)
+    bad.write_bytes(damage_zip(good.read_bytes(), *DAMAGED_ZIPS[damage]))
+    with pytest.raises(sp.FormatError) as info:
+        sp.load(bad)
+    assert info.value.path == str(bad) and "not a readable .npz archive" in str(info.value)
+    good_map, bad_map = tmp_path / "good.spheremap.npz", tmp_path / "bad.spheremap.npz"
+    sp.embed(mesh).save(good_map)
+    bad_map.write_bytes(damage_zip(good_map.read_bytes(), *DAMAGED_ZIPS[damage]))
+    with pytest.raises(sp.FormatError) as info:
+        sp.load_map(bad_map)
+    assert info.value.path == str(bad_map) and "unreadable sphere map" in str(info.value)
+
+
+def test_an_npy_array_with_a_zip_end_record_is_not_an_npz(tmp_path: Path) -> None:
+    # zipfile.is_zipfile reads the end of a file, np.load its start: this
+    # passed the one and came back from the other as an array (TypeError).
+    buffer = io.BytesIO()
+    np.save(buffer, np.zeros((3, 3)))
+    data = buffer.getvalue() + b"PK\x05\x06" + bytes(18)
+    for name, read in (("a.npz", sp.load), ("a.spheremap.npz", sp.load_map)):
+        (tmp_path / name).write_bytes(data)
+        with pytest.raises(sp.FormatError, match="zip"):
+            read(tmp_path / name)
 
 
 @pytest.mark.parametrize("name", ["lh.pial", "rh.white", "lh.sphere", "lh.sphere.reg", "x.inflated"])

@@ -3,7 +3,11 @@ images (Praun and Hoppe 2003; 8.2's compression)."""
 
 from __future__ import annotations
 
+import struct
+import tracemalloc
+import zlib
 from pathlib import Path
+from typing import Tuple
 
 import numpy as np
 import pytest
@@ -127,3 +131,39 @@ def test_bad_images_and_files_are_refused(tmp_path: Path) -> None:
     bad.write_bytes(bytes(data))
     with pytest.raises(sp.FormatError, match="CRC"):
         sp.load_geometry_image(bad)
+
+
+def png(*chunks: Tuple[bytes, bytes]) -> bytes:
+    """A PNG of the given (kind, body) chunks, each with its right CRC."""
+    return b"\x89PNG\r\n\x1a\n" + b"".join(
+        struct.pack(">I", len(body)) + kind + body
+        + struct.pack(">I", zlib.crc32(kind + body) & 0xFFFFFFFF) for kind, body in chunks)
+
+
+def test_crafted_geometry_images_with_right_crcs_are_refused(tmp_path: Path) -> None:
+    # Chunks whose CRCs hold but whose content does not: each once gave
+    # something other than a FormatError (struct.error; a 300 MB inflation
+    # before the size check; an image of NaN).
+    header = (b"IHDR", struct.pack(">IIBBBBB", 5, 5, 16, 2, 0, 0, 0))
+    box = (b"tEXt", b"spherify-bbox\x000 0 0 1 1 1")
+    rows = (b"IDAT", zlib.compress(b"\x00" * (5 * 31)))
+    end = (b"IEND", b"")
+    bad = tmp_path / "bad.png"
+    bad.write_bytes(png(*[header, box, rows, end]))
+    assert sp.load_geometry_image(bad).shape == (5, 5, 3)  # the crafted good one reads
+    cases = {
+        "an IHDR chunk of 12 bytes": [(b"IHDR", bytes(12)), box, rows, end],
+        # 30 MB of zeros in 30 kB: inflated no further than the 155 bytes
+        # the header promises, plus one
+        "does not match the header": [header, box, (b"IDAT", zlib.compress(bytes(30_000_000))),
+                                      end],
+        "not finite": [header, (b"tEXt", b"spherify-bbox\x00nan 0 0 inf 1 1"), rows, end],
+    }
+    for match, chunks in cases.items():
+        bad.write_bytes(png(*chunks))
+        tracemalloc.start()
+        with pytest.raises(sp.FormatError, match=match):
+            sp.load_geometry_image(bad)
+        peak = tracemalloc.get_traced_memory()[1]
+        tracemalloc.stop()
+        assert peak < 5_000_000, (match, peak)

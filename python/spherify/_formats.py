@@ -16,8 +16,10 @@ Every malformed file raises :class:`FormatError` naming the file.
 from __future__ import annotations
 
 import importlib
+import lzma
 import os
 import zipfile
+import zlib
 from pathlib import Path
 from typing import Any, Callable, Dict, List, Optional, Tuple
 
@@ -121,22 +123,50 @@ def _pick(arrays: Any, path: Path, names: Tuple[str, ...]) -> np.ndarray:
                       f"(it has {', '.join(sorted(arrays.files)) or 'none'})", str(path))
 
 
+def is_zip_archive(path: Path) -> bool:
+    """Whether ``path`` is a zip archive as ``np.load`` and ``zipfile`` both
+    read one: ``np.load`` goes by the first bytes, ``zipfile.is_zipfile`` by
+    the end of the file, and an ``.npy`` array with a zip's end record
+    appended passed the one and came back as an array from the other."""
+    with open(path, "rb") as handle:
+        start = handle.read(4)
+    return start in (b"PK\x03\x04", b"PK\x05\x06") and zipfile.is_zipfile(path)
+
+
+def damaged_archive(err: BaseException) -> bool:
+    """Whether ``err``, raised while numpy read a zip archive, says the
+    archive is damaged (a :class:`FormatError` for the reader to raise, naming
+    the file) rather than that something else went wrong. Besides the
+    ``ValueError`` / ``BadZipFile`` family, ``zipfile`` raises
+    ``NotImplementedError`` for an unknown zip version or compression method,
+    ``RuntimeError`` for an encrypted member, and the decompressors their
+    own errors: ``zlib.error``, ``lzma.LZMAError``, and for bzip2 an
+    ``OSError`` without an errno (one with an errno is the disk's, a
+    ``FileError``). Found by mutating ``.npz`` files (2026-12-02)."""
+    if isinstance(err, (ValueError, EOFError, KeyError, zipfile.BadZipFile,
+                        NotImplementedError, zlib.error, lzma.LZMAError)):
+        return True
+    if isinstance(err, RuntimeError):
+        return "encrypted" in str(err)
+    return isinstance(err, OSError) and err.errno is None
+
+
 def read_npz(path: Path) -> Loaded:
     """``V``/``F`` (or ``vertices``/``faces``) from an ``.npz``; ``sphere`` (n, 3)
     and ``uv`` (n, 2), when present, become attributes. Never unpickles."""
     require_regular_file(path)
-    with open(path, "rb"):
-        pass  # FileNotFoundError / PermissionError before is_zipfile's silent False
-    if not zipfile.is_zipfile(path):
+    if not is_zip_archive(path):  # (FileNotFoundError, PermissionError, ... from open)
         raise FormatError(f"{path}: not an .npz (zip) archive", str(path))
     try:
-        with np.load(path, allow_pickle=False) as arrays:
+        # np.load gets an open file: given a path, it leaks its handle when
+        # the zip's central directory is refused (an unknown zip version).
+        with open(path, "rb") as handle, np.load(handle, allow_pickle=False) as arrays:
             vertices = _pick(arrays, path, ("V", "vertices"))
             faces = _pick(arrays, path, ("F", "faces"))
             attributes = {name: np.asarray(arrays[name], dtype=np.float64)
                           for name in ("sphere", "uv") if name in arrays.files}
-    except (ValueError, EOFError, zipfile.BadZipFile, KeyError) as err:
-        if isinstance(err, FormatError):
+    except Exception as err:
+        if isinstance(err, FormatError) or not damaged_archive(err):
             raise
         raise FormatError(f"{path}: not a readable .npz archive: {err}", str(path)) from None
     return vertices, faces, [], attributes

@@ -201,6 +201,8 @@ def load_geometry_image(path: PathLike) -> np.ndarray:
         if zlib.crc32(kind + body) & 0xFFFFFFFF != crc:
             raise bad(f"chunk {kind!r} fails its CRC", pos)
         if kind == b"IHDR":
+            if length != 13:
+                raise bad(f"an IHDR chunk of {length} bytes (PNG's has 13)", pos)
             header = struct.unpack(">IIBBBBB", body)
         elif kind == b"tEXt" and body.startswith(b"spherify-bbox\x00"):
             bbox = body[len(b"spherify-bbox\x00"):]
@@ -214,14 +216,18 @@ def load_geometry_image(path: PathLike) -> np.ndarray:
     if bbox is None:
         raise bad("no spherify-bbox text chunk: not written by save_geometry_image", 8)
     n = header[0]
+    stride = 1 + 6 * n
     try:
         lo_hi = np.array([float(x) for x in bbox.decode().split()])
-        raw = zlib.decompress(idat)
+        # At most one byte more than the header's image: a small file that
+        # inflates to gigabytes is refused after n * stride + 1 bytes.
+        raw = zlib.decompressobj().decompress(idat, n * stride + 1)
     except (ValueError, UnicodeDecodeError, zlib.error) as err:
         raise bad(f"unreadable bounding box or image data: {err}", 8) from None
-    stride = 1 + 6 * n
     if lo_hi.shape != (6,) or len(raw) != n * stride:
         raise bad("image data does not match the header", 8)
+    if not np.isfinite(lo_hi).all():
+        raise bad(f"the spherify-bbox chunk holds a value that is not finite: {bbox!r}", 8)
     rows = np.frombuffer(raw, dtype=np.uint8).reshape(n, stride)
     if np.any(rows[:, 0] != 0):
         raise bad("only PNG filter 0 (none) is supported", 8)

@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import json
 import os
-import zipfile
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Dict, List, Tuple, Union
 
@@ -30,6 +29,7 @@ from . import _core
 from ._atomic import write_atomically
 from ._errors import FormatError, MeshError
 from ._files import file_errors, require_regular_file
+from ._formats import damaged_archive, is_zip_archive
 
 if TYPE_CHECKING:
     from ._spheremap import SphereMap
@@ -192,14 +192,13 @@ def load_map(path: PathLike) -> "SphereMap":
     """
     file = Path(os.fspath(path))
     require_regular_file(file)
-    with open(file, "rb"):
-        pass  # FileNotFoundError / PermissionError first
-    if not zipfile.is_zipfile(file):
+    if not is_zip_archive(file):  # (FileNotFoundError, PermissionError, ... from open)
         raise FormatError(f"{file}: not a sphere map (.spheremap.npz is a zip archive)", str(file))
     try:
-        with np.load(file, allow_pickle=False) as arrays:
+        # (An open file, not the path: see _formats.read_npz.)
+        with open(file, "rb") as handle, np.load(handle, allow_pickle=False) as arrays:
             return rebuild(arrays, str(file))
-    except (ValueError, zipfile.BadZipFile, EOFError) as err:
-        if isinstance(err, FormatError):
+    except Exception as err:
+        if isinstance(err, FormatError) or not damaged_archive(err):
             raise
         raise FormatError(f"{file}: unreadable sphere map ({err})", str(file)) from None
