@@ -527,6 +527,19 @@ def test_a_folder_without_meshes_is_named_and_an_empty_batch_is_not_a_success(
     assert "spherify: warning: batch input folder" in err and "no mesh to map" in err
 
 
+def test_a_bad_list_of_paths_names_the_list_and_the_line(tmp_path: Path) -> None:
+    make_inputs(tmp_path / "in", 1)
+    listing = tmp_path / "list.txt"
+    listing.write_text("# meshes\nin/mesh000.ply\n\nin/mesh001.ply\n")
+    with pytest.raises(sp.MeshError, match=r"in/mesh001.ply, listed in .*list.txt line 4, "
+                                           "does not exist"):
+        sp.batch(listing, tmp_path / "out")
+    listing.write_bytes(b"in/mesh000.ply\n\xff\xfe\n")  # a UnicodeDecodeError traceback before
+    with pytest.raises(sp.FormatError, match="must be UTF-8 text; byte 15") as info:
+        sp.batch(listing, tmp_path / "out")
+    assert info.value.path == str(listing) and info.value.offset == 15
+
+
 def test_folders_skip_outputs_and_temporaries(tmp_path: Path) -> None:
     make_inputs(tmp_path / "in", 2)
     sp.batch(tmp_path / "in", tmp_path / "in" / "out", workers=1)

@@ -57,7 +57,7 @@ from ._files import file_errors, special_kind
 from ._batch_pool import LocalPool, executor_rows, usable_cores
 from ._batch_task import COLUMNS, QUALITY, Task, file_matches, run_task
 from ._embed import THETA_PHI_OPTIONS, methods
-from ._errors import FileError, MeshError, SpherifyWarning
+from ._errors import FileError, FormatError, MeshError, SpherifyWarning
 
 PathLike = Union[str, "os.PathLike[str]"]
 
@@ -97,10 +97,7 @@ def expand_inputs(inputs: Iterable[PathLike]) -> List[Path]:
                               "surfaces such as lh.pial)", SpherifyWarning, stacklevel=4)
             found.extend(meshes)
         elif path.suffix.lower() in LIST_SUFFIXES and path.is_file():
-            lines = path.read_text(encoding="utf-8").splitlines()
-            listed = [path.parent / line.strip() for line in lines
-                      if line.strip() and not line.strip().startswith("#")]
-            found.extend(expand_inputs(listed))
+            found.extend(expand_inputs(_read_list(path)))
         elif path.is_file():
             found.append(path)
         elif path.exists():
@@ -113,6 +110,28 @@ def expand_inputs(inputs: Iterable[PathLike]) -> List[Path]:
     for p in found:
         unique.setdefault(p.resolve(), None)
     return list(unique)
+
+
+def _read_list(path: Path) -> List[Path]:
+    """The paths a ``.txt`` / ``.lst`` file lists (module doc of
+    :func:`expand_inputs`); a listed path that does not exist is named with
+    the list's line."""
+    try:
+        text = path.read_text(encoding="utf-8")
+    except UnicodeDecodeError as err:
+        raise FormatError(f"{path}: a list of paths must be UTF-8 text; byte {err.start} is not",
+                          str(path), None, err.start) from None
+    listed = []
+    for number, line in enumerate(text.splitlines(), 1):
+        entry = line.strip()
+        if not entry or entry.startswith("#"):
+            continue
+        item = path.parent / entry
+        if not item.exists():
+            raise MeshError(f"batch input {item}, listed in {path} line {number}, does not exist "
+                            "(a relative path is read from the list's folder)")
+        listed.append(item)
+    return listed
 
 
 def content_hash(path: Path) -> str:
