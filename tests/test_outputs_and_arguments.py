@@ -75,6 +75,23 @@ def test_saving_keeps_the_mode_and_writes_through_a_symlink(tmp_path: Path, blob
     assert stat.S_IMODE(npz_real.stat().st_mode) == 0o640
 
 
+@pytest.mark.parametrize("stem", ["a" * 247, "é" * 123])
+def test_a_long_legal_name_is_written_by_every_writer(tmp_path: Path, blob: sp.Mesh,
+                                                       stem: str) -> None:
+    # 251- and 250-byte names (255 is the limit): their temporaries, the name
+    # with a dot and ".tmp-PID-N", were not legal ("File name too long").
+    m = sp.embed(blob)
+    writes = {".ply": lambda p: sp.save(blob, p), ".npz": lambda p: sp.save(blob, p),
+              ".map": m.save, ".png": lambda p: sp.save_geometry_image(np.zeros((3, 3, 3)), p)}
+    for suffix, write in writes.items():
+        path = tmp_path / (stem[:len(stem) - len(suffix) + 4] + suffix)
+        assert len(os.fsencode(path.name)) <= 255
+        write(path)
+        assert path.is_file(), suffix
+    assert sp.load(tmp_path / (stem + ".ply")).n_vertices == blob.n_vertices
+    assert sorted(p.suffix for p in tmp_path.iterdir()) == [".map", ".npz", ".ply", ".png"]
+
+
 # Item 13: STL cannot hold every double.
 
 @pytest.mark.parametrize("scale", [1e300, 1e-320])

@@ -38,10 +38,19 @@ _COUNTER = itertools.count()
 TEMP_MARK = ".tmp-"
 
 
+#: Bytes of the target's name its temporary's name keeps (as the core's
+#: writer, ``io/atomic.rs``): with the dot and ``.tmp-PID-N`` it stays within
+#: the 255 bytes a name may have, so a legal target name is never refused for
+#: its temporary's.
+TEMP_NAME_KEPT = 200
+
+
 def temporary_path(path: Path) -> Path:
     """``dir/.name.tmp-PID-N`` beside ``path``: same file system, so the final
-    rename is atomic; hidden, so a folder scan does not take it for an input."""
-    return path.with_name(f".{path.name}{TEMP_MARK}{os.getpid()}-{next(_COUNTER)}")
+    rename is atomic; hidden, so a folder scan does not take it for an input.
+    ``name`` is cut to :data:`TEMP_NAME_KEPT` bytes (PID-N keeps it unique)."""
+    name = os.fsdecode(os.fsencode(path.name)[:TEMP_NAME_KEPT])
+    return path.with_name(f".{name}{TEMP_MARK}{os.getpid()}-{next(_COUNTER)}")
 
 
 def is_temporary(path: Path) -> bool:

@@ -232,8 +232,14 @@ fn sync_folder(target: &Path) {
     let _ = target;
 }
 
+/// Bytes of the target's name that its temporary's name keeps. With the dot
+/// and `.tmp-PID-N` (at most 32 bytes) that stays within the 255 bytes most
+/// file systems allow in a name, so a target whose name is legal is never
+/// refused for its temporary's ("File name too long" for a 245-byte name).
+const TEMP_NAME_KEPT: usize = 200;
+
 /// `dir/.name.tmp-PID-N` beside the target, so the final rename stays within one
-/// file system.
+/// file system; `name` cut to [`TEMP_NAME_KEPT`] bytes (PID-N keeps it unique).
 fn temp_path(path: &Path) -> Result<PathBuf, MeshError> {
     let name = path.file_name().ok_or_else(|| {
         MeshError::io(
@@ -242,7 +248,12 @@ fn temp_path(path: &Path) -> Result<PathBuf, MeshError> {
         )
     })?;
     let n = COUNTER.fetch_add(1, Ordering::Relaxed);
-    let temp_name = format!(".{}.tmp-{}-{}", name.to_string_lossy(), std::process::id(), n);
+    let name = name.to_string_lossy();
+    let mut kept = name.len().min(TEMP_NAME_KEPT);
+    while !name.is_char_boundary(kept) {
+        kept -= 1;
+    }
+    let temp_name = format!(".{}.tmp-{}-{}", &name[..kept], std::process::id(), n);
     Ok(path.with_file_name(temp_name))
 }
 
@@ -314,6 +325,23 @@ mod tests {
         write_file(&target, |w| w.write_all(b"new")).unwrap();
         assert_eq!(std::fs::read(&target).unwrap(), b"new");
         assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 1);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn a_long_legal_name_is_written() {
+        // 251 and 254 bytes: legal names whose temporaries, with the full
+        // name and `.tmp-PID-N`, were not ("File name too long").
+        let dir = scratch_dir("long");
+        for name in ["a".repeat(247) + ".ply", "é".repeat(125) + ".ply"] {
+            let target = dir.join(&name);
+            write_file(&target, |w| w.write_all(b"x")).unwrap();
+            assert_eq!(std::fs::read(&target).unwrap(), b"x");
+            let temp = temp_path(&target).unwrap();
+            let temp_name = temp.file_name().unwrap().to_str().unwrap();
+            assert!(temp_name.len() <= 255 && temporary_owner(temp_name).is_some());
+        }
+        assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 2);
         std::fs::remove_dir_all(&dir).unwrap();
     }
 
