@@ -5,6 +5,8 @@
 //! coordinates to each vertex line; spherify reads the first three numbers and
 //! ignores the rest, as it ignores colours after a face's indices. Dimension
 //! variants (`4OFF`, `nOFF`) and binary OFF are refused with a clear message.
+//! A first line that joins the keyword and the vertex count (`OFF490 518 0`,
+//! as in the ModelNet data sets) is read as `OFF 490 518 0`.
 
 use super::text::{self, next_token, take_f64, Lines};
 use super::{finish, line_error, LoadedMesh, Triangles, VertexAttributes};
@@ -24,8 +26,21 @@ pub(crate) fn read(bytes: &[u8], name: &str) -> Result<LoadedMesh, MeshError> {
     let Some((number, mut rest)) = next_content(&mut lines) else {
         return Err(line_error(name, 1, "empty file: expected the OFF header"));
     };
-    let keyword = next_token(&mut rest).unwrap_or_default();
+    let line = rest;
+    let token = next_token(&mut rest).unwrap_or_default();
+    // ModelNet's OFF files join the keyword and the vertex count on their
+    // first line ("OFF490 518 0"): the digits start the counts.
+    let joined = token
+        .windows(3)
+        .position(|w| w == b"OFF")
+        .map(|at| at + 3)
+        .filter(|&end| token.get(end).is_some_and(u8::is_ascii_digit));
+    let keyword = joined.map_or(token, |end| &token[..end]);
     check_keyword(keyword).map_err(|msg| line_error(name, number, msg))?;
+    if let Some(end) = joined {
+        // (`token` is a slice of `line`: its offset there, then past the keyword.)
+        rest = &line[token.as_ptr() as usize - line.as_ptr() as usize + end..];
+    }
     let mut peek = rest;
     if next_token(&mut peek).is_some_and(|t| t.eq_ignore_ascii_case(b"BINARY")) {
         return Err(line_error(
@@ -225,6 +240,14 @@ mod tests {
         let stnoff = "STCNOFF\n3 1\n0 0 0 0 0 1 1 1 1 1 0.5 0.5\n1 0 0 0 0 1 1 1 1 1 0 0\n\
                       0 1 0 0 0 1 1 1 1 1 1 1\n3 0 1 2\n";
         assert_eq!(parse(stnoff).unwrap().mesh.positions()[1], [1.0, 0.0, 0.0]);
+        // ModelNet's joined first line; the keyword still has to be OFF's.
+        let joined = "OFF3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+        assert_eq!(parse(joined).unwrap().mesh.faces(), &[[0, 1, 2]]);
+        assert_eq!(parse(&joined.replacen("OFF3", "COFF3", 1)).unwrap().mesh.n_faces(), 1);
+        for bad in ["XOFF3 1 0", "OFF3x 1 0", "OFF3"] {
+            let text = joined.replacen("OFF3 1 0", bad, 1);
+            assert!(parse(&text).is_err(), "{bad}");
+        }
     }
 
     #[test]
