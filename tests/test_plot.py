@@ -55,6 +55,11 @@ def test_mesh_and_rectangle_pictures(blob: sp.ThetaPhiMap, tmp_path: Path) -> No
     import matplotlib.pyplot as plt
 
     plt.close(fig)
+    # limits= fixes the colour scale (a signed quantity centred on 0).
+    fig = sp.plot.mesh(blob.mesh, values=q["area_log"], cmap="coolwarm", limits=(-2, 2))
+    colorbar = fig.axes[-1]
+    assert colorbar.get_ylim() == (-2.0, 2.0)
+    plt.close(fig)
 
 
 def test_bad_arguments(blob: sp.ThetaPhiMap, default_map: sp.SphereMap) -> None:
@@ -62,6 +67,9 @@ def test_bad_arguments(blob: sp.ThetaPhiMap, default_map: sp.SphereMap) -> None:
         sp.plot.sphere(blob, color="rainbow")
     with pytest.raises(sp.MeshError, match="one entry per face"):
         sp.plot.mesh(blob.mesh, values=[1.0, 2.0])
+    for limits in [(1.0, 1.0), (2.0, 1.0), (0.0, np.inf), (0.0, 1.0, 2.0)]:
+        with pytest.raises(sp.MeshError, match="low < high"):
+            sp.plot.mesh(blob.mesh, values=np.zeros(blob.mesh.n_faces), limits=limits)
     radial = sp.embed(sp.datasets.icosphere(1), "radial")
     with pytest.raises(sp.MeshError, match="theta-phi"):
         sp.plot.rectangle(radial)

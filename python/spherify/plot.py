@@ -86,12 +86,13 @@ def _finish(fig: Any, path: Optional[Union[str, Path]]) -> Any:
 
 
 def mesh(surface: MeshLike, *, values: Any = None, colors: Any = None, cmap: str = "viridis",
-         title: Optional[str] = None, view: Tuple[float, float] = (20, -60),
-         edges: bool = False, ax: Any = None, path: Optional[Union[str, Path]] = None) -> Any:
+         limits: Optional[Tuple[float, float]] = None, title: Optional[str] = None,
+         view: Tuple[float, float] = (20, -60), edges: bool = False, ax: Any = None,
+         path: Optional[Union[str, Path]] = None) -> Any:
     """A shaded picture of a mesh, optionally coloured by per-face ``values``
-    ((m,) float, through ``cmap``; NaN drawn at the low end) or per-face
-    ``colors`` ((m, 3) RGB in [0, 1]). ``ax``: a 3D axis to draw into
-    (default: a new figure).
+    ((m,) float, through ``cmap`` over ``limits``, default their range; NaN
+    drawn at the low end) or per-face ``colors`` ((m, 3) RGB in [0, 1]).
+    ``ax``: a 3D axis to draw into (default: a new figure).
 
     Returns
     -------
@@ -109,11 +110,16 @@ def mesh(surface: MeshLike, *, values: Any = None, colors: Any = None, cmap: str
         if vals.shape != (surface.n_faces,):
             raise MeshError(f"values must have one entry per face ({surface.n_faces}), "
                             f"got shape {vals.shape}")
+    if limits is not None:
+        bounds = np.asarray(limits, dtype=np.float64)
+        if bounds.shape != (2,) or not np.isfinite(bounds).all() or not bounds[0] < bounds[1]:
+            raise MeshError(f"limits must be (low, high) with low < high, got {limits!r}")
+        limits = (float(bounds[0]), float(bounds[1]))
     if colors is not None:
         rgb = np.asarray(colors, dtype=np.float64)
         if rgb.ndim != 2 or rgb.shape[0] != surface.n_faces or rgb.shape[1] not in (3, 4):
             raise MeshError(f"colors must be (m, 3) RGB per face, got shape {rgb.shape}")
-    mappable = _draw(ax, surface.vertices, surface.faces, vals, cmap, None, view, edges, rgb)
+    mappable = _draw(ax, surface.vertices, surface.faces, vals, cmap, limits, view, edges, rgb)
     if mappable is not None:
         fig.colorbar(mappable, ax=ax, shrink=0.6)
     ax.set_title(title if title is not None else repr(surface), fontsize=9)
