@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+from typing import Tuple
 
 import numpy as np
 import pytest
@@ -270,3 +271,42 @@ def test_notes_from_loading_reach_the_report(tmp_path) -> None:
     assert r.valid
     assert set(mesh.notes) <= set(r.notes)
     assert dataclasses.replace(r, notes=[]) == dataclasses.replace(sp.check((mesh.vertices, mesh.faces)), notes=[])
+
+
+def split_along_a_seam(V: np.ndarray, F: np.ndarray, side: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
+    """What an exporter does at a texture seam: the faces in ``side`` get
+    their own copies (appended) of the vertices they share with the others."""
+    shared = np.intersect1d(F[side].ravel(), F[~side].ravel())
+    copy_of = {int(v): len(V) + k for k, v in enumerate(shared)}
+    F2 = F.copy()
+    for f in np.flatnonzero(side):
+        F2[f] = [copy_of.get(int(v), int(v)) for v in F[f]]
+    return np.vstack([V, V[shared]]), F2
+
+
+@given(mg.surfaces(max_vertices=120), st.integers(0, 2**32 - 1))
+def test_weld_closes_what_a_seam_split_opened(s: mg.Surface, seed: int) -> None:
+    side = np.random.default_rng(seed).random(len(s.F)) < 0.5
+    V2, F2 = split_along_a_seam(s.V, s.F, side)
+    split = sp.Mesh(V2, F2)
+    split.attributes["uv"] = np.arange(2 * len(V2), dtype=np.float64).reshape(-1, 2)
+    report = sp.check(split)
+    if len(V2) > len(s.V):  # the two sides shared a vertex: the report names the seam
+        assert any("sit exactly on another boundary vertex" in p and "sp.weld" in p
+                   for p in report.problems), report.problems
+    welded = sp.weld(split)
+    # The copies go back onto the vertices they were made from: the surface
+    # comes back exactly, attributes from the kept (first) vertex of each.
+    assert np.array_equal(welded.vertices, s.V) and np.array_equal(welded.faces, s.F)
+    assert np.array_equal(welded.attributes["uv"], split.attributes["uv"][:len(s.V)])
+    assert sp.check(welded).is_sphere_topology
+    merged = len(V2) - len(s.V)
+    assert (f"welded {merged} vertices" in " ".join(welded.notes)) == (merged > 0)
+
+
+def test_weld_merges_signed_zeros_but_not_near_misses() -> None:
+    V = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [-0.0, 0.0, -0.0],
+                  [np.nextafter(1.0, 2.0), 0.0, 0.0], [0.0, 1.0, 0.0]])
+    welded = sp.weld(sp.Mesh(V, [[0, 1, 4], [2, 3, 4]]))
+    assert welded.n_vertices == 4
+    assert welded.faces.tolist() == [[0, 1, 3], [0, 2, 3]]

@@ -256,3 +256,18 @@ def test_a_reader_that_leaves_does_not_stop_the_job(tmp_path: Path, buffered: bo
     assert done.returncode == 0 and done.stderr == ""
     assert sp.load(out).n_vertices == sp.datasets.make("bumpy_blob", 400).n_vertices
     assert out.with_suffix(".npz").is_file()
+
+
+def test_weld_closes_a_seam_the_file_split(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    from test_check import split_along_a_seam
+    mesh = sp.datasets.make("bumpy_blob", 400)
+    side = mesh.vertices[mesh.faces].mean(1)[:, 0] > 0
+    path = tmp_path / "seam.obj"
+    sp.save(sp.Mesh(*split_along_a_seam(mesh.vertices, mesh.faces, side)), path)
+    assert cli.main(["check", str(path)]) == 1
+    assert "welding (sp.weld, --weld) closes" in capsys.readouterr().out
+    assert cli.main(["check", "--weld", str(path)]) == 0
+    out = capsys.readouterr().out
+    assert "valid genus-0 mesh" in out and "note: welded" in out
+    assert cli.main(["map", "--weld", str(path), "-o", str(tmp_path / "s.ply")]) == 0
+    assert sp.load(tmp_path / "s.ply").n_vertices == mesh.n_vertices

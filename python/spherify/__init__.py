@@ -9,7 +9,7 @@ from . import datasets, harmonics, plot, texture
 from ._core import __version__
 from ._errors import (ConvergenceError, FileError, FormatError, MapError, MeshError,
                       SpherifyError, SpherifyWarning, TopologyError)
-from ._mesh import Mesh, check, check_sphere, dijkstra, load, orient, save, shortest_path
+from ._mesh import Mesh, check, check_sphere, dijkstra, load, orient, save, shortest_path, weld
 from ._report import MeshReport, SphereReport
 from ._spheremap import SphereMap, ThetaPhiMap
 from ._tutte import TutteInfo, boundary_loop, tutte
@@ -68,4 +68,5 @@ __all__ = [
     "surface_distance",
     "texture",
     "tutte",
+    "weld",
 ]

@@ -348,6 +348,37 @@ def orient(mesh: MeshLike, *,
     return (oriented, info) if return_info else oriented
 
 
+def weld(mesh: MeshLike) -> Mesh:
+    """Merge vertices that sit at exactly the same position.
+
+    Exporters often split a closed surface along its texture seams, giving
+    each side its own copy of the seam's vertices; the file then describes an
+    open surface (``sp.check`` says so, and how many boundary vertices sit on
+    another), which no spherical map accepts. Welding closes it. Positions
+    must be bitwise equal (``-0.0`` and ``0.0`` are one), as the STL reader
+    welds every file; nothing within a tolerance is merged. O(n log n).
+
+    Returns
+    -------
+    Mesh
+        Each group of copies becomes its first vertex, in the input's order;
+        faces renumbered and otherwise unchanged (a face with two corners at
+        one position repeats a vertex and is reported as degenerate). Per-vertex
+        ``attributes`` are taken from the kept vertex of each group; a note
+        says how many vertices were merged.
+    """
+    mesh = as_mesh(mesh)
+    core, kept = _core.weld(mesh._core)
+    merged = mesh.n_vertices - len(kept)
+    notes = list(mesh.notes)
+    if merged:
+        notes.append(f"welded {merged} vertices onto others at exactly the same position "
+                     f"({mesh.n_vertices} -> {len(kept)} vertices)")
+    attributes = {name: np.ascontiguousarray(values[kept])
+                  for name, values in mesh.attributes.items()}
+    return Mesh._from_core(core, notes, attributes)
+
+
 def dijkstra(mesh: MeshLike, source: int, *, weights: str = "length") -> Tuple[np.ndarray, np.ndarray]:
     """Shortest-path distances from ``source`` along mesh edges (thesis App. A).
 

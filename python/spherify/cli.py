@@ -14,7 +14,9 @@
                                    --method progressive. A progress bar shows on a
                                    terminal (or with --progress) for progressive and
                                    for --poles graph
-    spherify check MESH            load, validate, orient and print the report
+    spherify check MESH [--weld]   load, validate, orient and print the report; --weld
+                                   (also for map and orient) first merges vertices at
+                                   exactly the same position (a seam a file splits)
     spherify orient MESH -o OUT    write a consistently, outward-oriented copy
     spherify harmonics ...         the applications of thesis ch. 8: see
                                    ``spherify <command> --help`` and _cli_apps.py;
@@ -47,7 +49,7 @@ import numpy as np
 from . import _args, _cli_apps, _core, _files, _formats, datasets
 from ._embed import embed, methods
 from ._errors import MeshError, SpherifyError, SpherifyWarning, TopologyError
-from ._mesh import Mesh, check, check_sphere, load, orient, save
+from ._mesh import Mesh, check, check_sphere, load, orient, save, weld
 from ._quality import quality
 from ._spheremap import ThetaPhiMap
 
@@ -146,7 +148,8 @@ def _load(args: argparse.Namespace) -> Mesh:
         return datasets.make(args.dataset, args.n_vertices)
     if not args.mesh:
         raise UsageError("give a mesh file or --dataset NAME")
-    return load(args.mesh)
+    mesh = load(args.mesh)
+    return weld(mesh) if getattr(args, "weld", False) else mesh
 
 
 def _sha256(path: Path) -> str:
@@ -415,6 +418,9 @@ def main(argv: Optional[List[str]] = None) -> int:
         p.add_argument("--dataset", choices=datasets.names(), help="use a generated shape instead")
         p.add_argument("--n-vertices", type=_n_vertices, default=5000,
                        help=f"size of the generated shape ({N_VERTICES[0]} to {N_VERTICES[1]:,})")
+        p.add_argument("--weld", action="store_true",
+                       help="first merge vertices at exactly the same position (a seam the "
+                            "exporter split; the report of such an open mesh suggests it)")
         if name in ("orient", "map"):
             p.add_argument("-o", "--output", required=True, help="output mesh file")
         if name == "map":

@@ -25,6 +25,7 @@ pub mod solids;
 pub mod validate;
 pub mod vec3;
 mod volume;
+pub mod weld;
 
 pub use error::{FormatError, Location, MeshError, TopologyError, TopologyProblem, UnknownName};
 pub use graph::Adjacency;

@@ -11,6 +11,7 @@ use crate::edge_table::{corner_endpoints, EdgeTable, NONE};
 use crate::mesh::Mesh;
 use crate::predicates::collinear3;
 use crate::volume::component_volumes;
+use crate::weld::coincident_vertices;
 
 mod report;
 
@@ -92,6 +93,21 @@ fn check_faces(
     if r.manifold && repeated_index == 0 && twice_genus >= 0 && twice_genus % 2 == 0 {
         r.genus = Some(twice_genus / 2);
     }
+    let seam_copies = if edges.boundary_corners.is_empty() {
+        0
+    } else {
+        let mut ends: Vec<u32> = edges
+            .boundary_corners
+            .iter()
+            .flat_map(|&c| {
+                let (a, b) = corner_endpoints(faces, c);
+                [a, b]
+            })
+            .collect();
+        ends.sort_unstable();
+        ends.dedup();
+        coincident_vertices(positions, &ends)
+    };
     r.signed_volume = volumes.total();
     r.outward = r.closed && r.consistently_oriented && volumes.normalized.iter().all(|&v| v > 0.0);
     r.is_sphere_topology = r.closed
@@ -100,7 +116,7 @@ fn check_faces(
         && r.euler_characteristic == 2
         && repeated_index == 0
         && r.unreferenced_vertices.is_empty();
-    r.describe_problems(repeated_index);
+    r.describe_problems(repeated_index, seam_copies);
     r
 }
 

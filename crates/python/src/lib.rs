@@ -43,6 +43,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(validate::check, m)?)?;
     m.add_function(wrap_pyfunction!(validate::check_raw, m)?)?;
     m.add_function(wrap_pyfunction!(validate::orient, m)?)?;
+    m.add_function(wrap_pyfunction!(validate::weld, m)?)?;
     m.add_function(wrap_pyfunction!(sphere::check_sphere, m)?)?;
     m.add_function(wrap_pyfunction!(tutte::boundary_loop, m)?)?;
     m.add_function(wrap_pyfunction!(tutte::tutte, m)?)?;

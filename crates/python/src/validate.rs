@@ -1,11 +1,11 @@
-//! `check`, `check_raw` and `orient`: reports become `spherify.MeshReport`.
+//! `check`, `check_raw`, `orient` and `weld`: reports become `spherify.MeshReport`.
 
 use std::sync::Arc;
 
-use numpy::PyReadonlyArrayDyn;
+use numpy::{IntoPyArray, PyArray1, PyReadonlyArrayDyn};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList, PyTuple};
-use spherify_mesh::{orient as orient_mod, validate, MeshReport};
+use spherify_mesh::{orient as orient_mod, validate, weld as weld_mod, MeshReport};
 
 use crate::convert::rows;
 use crate::errors::to_py;
@@ -51,6 +51,20 @@ pub fn orient<'py>(py: Python<'py>, mesh: &CoreMesh) -> PyResult<(CoreMesh, Boun
     dict.set_item("components", info.components)?;
     dict.set_item("components_turned_outward", info.components_turned_outward)?;
     Ok((CoreMesh { mesh: oriented.into() }, dict))
+}
+
+/// weld(mesh) -> (CoreMesh, kept): vertices at one position merged
+/// (`spherify_mesh::weld`); `kept[i]` is the input vertex of new vertex `i`.
+#[pyfunction]
+pub fn weld<'py>(
+    py: Python<'py>,
+    mesh: &CoreMesh,
+) -> PyResult<(CoreMesh, Bound<'py, PyArray1<i64>>)> {
+    let shared = Arc::clone(&mesh.mesh);
+    let size = shared.n_faces();
+    let welded = crate::progress::run_sized(py, size, move || weld_mod::weld(&shared))?;
+    let kept: Vec<i64> = welded.kept.iter().map(|&v| i64::from(v)).collect();
+    Ok((CoreMesh { mesh: welded.mesh.into() }, kept.into_pyarray(py)))
 }
 
 fn pairs<'py>(py: Python<'py>, items: &[[u32; 2]]) -> PyResult<Bound<'py, PyList>> {

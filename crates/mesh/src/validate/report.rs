@@ -102,8 +102,10 @@ impl MeshReport {
     }
 
     /// Fills `problems` from the findings; `repeated_index` is the number of
-    /// faces that repeat a vertex (the rest of the degenerate ones have zero area).
-    pub(super) fn describe_problems(&mut self, repeated_index: usize) {
+    /// faces that repeat a vertex (the rest of the degenerate ones have zero
+    /// area), `seam_copies` the number of boundary vertices at exactly the
+    /// position of another boundary vertex (a seam split by an exporter).
+    pub(super) fn describe_problems(&mut self, repeated_index: usize, seam_copies: usize) {
         let mut p = Vec::new();
         if !self.non_finite_vertices.is_empty() {
             p.push(format!(
@@ -127,8 +129,17 @@ impl MeshReport {
             ));
         }
         if self.boundary_edges > 0 {
+            let seam = if seam_copies > 0 {
+                format!(
+                    "; {} of their vertices sit exactly on another boundary vertex: a seam \
+                     the file splits, which welding (sp.weld, --weld) closes",
+                    seam_copies
+                )
+            } else {
+                String::new()
+            };
             p.push(format!(
-                "the mesh is open: {} in {} (holes)",
+                "the mesh is open: {} in {} (holes){seam}",
                 count(self.boundary_edges, "boundary edge", "boundary edges"),
                 count(self.boundary_loops.total, "boundary loop", "boundary loops")
             ));
@@ -229,7 +240,7 @@ mod tests {
         assert_eq!(listed.examples(), "0, 1, 2, 3, 4, ...");
         let mut r = MeshReport { is_sphere_topology: true, ..Default::default() };
         r.nonmanifold_vertices = listed.clone();
-        r.describe_problems(0);
+        r.describe_problems(0, 0);
         r.add_out_of_range(listed, 4);
         assert!(!r.is_sphere_topology);
         assert_eq!(
