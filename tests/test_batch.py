@@ -689,3 +689,23 @@ def test_a_timeout_blames_the_mesh_being_mapped_not_the_one_waiting_to_be_writte
     assert worker.late(4.0) is slow
     worker.mapping = None  # slow mapped too: then the writing is late
     assert worker.late(4.0) is quick
+
+
+def test_weld_lets_a_batch_map_meshes_whose_seams_the_files_split(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    from test_check import split_along_a_seam
+    (tmp_path / "in").mkdir()
+    mesh = sp.datasets.make("bumpy_blob", 500)
+    side = mesh.vertices[mesh.faces].mean(1)[:, 0] > 0
+    sp.save(sp.Mesh(*split_along_a_seam(mesh.vertices, mesh.faces, side)),
+            tmp_path / "in" / "seam.obj")
+    make_inputs(tmp_path / "in", 1)
+    out = tmp_path / "out"
+    rows = by_name(sp.batch(tmp_path / "in", out, workers=1).rows)
+    assert rows["seam.obj"]["error_type"] == "TopologyError"
+    assert "sp.weld" in rows["seam.obj"]["error"]
+    welded = sp.batch(tmp_path / "in", out, workers=1, weld=True)
+    assert welded.all_certified and welded.skipped == 0  # weld is part of the options
+    assert by_name(welded.rows)["seam.obj"]["n_vertices"] == mesh.n_vertices
+    assert cli.main(["batch", str(tmp_path / "in"), "-o", str(out), "--weld"]) == 0
+    assert "2 already done" in capsys.readouterr().out

@@ -143,9 +143,13 @@ def content_hash(path: Path) -> str:
     return digest.hexdigest()
 
 
-def options_hash(method: str, options: Dict[str, Any]) -> str:
-    """What must match for a rerun to reuse a result."""
-    text = json.dumps({"method": method, "options": options}, sort_keys=True, default=repr)
+def options_hash(method: str, options: Dict[str, Any], weld: bool = False) -> str:
+    """What must match for a rerun to reuse a result (``weld`` counts only
+    when set, so that rows from before it existed stay reusable)."""
+    what: Dict[str, Any] = {"method": method, "options": options}
+    if weld:
+        what["weld"] = True
+    text = json.dumps(what, sort_keys=True, default=repr)
     return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 
@@ -280,7 +284,7 @@ class _Progress:
 def batch(paths: Union[PathLike, Iterable[PathLike]], out_dir: PathLike, executor: Any = None, *,
           method: str = "progressive", workers: Optional[int] = None,
           timeout: Optional[float] = None, scheduler: Optional[str] = None,
-          progress: bool = False, **options: Any) -> BatchResult:
+          progress: bool = False, weld: bool = False, **options: Any) -> BatchResult:
     """Map many meshes, in parallel, resumably.
 
     Parameters
@@ -312,6 +316,9 @@ def batch(paths: Union[PathLike, Iterable[PathLike]], out_dir: PathLike, executo
         A Dask scheduler address (``tcp://host:8786``): the batch runs there.
     progress : bool
         Draw a progress bar on stderr.
+    weld : bool
+        Merge vertices at exactly the same position first (:func:`spherify.weld`:
+        texture seams that exporters split).
 
     Returns
     -------
@@ -369,7 +376,7 @@ def batch(paths: Union[PathLike, Iterable[PathLike]], out_dir: PathLike, executo
     out.mkdir(parents=True, exist_ok=True)
     with _folder_lock(out):
         return _batch_into(out, inputs, executor, method, workers, timeout, scheduler, progress,
-                           options)
+                           options, weld)
 
 
 def _check_method(method: str, options: Dict[str, Any]) -> None:
@@ -416,7 +423,7 @@ def _folder_lock(out: Path) -> Iterator[None]:
 
 def _batch_into(out: Path, inputs: List[Path], executor: Any, method: str,
                 workers: Optional[int], timeout: Optional[float], scheduler: Optional[str],
-                progress: bool, options: Dict[str, Any]) -> BatchResult:
+                progress: bool, options: Dict[str, Any], weld: bool) -> BatchResult:
     """:func:`batch` once its arguments are checked and ``out`` is locked."""
     for stale in out.iterdir():
         if is_stale_temporary(stale):  # left by a killed run
@@ -436,7 +443,7 @@ def _batch_into(out: Path, inputs: List[Path], executor: Any, method: str,
     interrupted = False
     bar = _Progress(len(inputs), progress)
     try:
-        key = options_hash(method, options)
+        key = options_hash(method, options, weld)
         tasks = []
         for path in inputs:
             digest = content_hash(path)
@@ -444,7 +451,7 @@ def _batch_into(out: Path, inputs: List[Path], executor: Any, method: str,
             tasks.append(Task(input=str(path), sha256=digest,
                               sphere=str(out / f"{stem}.sphere.ply"),
                               spheremap=str(out / f"{stem}.spheremap.npz"), method=method,
-                              options=dict(options), options_hash=key))
+                              options=dict(options), options_hash=key, weld=weld))
         journal, summary = out / JOURNAL, out / SUMMARY
         previous = {row["input"]: row for row in read_journal(journal)}
         done: Dict[str, Dict[str, Any]] = {}

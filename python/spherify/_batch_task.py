@@ -55,6 +55,8 @@ class Task:
     method: str
     options: Dict[str, Any]
     options_hash: str
+    #: Merge vertices at one position before mapping (``sp.weld``).
+    weld: bool = False
 
 
 def failed_row(task: Task, error_type: str, message: str) -> Dict[str, Any]:
@@ -183,7 +185,7 @@ def map_task(task: Task) -> Mapped:
     The row's ``peak_memory_mb`` is left for the caller to read once it
     knows which work the figure covers (``run_task``, ``child_main``)."""
     from ._embed import embed
-    from ._mesh import load
+    from ._mesh import load, weld
     from ._spheremap import ThetaPhiMap
 
     reset = reset_peak_memory()
@@ -196,6 +198,8 @@ def map_task(task: Task) -> Mapped:
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
             mesh = load(task.input)
+            if task.weld:
+                mesh = weld(mesh)
             row.update(n_vertices=mesh.n_vertices, n_faces=mesh.n_faces)
             row["seconds_read"] = round(time.perf_counter() - start, 6)
             # embed validates (a TopologyError carries the MeshReport), orients

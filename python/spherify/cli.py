@@ -365,7 +365,7 @@ def _cmd_batch(args: argparse.Namespace) -> int:
             warnings.showwarning = show
             result = batch(args.inputs, args.output, method=args.method or "progressive",
                            workers=args.workers, timeout=args.timeout,
-                           scheduler=args.scheduler,
+                           scheduler=args.scheduler, weld=args.weld,
                            progress=args.progress or sys.stderr.isatty(), **options)
     except KeyboardInterrupt:
         print(f"interrupted: {args.output}/journal.jsonl holds every mesh that finished; "
@@ -433,6 +433,8 @@ def main(argv: Optional[List[str]] = None) -> int:
     p.add_argument("inputs", nargs="+", help="mesh files, folders, or .txt files of paths")
     p.add_argument("-o", "--output", required=True, help="output folder")
     _add_method_flags(p, names)
+    p.add_argument("--weld", action="store_true",
+                   help="first merge vertices at exactly the same position in each mesh")
     p.add_argument("--workers", type=int, default=None, help="local processes (default: cores)")
     p.add_argument("--timeout", type=float, default=None, help="seconds per mesh")
     p.add_argument("--scheduler", default=None, help="Dask scheduler address, tcp://host:port")
