@@ -56,7 +56,7 @@ from ._atomic import is_stale_temporary, is_temporary, write_atomically
 from ._files import file_errors, special_kind
 from ._batch_pool import LocalPool, executor_rows, usable_cores
 from ._batch_task import COLUMNS, QUALITY, Task, file_matches, run_task
-from ._embed import THETA_PHI_OPTIONS, methods
+from ._embed import methods, stray_theta_phi_options
 from ._errors import FileError, FormatError, MeshError, SpherifyWarning
 
 PathLike = Union[str, "os.PathLike[str]"]
@@ -387,13 +387,11 @@ def _check_method(method: str, options: Dict[str, Any]) -> None:
     errors are the core's to find, per mesh."""
     if method not in methods():
         raise MeshError(f"unknown method {method!r}; sp.methods() lists {methods()}")
-    stray = [name for name in options if name in THETA_PHI_OPTIONS]
-    if stray and method != "theta_phi":
-        names = ", ".join(repr(name) for name in stray)
-        what = "is a theta-phi option" if len(stray) == 1 else "are theta-phi options"
-        raise MeshError(f"{names} {what}, not of method {method!r}: pass "
-                        "method='theta_phi' to use it (sp.batch's default method is "
-                        "sp.embed's, 'progressive')")
+    stray = stray_theta_phi_options(options, method)
+    if stray is not None:
+        what, them = stray
+        raise MeshError(f"{what}, not of method {method!r}: pass method='theta_phi' to use "
+                        f"{them} (sp.batch's default method is sp.embed's, 'progressive')")
 
 
 @contextmanager

@@ -5,7 +5,7 @@ all happen in Rust)."""
 from __future__ import annotations
 
 import warnings
-from typing import Any, List
+from typing import Any, Dict, List, Optional, Tuple
 
 import numpy as np
 
@@ -21,6 +21,21 @@ from ._spheremap import SphereMap, ThetaPhiMap, warn_if_thin
 #: tests/test_methods.py checks it against the core's own list).
 THETA_PHI_OPTIONS = ("poles", "weights", "rho", "symmetry_eps", "symmetry_max_score",
                      "max_refinements")
+
+
+def stray_theta_phi_options(options: Dict[str, Any],
+                            method: str) -> Optional[Tuple[str, str]]:
+    """When ``options`` holds theta-phi options but ``method`` is another
+    one: what they are ("'poles' is a theta-phi option", "'poles', 'rho' are
+    theta-phi options") and the pronoun for them ("it", "them"); else None.
+    Shared by :func:`embed` and ``sp.batch``, which refuse such calls."""
+    stray = [name for name in options if name in THETA_PHI_OPTIONS]
+    if not stray or method == "theta_phi":
+        return None
+    names = ", ".join(repr(name) for name in stray)
+    if len(stray) == 1:
+        return f"{names} is a theta-phi option", "it"
+    return f"{names} are theta-phi options", "them"
 
 
 def methods() -> List[str]:
@@ -164,15 +179,13 @@ def embed(mesh: MeshLike, method: str = "progressive", *, progress: Any = None,
         core = _core.embed(mesh._core, method, dict(options),
                            as_callback(progress, "graph poles" if method == "theta_phi" else method))
     except MeshError as err:
-        stray = [name for name in options if name in THETA_PHI_OPTIONS]
-        if method != "progressive" or not stray or isinstance(err, TopologyError):
+        stray = stray_theta_phi_options(options, method)
+        if method != "progressive" or stray is None or isinstance(err, TopologyError):
             raise
         # Old code and habits call sp.embed(mesh, poles=...) without a method:
         # say which method those options belong to.
-        names = ", ".join(repr(name) for name in stray)
-        what, them = ("is a theta-phi option", "it") if len(stray) == 1 else \
-            ("are theta-phi options", "them")
-        raise MeshError(f"{err}. {names} {what}, and sp.embed's default method is "
+        what, them = stray
+        raise MeshError(f"{err}. {what}, and sp.embed's default method is "
                         f"\"progressive\": pass method=\"theta_phi\" to use {them}") from err
     if core.tp_valid is None:
         plain = SphereMap(core, mesh)

@@ -28,13 +28,6 @@ pub struct Welded {
     pub kept: Vec<u32>,
 }
 
-impl Welded {
-    /// Input vertices merged into another one.
-    pub fn n_merged(&self, n_input: usize) -> usize {
-        n_input - self.kept.len()
-    }
-}
-
 /// `mesh` with every group of vertices at one position merged into the first
 /// of them, faces renumbered. Faces are kept as they are, so a face with two
 /// corners at one position repeats a vertex afterwards (the report calls it
@@ -120,7 +113,6 @@ mod tests {
         let welded = weld(&split);
         assert_eq!(welded.mesh, closed);
         assert_eq!(welded.kept, (0..closed.n_vertices() as u32).collect::<Vec<_>>());
-        assert_eq!(welded.n_merged(split.n_vertices()), split.n_vertices() - closed.n_vertices());
         assert!(check(&welded.mesh).is_sphere_topology);
     }
 
@@ -146,6 +138,6 @@ mod tests {
         let mesh = solids::octahedron();
         let welded = weld(&mesh);
         assert_eq!(welded.mesh, mesh);
-        assert_eq!(welded.n_merged(mesh.n_vertices()), 0);
+        assert_eq!(welded.kept.len(), mesh.n_vertices());
     }
 }

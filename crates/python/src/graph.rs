@@ -4,7 +4,6 @@ use numpy::{IntoPyArray, PyArray1};
 use pyo3::prelude::*;
 use spherify_mesh::dijkstra::{self as paths, EdgeWeights};
 use spherify_mesh::{Adjacency, Mesh};
-use std::sync::Arc;
 
 use crate::errors::mesh_error;
 use crate::mesh::CoreMesh;
@@ -53,13 +52,9 @@ pub fn dijkstra<'py>(
 ) -> PyResult<Paths<'py>> {
     let source = check_vertex(py, mesh, source, "source")?;
     let by_length = by_length(py, weights)?;
-    // At 10^7 vertices a search takes seconds and cannot poll: Ctrl-C leaves
-    // it to finish in the background (crate::progress::run_sized).
-    let shared = Arc::clone(&mesh.mesh);
-    let size = shared.n_faces();
-    let paths = crate::progress::run_sized(py, size, move || {
-        let graph = Adjacency::from_faces(shared.n_vertices(), shared.faces());
-        paths::dijkstra(&graph, source, self::weights(&shared, by_length))
+    let paths = crate::progress::run_on_mesh(py, mesh, move |mesh| {
+        let graph = Adjacency::from_faces(mesh.n_vertices(), mesh.faces());
+        paths::dijkstra(&graph, source, self::weights(mesh, by_length))
     })?;
     // The source was checked above, so the search always runs.
     let paths = paths.ok_or_else(|| mesh_error(py, "source vertex out of range"))?;
@@ -85,11 +80,9 @@ pub fn shortest_path<'py>(
     let source = check_vertex(py, mesh, source, "source")?;
     let target = check_vertex(py, mesh, target, "target")?;
     let by_length = by_length(py, weights)?;
-    let shared = Arc::clone(&mesh.mesh);
-    let size = shared.n_faces();
-    let found = crate::progress::run_sized(py, size, move || {
-        let graph = Adjacency::from_faces(shared.n_vertices(), shared.faces());
-        paths::dijkstra_to(&graph, source, target, self::weights(&shared, by_length))
+    let found = crate::progress::run_on_mesh(py, mesh, move |mesh| {
+        let graph = Adjacency::from_faces(mesh.n_vertices(), mesh.faces());
+        paths::dijkstra_to(&graph, source, target, self::weights(mesh, by_length))
     })?;
     match found {
         Some((length, path)) => {

@@ -4,7 +4,6 @@ use numpy::{IntoPyArray, PyReadonlyArrayDyn};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use spherify_sphere::metrics;
-use std::sync::Arc;
 
 use crate::convert::rows;
 use crate::errors::mesh_error;
@@ -19,11 +18,8 @@ pub fn quality<'py>(
     points: PyReadonlyArrayDyn<'_, f64>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let points = rows::<f64, 3>(py, &points, "points")?;
-    let shared = Arc::clone(&mesh.mesh);
-    let q = crate::progress::run_sized(py, shared.n_faces(), move || {
-        metrics::quality(&shared, &points)
-    })?
-    .map_err(|e| mesh_error(py, e.to_string()))?;
+    let q = crate::progress::run_on_mesh(py, mesh, move |mesh| metrics::quality(mesh, &points))?
+        .map_err(|e| mesh_error(py, e.to_string()))?;
     let d = PyDict::new(py);
     for (name, value) in q.fields() {
         d.set_item(name, value)?;
@@ -43,11 +39,9 @@ pub fn face_quality<'py>(
     points: PyReadonlyArrayDyn<'_, f64>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let points = rows::<f64, 3>(py, &points, "points")?;
-    let shared = Arc::clone(&mesh.mesh);
-    let f = crate::progress::run_sized(py, shared.n_faces(), move || {
-        metrics::face_measures(&shared, &points)
-    })?
-    .map_err(|e| mesh_error(py, e.to_string()))?;
+    let f =
+        crate::progress::run_on_mesh(py, mesh, move |mesh| metrics::face_measures(mesh, &points))?
+            .map_err(|e| mesh_error(py, e.to_string()))?;
     let d = PyDict::new(py);
     d.set_item("angle_max_deg", f.angle_max_deg.into_pyarray(py))?;
     d.set_item("conformal", f.conformal.into_pyarray(py))?;

@@ -29,6 +29,8 @@ use std::time::{Duration, Instant};
 use pyo3::prelude::*;
 
 use crate::errors::mesh_error;
+use crate::mesh::CoreMesh;
+use spherify_mesh::Mesh;
 
 /// Most calls of the Python callable per run (plus the final one).
 const MAX_CALLS: usize = 100;
@@ -203,6 +205,19 @@ pub fn run_sized<R: Send + 'static>(
     } else {
         run_detachable(py, None, move |_| work())
     }
+}
+
+/// [`run_sized`] for a call on one mesh, sized by its faces: at 10^7 faces a
+/// check, a search or the measures take seconds and cannot poll, and Ctrl-C
+/// leaves them to finish in the background. The work gets its own handle on
+/// the mesh, since a detached call may outlive this one.
+pub fn run_on_mesh<R: Send + 'static>(
+    py: Python<'_>,
+    mesh: &CoreMesh,
+    work: impl FnOnce(&Mesh) -> R + Send + 'static,
+) -> PyResult<R> {
+    let shared = Arc::clone(&mesh.mesh);
+    run_sized(py, shared.n_faces(), move || work(&shared))
 }
 
 /// How long [`run_detachable`] waits for stopped work before it returns.

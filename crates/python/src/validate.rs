@@ -1,7 +1,5 @@
 //! `check`, `check_raw`, `orient` and `weld`: reports become `spherify.MeshReport`.
 
-use std::sync::Arc;
-
 use numpy::{IntoPyArray, PyArray1, PyReadonlyArrayDyn};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList, PyTuple};
@@ -14,11 +12,7 @@ use crate::mesh::CoreMesh;
 /// check(mesh) -> MeshReport.
 #[pyfunction]
 pub fn check<'py>(py: Python<'py>, mesh: &CoreMesh) -> PyResult<Bound<'py, PyAny>> {
-    // At 10^7 vertices a check takes seconds and cannot poll: Ctrl-C leaves
-    // it to finish in the background (crate::progress::run_sized).
-    let shared = Arc::clone(&mesh.mesh);
-    let size = shared.n_faces();
-    let report = crate::progress::run_sized(py, size, move || validate::check(&shared))?;
+    let report = crate::progress::run_on_mesh(py, mesh, validate::check)?;
     report_to_py(py, &report)
 }
 
@@ -41,11 +35,8 @@ pub fn check_raw<'py>(
 /// orient(mesh) -> (CoreMesh, info dict); raises TopologyError.
 #[pyfunction]
 pub fn orient<'py>(py: Python<'py>, mesh: &CoreMesh) -> PyResult<(CoreMesh, Bound<'py, PyDict>)> {
-    let shared = Arc::clone(&mesh.mesh);
-    let size = shared.n_faces();
-    let (oriented, info) =
-        crate::progress::run_sized(py, size, move || orient_mod::orient(&shared))?
-            .map_err(|e| to_py(py, e.into()))?;
+    let (oriented, info) = crate::progress::run_on_mesh(py, mesh, orient_mod::orient)?
+        .map_err(|e| to_py(py, e.into()))?;
     let dict = PyDict::new(py);
     dict.set_item("flipped_faces", info.flipped_faces)?;
     dict.set_item("components", info.components)?;
@@ -60,9 +51,7 @@ pub fn weld<'py>(
     py: Python<'py>,
     mesh: &CoreMesh,
 ) -> PyResult<(CoreMesh, Bound<'py, PyArray1<i64>>)> {
-    let shared = Arc::clone(&mesh.mesh);
-    let size = shared.n_faces();
-    let welded = crate::progress::run_sized(py, size, move || weld_mod::weld(&shared))?;
+    let welded = crate::progress::run_on_mesh(py, mesh, weld_mod::weld)?;
     let kept: Vec<i64> = welded.kept.iter().map(|&v| i64::from(v)).collect();
     Ok((CoreMesh { mesh: welded.mesh.into() }, kept.into_pyarray(py)))
 }

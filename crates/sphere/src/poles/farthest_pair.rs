@@ -38,6 +38,8 @@
 
 use rayon::prelude::*;
 
+use super::dist2;
+
 /// Points per leaf of the direction tree.
 const LEAF_SIZE: usize = 8;
 
@@ -75,10 +77,6 @@ impl Pair {
         self.offer(other.lo, other.hi, other.length2);
         self
     }
-}
-
-fn dist2(a: [f64; 3], b: [f64; 3]) -> f64 {
-    (a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)
 }
 
 /// One point as the search sees it: its unit direction from the centre,
