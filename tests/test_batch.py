@@ -492,9 +492,16 @@ def test_the_default_method_is_embeds_and_stray_options_are_refused_at_once(
     # mesh fail alike: they are refused before anything starts or is written.
     make_inputs(tmp_path / "in", 2)
     out = tmp_path / "out"
-    for options in ({"poles": "graph"}, {"method": "progressive", "weights": "chord"}):
-        with pytest.raises(sp.MeshError, match="theta-phi option.*method='theta_phi'"):
-            sp.batch(tmp_path / "in", out, **options)
+    with pytest.raises(sp.MeshError, match="'poles' is an option of method 'theta_phi'.*"
+                                           "pass method='theta_phi'"):
+        sp.batch(tmp_path / "in", out, poles="graph")
+    with pytest.raises(sp.MeshError, match="'weights' is an option of methods 'relaxation', "
+                                           "'gotsman' and 'theta_phi', not of method "
+                                           "'progressive': pass method='relaxation', 'gotsman' "
+                                           "or 'theta_phi'"):
+        sp.batch(tmp_path / "in", out, method="progressive", weights="chord")
+    with pytest.raises(sp.MeshError, match="method 'radial' has no option 'no_such'"):
+        sp.batch(tmp_path / "in", out, method="radial", no_such=1)
     with pytest.raises(sp.MeshError, match="unknown method 'tetha_phi'"):
         sp.batch(tmp_path / "in", out, method="tetha_phi")
     assert not out.exists()

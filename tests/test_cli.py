@@ -171,8 +171,9 @@ def test_map_defaults_to_the_progressive_isometric_map(tmp_path: Path,
 @pytest.mark.parametrize("flags, message", [
     (["--poles", "symmetry"], "--poles is an option of --method theta_phi, and the default "
                               "method is progressive: add --method theta_phi to use it"),
-    (["--weights", "chord"], "--weights is an option of --method theta_phi, and the default "
-                             "method is progressive: add --method theta_phi to use it"),
+    (["--weights", "chord"], "--weights is an option of --method relaxation, gotsman or "
+                             "theta_phi, and the default method is progressive: add --method "
+                             "relaxation, gotsman or theta_phi to use it"),
     (["--poles", "symmetry", "--symmetry-eps", "0.1"],
      "--poles, --symmetry-eps are options of --method theta_phi, and the default method is "
      "progressive: add --method theta_phi to use them"),
@@ -185,7 +186,10 @@ def test_map_defaults_to_the_progressive_isometric_map(tmp_path: Path,
     (["--method", "radial", "--energy", "conformal"],
      "--energy is an option of --method progressive, not of --method radial"),
     (["--method", "theta_phi", "--symmetry-eps", "0.1"],
-     "--symmetry-eps 0.1 sets the band of --poles symmetry: add --poles symmetry to use it"),
+     "--symmetry-eps 0.1 only applies to --poles symmetry: add --poles symmetry to use it"),
+    (["--method", "gotsman", "--weights", "mean_value"],
+     "--weights mean_value is not one of --method gotsman's: it takes uniform, chord"),
+    (["--method", "relaxation", "--check-every", "0"], "--check-every must be at least 1, got 0"),
 ])
 def test_map_refuses_an_option_its_method_would_ignore(
         flags: List[str], message: str, tmp_path: Path,

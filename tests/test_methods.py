@@ -265,26 +265,36 @@ THETA_PHI_VALUES = {"poles": "symmetry", "weights": "chord", "rho": 2.0, "symmet
                     "symmetry_max_score": 0.1, "max_refinements": 3}
 
 
-def test_the_hint_knows_theta_phi_s_options() -> None:
-    # sp.embed words its hint from a list of its own; the core's list decides.
-    from spherify._embed import THETA_PHI_OPTIONS
+def test_the_core_lists_theta_phi_s_options_once() -> None:
+    # The refusal of an unknown option, sp.method_options and the hint all
+    # read the core's one table.
     with pytest.raises(sp.MeshError) as err:
         sp.embed(shape("icosphere1"), "theta_phi", no_such_option=1)
     listed = str(err.value).split("its options are: ")[1].split(", ")
-    assert sorted(listed) == sorted(THETA_PHI_OPTIONS) == sorted(THETA_PHI_VALUES)
+    assert sorted(listed) == sorted(sp.method_options("theta_phi")) == sorted(THETA_PHI_VALUES)
+
+
+def _owners(names: List[str]) -> List[str]:
+    return [m for m in sp.methods() if all(n in sp.method_options(m) for n in names)]
 
 
 @pytest.mark.parametrize("names", [[name] for name in THETA_PHI_VALUES]
                          + [["weights", "symmetry_eps"]])
-def test_theta_phi_options_without_the_method_say_to_name_it(names: List[str]) -> None:
+def test_another_method_s_options_without_the_method_say_which_methods_take_them(
+        names: List[str]) -> None:
     # Issue 10, item 8: sp.embed(mesh, poles=...) used to mean theta-phi.
+    # The hint names every method that takes the options (weights and rho
+    # are relaxation's and Gotsman's too), from the core's table.
     options = {name: THETA_PHI_VALUES[name] for name in names}
     with pytest.raises(sp.MeshError) as err:
         sp.embed(shape("icosphere1"), **options)
     text = str(err.value)
+    owners = _owners(names)
+    assert "theta_phi" in owners and "progressive" not in owners
     assert all(repr(name) in text for name in names), text
-    assert 'default method is "progressive"' in text and 'pass method="theta_phi"' in text
-    assert ("theta-phi option" if len(names) == 1 else "theta-phi options") in text
+    assert 'default method is "progressive"' in text
+    assert "pass method=" in text and all(f'"{m}"' in text for m in owners), text
+    assert (" is an option of " if len(names) == 1 else " are options of ") in text
     # Named, theta-phi takes them (the symmetry options with symmetry poles).
     if any(name.startswith("symmetry_") for name in names):
         options["poles"] = "symmetry"
@@ -293,6 +303,62 @@ def test_theta_phi_options_without_the_method_say_to_name_it(names: List[str]) -
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", sp.SpherifyWarning)  # symmetry may fall back
         assert sp.embed(shape("icosphere1"), "theta_phi", **options).method == "theta_phi"
+
+
+# A value each kind of option takes, for the options of every method.
+def _sample(method: str, row: Dict[str, Any]) -> Any:
+    if row["kind"] == "count":
+        return max(row["minimum"], 2)
+    if row["kind"] == "number":
+        return {"tol": 1e-6, "rho": 2.0, "c": 1.0}.get(row["name"], 0.1)
+    if row["kind"] == "flag":
+        return False
+    if row["kind"] == "points":
+        return shape("icosphere1").vertices
+    return row["choices"][-1] if row["name"] != "poles" else "physical"
+
+
+@pytest.mark.parametrize("method", METHODS + ["improve"])
+def test_every_option_in_the_core_s_table_is_read_by_its_method(method: str) -> None:
+    # The bindings read keywords through the table; an entry its reader
+    # forgot would be refused as a bug, one it reads without the table
+    # could never be given. Each option alone, with what it requires.
+    mesh = shape("icosphere1")
+    table = sp.method_options(method)
+    assert table, method
+    for name, row in table.items():
+        if name == "center" and method == "radial":
+            continue  # the kernel / centroid / a point: test_radial.py
+        options = {name: _sample(method, row)}
+        if row["requires"] is not None:
+            other, value = row["requires"]
+            options[other] = value
+        if "initial" in options and "center" in options:
+            del options["center"]
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", sp.SpherifyWarning)
+            if method == "improve":
+                m = sp.improve(sp.embed(mesh), **options)
+            else:
+                m = sp.embed(mesh, method, **options)
+        assert m.points.shape == (len(mesh.vertices), 3), (method, name)
+
+
+def test_the_table_s_defaults_are_what_the_methods_run_with() -> None:
+    mesh = shape("icosphere1")
+    for method in ["relaxation", "alexa", "gotsman", "theta_phi"]:
+        given = {name: row["default"] for name, row in sp.method_options(method).items()
+                 if row["default"] is not None and row["requires"] is None}
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", sp.SpherifyWarning)
+            np.testing.assert_array_equal(sp.embed(mesh, method, **given).points,
+                                          sp.embed(mesh, method).points)
+    by_energy = sp.method_options("progressive")["max_iter"]["default_by"]
+    for energy, max_iter in by_energy.items():
+        tol = sp.method_options("progressive")["tol"]["default_by"][energy]
+        np.testing.assert_array_equal(
+            sp.embed(mesh, energy=energy, max_iter=max_iter, tol=tol).points,
+            sp.embed(mesh, energy=energy).points)
 
 
 def test_other_methods_keep_the_core_s_message() -> None:

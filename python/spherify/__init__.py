@@ -13,7 +13,7 @@ from ._mesh import Mesh, check, check_sphere, dijkstra, load, orient, save, shor
 from ._report import MeshReport, SphereReport
 from ._spheremap import SphereMap, ThetaPhiMap
 from ._tutte import TutteInfo, boundary_loop, tutte
-from ._embed import embed, improve, methods
+from ._embed import embed, improve, method_options, methods
 from ._quality import face_quality, quality
 from ._morph import Morph, morph
 from ._remesh import remesh, remesh_map, surface_distance
@@ -55,6 +55,7 @@ __all__ = [
     "load",
     "load_geometry_image",
     "load_map",
+    "method_options",
     "methods",
     "morph",
     "orient",

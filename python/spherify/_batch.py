@@ -56,7 +56,7 @@ from ._atomic import is_stale_temporary, is_temporary, write_atomically
 from ._files import file_errors, special_kind
 from ._batch_pool import LocalPool, executor_rows, usable_cores
 from ._batch_task import COLUMNS, QUALITY, Task, file_matches, run_task
-from ._embed import methods, stray_theta_phi_options
+from ._embed import method_options, methods, pass_method, stray_options
 from ._errors import FileError, FormatError, MeshError, SpherifyWarning
 
 PathLike = Union[str, "os.PathLike[str]"]
@@ -344,8 +344,10 @@ def batch(paths: Union[PathLike, Iterable[PathLike]], out_dir: PathLike, executo
     ------
     MeshError
         An input path that does not exist, bad ``workers`` or ``timeout``, an
-        unknown method, theta-phi's options (``poles``, ``weights``, ...)
-        without ``method="theta_phi"``, or options that cannot be stored.
+        unknown method, an option the method does not take
+        (:func:`spherify.method_options` lists each method's; theta-phi's
+        ``poles`` without ``method="theta_phi"``, say), or options that cannot
+        be stored.
     FileError
         ``out_dir`` cannot be made or written, or another batch is writing
         into it (``errno.EBUSY``: two at once would each rewrite the journal).
@@ -381,17 +383,21 @@ def batch(paths: Union[PathLike, Iterable[PathLike]], out_dir: PathLike, executo
 
 def _check_method(method: str, options: Dict[str, Any]) -> None:
     """Refuses at once what would fail every mesh alike: an unknown method,
-    and theta-phi's options under another method (the batch's default was
-    theta-phi until the progressive map became spherify's default; a call
-    written then would otherwise record every mesh as failed). Other option
-    errors are the core's to find, per mesh."""
-    if method not in methods():
-        raise MeshError(f"unknown method {method!r}; sp.methods() lists {methods()}")
-    stray = stray_theta_phi_options(options, method)
+    and an option the method does not take (the core's table says which
+    options each method takes; the batch's default was theta-phi until the
+    progressive map became spherify's default, and a call written then would
+    otherwise record every mesh as failed). Values are the core's to check,
+    per mesh."""
+    taken = method_options(method)
+    stray = stray_options(options, method)
     if stray is not None:
-        what, them = stray
-        raise MeshError(f"{what}, not of method {method!r}: pass method='theta_phi' to use "
-                        f"{them} (sp.batch's default method is sp.embed's, 'progressive')")
+        what, owners, them = stray
+        raise MeshError(f"{what}, not of method {method!r}: {pass_method(owners, quote=chr(39))} "
+                        f"to use {them} (sp.batch's default method is sp.embed's, 'progressive')")
+    unknown = [name for name in options if name not in taken]
+    if unknown:
+        raise MeshError(f"method {method!r} has no option {', '.join(map(repr, unknown))}; "
+                        f"its options are: {', '.join(sorted(taken))}")
 
 
 @contextmanager

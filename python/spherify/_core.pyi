@@ -7,7 +7,7 @@ import numpy.typing as npt
 
 from ._report import MeshReport, SphereReport
 
-__all__ = ["CoreMesh", "CoreSphereMap", "__version__", "boundary_loop", "check", "check_raw", "check_sphere", "choices", "dijkstra", "embed", "encode", "face_quality", "from_points", "harmonics_evaluate", "harmonics_fit", "improve", "load", "methods", "orient", "quality", "restore_map", "save", "shortest_path", "tutte", "weld", "write_atomic"]
+__all__ = ["CoreMesh", "CoreSphereMap", "__version__", "boundary_loop", "check", "check_raw", "check_sphere", "choices", "dijkstra", "embed", "encode", "face_quality", "from_points", "harmonics_evaluate", "harmonics_fit", "improve", "load", "method_options", "methods", "orient", "quality", "restore_map", "save", "shortest_path", "tutte", "weld", "write_atomic"]
 
 __version__: str
 
@@ -101,6 +101,7 @@ def tutte(
 ) -> Tuple[npt.NDArray[np.float64], Dict[str, Any]]: ...
 def methods() -> List[str]: ...
 def choices() -> Dict[str, List[str]]: ...
+def method_options() -> Dict[str, List[Dict[str, Any]]]: ...
 def embed(
     mesh: CoreMesh,
     method: str,

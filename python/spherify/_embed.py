@@ -4,8 +4,9 @@ all happen in Rust)."""
 
 from __future__ import annotations
 
+import functools
 import warnings
-from typing import Any, Dict, List, Optional, Tuple
+from typing import Any, Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
@@ -16,31 +17,76 @@ from ._progress import as_callback
 from ._spheremap import SphereMap, ThetaPhiMap, warn_if_thin
 
 
-#: The options of ``method="theta_phi"`` (the core refuses them for every
-#: method that does not read them; this list only words the hint below, and
-#: tests/test_methods.py checks it against the core's own list).
-THETA_PHI_OPTIONS = ("poles", "weights", "rho", "symmetry_eps", "symmetry_max_score",
-                     "max_refinements")
-
-
-def stray_theta_phi_options(options: Dict[str, Any],
-                            method: str) -> Optional[Tuple[str, str]]:
-    """When ``options`` holds theta-phi options but ``method`` is another
-    one: what they are ("'poles' is a theta-phi option", "'poles', 'rho' are
-    theta-phi options") and the pronoun for them ("it", "them"); else None.
-    Shared by :func:`embed` and ``sp.batch``, which refuse such calls."""
-    stray = [name for name in options if name in THETA_PHI_OPTIONS]
-    if not stray or method == "theta_phi":
-        return None
-    names = ", ".join(repr(name) for name in stray)
-    if len(stray) == 1:
-        return f"{names} is a theta-phi option", "it"
-    return f"{names} are theta-phi options", "them"
-
-
 def methods() -> List[str]:
     """Names accepted by :func:`embed`'s ``method``: the methods of the core."""
     return list(_core.methods())
+
+
+@functools.lru_cache(maxsize=None)
+def _option_table() -> Dict[str, Tuple[Dict[str, Any], ...]]:
+    return {method: tuple(rows) for method, rows in _core.method_options().items()}
+
+
+def method_options(method: str) -> Dict[str, Dict[str, Any]]:
+    """The keyword options of ``method`` (a name of :func:`methods`, or
+    ``"improve"`` for :func:`improve`), from the core's one table.
+
+    Returns
+    -------
+    dict
+        Option name -> a fresh dict: ``kind`` ("count", "number", "flag",
+        "name", "name_or_vertex_pair", "name_or_point" or "points"),
+        ``minimum`` (counts), ``choices`` (the names it accepts), ``default``
+        (None when the method decides; see ``help``), ``depends_on`` and
+        ``default_by`` (a default that depends on another option, such as
+        the progressive method's ``max_iter`` on its ``energy``),
+        ``requires`` (``(option, name)``: given only with that) and ``help``.
+
+    Raises
+    ------
+    MeshError
+        An unknown method.
+    """
+    table = _option_table()
+    if method not in table:
+        raise MeshError(f"unknown method {method!r}; sp.methods() lists {methods()}")
+    return {row["name"]: dict(row) for row in table[method]}
+
+
+def _listed(names: Sequence[str], quote: bool = True) -> str:
+    """'a', 'a' and 'b', 'a', 'b' and 'c'."""
+    words = [repr(n) if quote else n for n in names]
+    return words[0] if len(words) == 1 else f"{', '.join(words[:-1])} and {words[-1]}"
+
+
+def stray_options(options: Dict[str, Any], method: str) -> Optional[Tuple[str, List[str], str]]:
+    """When ``options`` holds options that ``method`` does not take but other
+    methods do (``sp.embed(mesh, poles="graph")`` under the default method):
+    what they are ("'poles' is an option of method 'theta_phi'"), the methods
+    that take all of them, and the pronoun for them ("it", "them"); else
+    None. Shared by :func:`embed` and ``sp.batch``, which refuse such calls
+    with a hint; both read the core's table, not a list of their own."""
+    taken = method_options(method)
+    stray = [name for name in options
+             if name not in taken and any(name in method_options(m) for m in methods())]
+    if not stray:
+        return None
+    owners = [m for m in methods() if all(name in method_options(m) for name in stray)]
+    where = (f"method{'s' if len(owners) > 1 else ''} {_listed(owners)}" if owners
+             else "other methods (sp.method_options lists each method's)")
+    what = (f"{_listed(stray)} is an option of {where}" if len(stray) == 1
+            else f"{_listed(stray)} are options of {where}")
+    return what, owners, ("it" if len(stray) == 1 else "them")
+
+
+def either(names: Sequence[str]) -> str:
+    """'a', 'a or b', 'a, b or c'."""
+    return names[0] if len(names) == 1 else f"{', '.join(names[:-1])} or {names[-1]}"
+
+
+def pass_method(owners: List[str], quote: str = '"') -> str:
+    """The hint: pass method="theta_phi" (or "relaxation", "gotsman" or "theta_phi")."""
+    return f"pass method={either([f'{quote}{m}{quote}' for m in owners])}"
 
 
 def embed(mesh: MeshLike, method: str = "progressive", *, progress: Any = None,
@@ -179,14 +225,14 @@ def embed(mesh: MeshLike, method: str = "progressive", *, progress: Any = None,
         core = _core.embed(mesh._core, method, dict(options),
                            as_callback(progress, "graph poles" if method == "theta_phi" else method))
     except MeshError as err:
-        stray = stray_theta_phi_options(options, method)
+        stray = stray_options(options, method) if method in methods() else None
         if method != "progressive" or stray is None or isinstance(err, TopologyError):
             raise
         # Old code and habits call sp.embed(mesh, poles=...) without a method:
         # say which method those options belong to.
-        what, them = stray
+        what, owners, them = stray
         raise MeshError(f"{err}. {what}, and sp.embed's default method is "
-                        f"\"progressive\": pass method=\"theta_phi\" to use {them}") from err
+                        f"\"progressive\": {pass_method(owners)} to use {them}") from err
     if core.tp_valid is None:
         plain = SphereMap(core, mesh)
         plain._options = dict(options)
@@ -204,8 +250,7 @@ def embed(mesh: MeshLike, method: str = "progressive", *, progress: Any = None,
     return result
 
 
-def improve(sphere_map: SphereMap, *, energy: str = "isometric", max_iter: int = 30,
-            tol: float = 1e-3, progress: Any = None) -> SphereMap:
+def improve(sphere_map: SphereMap, *, progress: Any = None, **options: Any) -> SphereMap:
     """Lower a distortion energy of a valid map with flip-free moves.
 
     Thesis 9.3.2's local iteration: each vertex moves in the tangent plane by
@@ -218,6 +263,18 @@ def improve(sphere_map: SphereMap, *, energy: str = "isometric", max_iter: int =
     h no longer describes the moved points; ``to_sphere`` / ``to_surface``
     use the barycentric map of thesis 3.3).
 
+    Parameters
+    ----------
+    sphere_map : SphereMap
+        A valid map (``sphere_map.valid``).
+    progress : callable or True, optional
+        ``(done, total)`` after every sweep; ``True`` shows a bar.
+    **options
+        ``energy`` ("isometric"; any of the progressive method's), ``max_iter``
+        (30 sweeps) and ``tol`` (stop when a sweep lowers the energy by less
+        than this fraction; 1e-3): ``sp.method_options("improve")`` gives the
+        core's table with the defaults it runs with.
+
     Raises
     ------
     MapError
@@ -225,8 +282,7 @@ def improve(sphere_map: SphereMap, *, energy: str = "isometric", max_iter: int =
     MeshError
         An unknown energy or a value out of range.
     """
-    options = {"energy": energy, "max_iter": max_iter, "tol": tol}
-    core = _core.improve(sphere_map._core, options, as_callback(progress, "improve"))
+    core = _core.improve(sphere_map._core, dict(options), as_callback(progress, "improve"))
     result = SphereMap(core, sphere_map.mesh)
     warn_if_thin(result)
     return result

@@ -7,7 +7,6 @@ The Rust core raises these classes directly, so they are defined here once.
 from __future__ import annotations
 
 import errno
-import os
 from typing import Any, Dict, Optional, Type, cast
 
 
@@ -64,7 +63,15 @@ class FileError(SpherifyError, OSError):
     builtin subclass that names its cause (``FileNotFoundError``,
     ``PermissionError``, ``IsADirectoryError``, ...), so ``except
     FileNotFoundError`` works as usual. ``errno``, ``strerror`` and
-    ``filename`` are set where the system said them."""
+    ``filename`` are set where the system said them.
+
+    Made as ``FileError(errno, strerror, filename)`` (as the core raises
+    it), it is the subclass of that errno, as ``OSError(errno, ...)`` is."""
+
+    def __new__(cls, *args: Any) -> "FileError":
+        if cls is FileError and len(args) >= 2 and isinstance(args[0], int):
+            cls = _FILE_ERRORS.get(args[0], FileError)
+        return super().__new__(cls, *args)
 
 
 def _file_error_class(builtin: type) -> Type[FileError]:
@@ -89,25 +96,6 @@ _FILE_ERRORS: Dict[int, Type[FileError]] = {
     errno.ENOTDIR: _file_error_class(NotADirectoryError),
 }
 _FILE_ERRORS[errno.EPERM] = _FILE_ERRORS[errno.EACCES]
-
-
-#: The errno of each Rust ``io::ErrorKind`` the core raises without one.
-_ERRNO_OF_KIND = {"NotFound": errno.ENOENT, "PermissionDenied": errno.EACCES,
-                  "AlreadyExists": errno.EEXIST, "IsADirectory": errno.EISDIR,
-                  "NotADirectory": errno.ENOTDIR}
-
-
-def file_error(code: Optional[int], kind: str, message: str, filename: str) -> FileError:
-    """The :class:`FileError` of a failed file operation on ``filename``, as
-    the core reports it: the OS error number ``code`` when the system gave
-    one, else the Rust ``io::ErrorKind`` name ``kind``, and its ``message``.
-    With a number it reads as Python's own do (``[Errno 2] No such file or
-    directory: 'mesh.ply'``); without one, ``filename: message``."""
-    if code is None:
-        code = _ERRNO_OF_KIND.get(kind)
-    if code is None:
-        return FileError(f"{filename}: {message}")
-    return _FILE_ERRORS.get(code, FileError)(code, os.strerror(code), filename)
 
 
 def as_file_error(err: OSError) -> FileError:

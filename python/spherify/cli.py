@@ -42,12 +42,12 @@ import sys
 import time
 import warnings
 from pathlib import Path
-from typing import Any, Dict, List, Optional, Union
+from typing import Any, Dict, List, Optional, Tuple, Union
 
 import numpy as np
 
 from . import _args, _cli_apps, _core, _files, _formats, datasets
-from ._embed import embed, methods
+from ._embed import either, embed, method_options, methods
 from ._errors import MeshError, SpherifyError, SpherifyWarning, TopologyError
 from ._mesh import Mesh, check, check_sphere, load, orient, save, weld
 from ._quality import quality
@@ -235,44 +235,61 @@ def _save_sphere(mesh: Mesh, points: np.ndarray, out: Path) -> None:
               f"({verdict.n_negative + verdict.n_zero} faces flipped or collapsed)")
 
 
-#: ``spherify map`` options that only one method reads, with that method and
-#: the default the method gets when the option is not given.
-METHOD_OPTIONS = {"poles": ("theta_phi", "fast_graph"), "weights": ("theta_phi", "uniform"),
-                  "symmetry_eps": ("theta_phi", None), "energy": ("progressive", "isometric")}
-
-
-def _method_options(args: argparse.Namespace, defaults: bool = True) -> Dict[str, Any]:
-    """The options of ``args.method``, refusing (UsageError, exit 2) an
-    option of another method: under the default method a ``--poles`` would
-    otherwise be ignored, and the map would not be the one asked for. With
-    ``defaults=False`` only the options given (a batch's journal records
-    them, and ``sp.batch`` with the same options must reuse its rows)."""
-    method = args.method or "progressive"
-    stray = [name for name, (owner, _) in METHOD_OPTIONS.items()
-             if getattr(args, name) is not None and owner != method]
-    if stray:
-        owner = METHOD_OPTIONS[stray[0]][0]
-        flags = [f"--{name.replace('_', '-')}" for name in stray
-                 if METHOD_OPTIONS[name][0] == owner]
-        what = (f"{flags[0]} is an option" if len(flags) == 1
-                else f"{', '.join(flags)} are options")
-        them = "it" if len(flags) == 1 else "them"
-        if args.method is None:
-            raise UsageError(f"{what} of --method {owner}, and the default method is {method}: "
-                             f"add --method {owner} to use {them}")
-        raise UsageError(f"{what} of --method {owner}, not of --method {method}: use "
-                         f"--method {owner}, or leave {them} out")
-    if args.symmetry_eps is not None and args.poles != "symmetry":
-        raise UsageError(f"--symmetry-eps {args.symmetry_eps:g} sets the band of --poles symmetry: "
-                         "add --poles symmetry to use it")
-    options: Dict[str, Any] = {}
-    for name, (owner, default) in METHOD_OPTIONS.items():
-        value = getattr(args, name)
-        if owner == method and value is not None:
-            options[name] = value
-        elif owner == method and defaults and default is not None:
-            options[name] = default
+def _command_line_options() -> Dict[str, Dict[str, Dict[str, Any]]]:
+    """Every option of every method that a command line can carry (all but
+    ``initial`` points), from the core's table: option name -> {method: the
+    table's row}, in the order the table lists them."""
+    options: Dict[str, Dict[str, Dict[str, Any]]] = {}
+    for method in methods():
+        for name, row in method_options(method).items():
+            if row["kind"] != "points":
+                options.setdefault(name, {})[method] = row
     return options
+
+
+def _flag(name: str) -> str:
+    return "--" + name.replace("_", "-")
+
+
+def _method_options(args: argparse.Namespace) -> Dict[str, Any]:
+    """The options given for ``args.method``, checked against the core's
+    table: an option of another method is refused (UsageError, exit 2; under
+    the default method a ``--poles`` would otherwise be ignored, and the map
+    would not be the one asked for), and so are a name the method does not
+    accept, a count below its minimum and an option without the value of
+    the option it needs. Only the options given: the method fills in its own
+    defaults, and a batch's journal records what was asked."""
+    method = args.method or "progressive"
+    takes = method_options(method)
+    given = {name: getattr(args, name) for name in _command_line_options()
+             if getattr(args, name) is not None}
+    stray = [name for name in given if name not in takes]
+    if stray:
+        owners = [m for m in methods() if all(name in method_options(m) for name in stray)]
+        flags = [_flag(name) for name in stray]
+        what = f"{flags[0]} is an option" if len(flags) == 1 else f"{', '.join(flags)} are options"
+        them = "it" if len(flags) == 1 else "them"
+        if not owners:
+            raise UsageError(f"{', '.join(flags)} are not options of one method together: "
+                             "spherify map --help says which method takes each")
+        if args.method is None:
+            raise UsageError(f"{what} of --method {either(owners)}, and the default method is "
+                             f"{method}: add --method {either(owners)} to use {them}")
+        raise UsageError(f"{what} of --method {either(owners)}, not of --method {method}: use "
+                         f"--method {either(owners)}, or leave {them} out")
+    for name, value in given.items():
+        row = takes[name]
+        if row["choices"] and isinstance(value, str) and value not in row["choices"]:
+            raise UsageError(f"{_flag(name)} {value} is not one of --method {method}'s: it "
+                             f"takes {', '.join(row['choices'])}")
+        if row["kind"] == "count" and value < row["minimum"]:
+            raise UsageError(f"{_flag(name)} must be at least {row['minimum']}, got {value}")
+        if row["requires"] is not None:
+            other, needed = row["requires"]
+            if getattr(args, other) != needed:
+                raise UsageError(f"{_flag(name)} {value} only applies to {_flag(other)} {needed}: "
+                                 f"add {_flag(other)} {needed} to use it")
+    return given
 
 
 def _cmd_map(args: argparse.Namespace) -> int:
@@ -354,7 +371,7 @@ def _cmd_map(args: argparse.Namespace) -> int:
 
 def _cmd_batch(args: argparse.Namespace) -> int:
     from ._batch import batch
-    options = _method_options(args, defaults=False)
+    options = _method_options(args)
 
     def show(message: Any, *_: Any, **__: Any) -> None:  # (a folder without meshes, ...)
         print(f"spherify: warning: {message}", file=sys.stderr)
@@ -385,30 +402,59 @@ def _cmd_batch(args: argparse.Namespace) -> int:
     return 0 if result.all_certified else 1
 
 
-def _add_method_flags(p: argparse.ArgumentParser, names: Dict[str, Any]) -> None:
-    """--method and the options of each method (:data:`METHOD_OPTIONS`), the
-    same for ``map`` and ``batch``."""
+def _default_words(row: Dict[str, Any]) -> str:
+    if row["default_by"] is not None:
+        by = ", ".join(f"{key} {value:g}" if isinstance(value, float) else f"{key} {value}"
+                       for key, value in row["default_by"].items())
+        return f"by {_flag(row['depends_on'])}: {by}"
+    value = row["default"]
+    if value is None:
+        return "automatic"
+    if isinstance(value, bool):
+        return "on" if value else "off"
+    return f"{value:g}" if isinstance(value, float) else str(value)
+
+
+def _flag_help(rows: Dict[str, Dict[str, Any]]) -> str:
+    """What the flag does, for which methods, and each one's default, from
+    the core's table (methods that share a help text and a default are
+    named together)."""
+    groups: Dict[Tuple[str, str], List[str]] = {}
+    for method, row in rows.items():
+        groups.setdefault((row["help"], _default_words(row)), []).append(method)
+    parts = [f"--method {', '.join(owners)}: {text} (default: {default})"
+             for (text, default), owners in groups.items()]
+    return "; ".join(parts).replace("%", "%%")
+
+
+def _add_method_flags(p: argparse.ArgumentParser) -> None:
+    """--method and a flag for every option of the core's table (the same
+    for ``map`` and ``batch``): its type, choices, help and defaults come
+    from the table, so the command line cannot drift from the methods."""
     p.add_argument("--method", default=None, choices=methods(),
                    help="the spherical method (default: progressive, a certified "
                         "low-distortion map of every mesh; theta_phi is the fastest)")
-    p.add_argument("--poles", default=None, choices=names["poles"],
-                   help="--method theta_phi: how to choose the poles and the cut "
-                        "(default: fast_graph)")
-    p.add_argument("--symmetry-eps", type=float, default=None,
-                   help="--method theta_phi --poles symmetry: band half-width around "
-                        "the plane in mesh units (default: automatic)")
-    p.add_argument("--weights", default=None, choices=names["theta_phi_weights"],
-                   help="--method theta_phi: the Tutte weights (default: uniform)")
-    p.add_argument("--energy", default=None, choices=names["energies"],
-                   help="--method progressive: the distortion energy it lowers "
-                        "(default: isometric)")
+    for name, rows in _command_line_options().items():
+        kinds = {row["kind"] for row in rows.values()}
+        choices = sorted({c for row in rows.values() for c in row["choices"]})
+        extra: Dict[str, Any] = {}
+        if kinds == {"count"}:
+            extra["type"] = int
+        elif kinds == {"number"}:
+            extra["type"] = float
+        elif kinds == {"flag"}:
+            extra["action"] = argparse.BooleanOptionalAction
+        else:
+            # A name (or on the API also a point or a vertex pair, which
+            # the command line does not take).
+            extra["choices"] = choices
+        p.add_argument(_flag(name), default=None, help=_flag_help(rows), **extra)
 
 
 def main(argv: Optional[List[str]] = None) -> int:
     parser = argparse.ArgumentParser(prog="spherify", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = parser.add_subparsers(dest="command", required=True)
-    names = _core.choices()
     for name, func, text in [("map", _cmd_map, "map a mesh onto the sphere and certify it"),
                              ("check", _cmd_check, "validate a mesh, orient it, print the report"),
                              ("orient", _cmd_orient, "write a consistently outward-oriented copy")]:
@@ -424,7 +470,7 @@ def main(argv: Optional[List[str]] = None) -> int:
         if name in ("orient", "map"):
             p.add_argument("-o", "--output", required=True, help="output mesh file")
         if name == "map":
-            _add_method_flags(p, names)
+            _add_method_flags(p)
             p.add_argument("--progress", action="store_true",
                            help="--method progressive and --poles graph: show a progress bar "
                                 "even when stderr is not a terminal")
@@ -432,7 +478,7 @@ def main(argv: Optional[List[str]] = None) -> int:
     p = sub.add_parser("batch", help="map many meshes, in parallel and resumably")
     p.add_argument("inputs", nargs="+", help="mesh files, folders, or .txt files of paths")
     p.add_argument("-o", "--output", required=True, help="output folder")
-    _add_method_flags(p, names)
+    _add_method_flags(p)
     p.add_argument("--weld", action="store_true",
                    help="first merge vertices at exactly the same position in each mesh")
     p.add_argument("--workers", type=int, default=None, help="local processes (default: cores)")

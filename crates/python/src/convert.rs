@@ -10,14 +10,13 @@ use crate::errors::mesh_error;
 
 /// Copies an `(n, K)` array into rows, or raises `MeshError` naming `what`.
 pub fn rows<T: numpy::Element + Copy + Default, const K: usize>(
-    py: Python<'_>,
     array: &PyReadonlyArrayDyn<'_, T>,
     what: &str,
 ) -> PyResult<Vec<[T; K]>> {
     let view = array.as_array();
     let shape = view.shape();
     if shape.len() != 2 || shape[1] != K {
-        return Err(mesh_error(py, format!("{what} must have shape (n, {K}), got {shape:?}")));
+        return Err(mesh_error(format!("{what} must have shape (n, {K}), got {shape:?}")));
     }
     // A C-contiguous array (what the Python side always passes) is copied
     // as one slice: walking it row by row through ndarray's iterators cost
@@ -59,10 +58,10 @@ pub fn to_i64_rows<const K: usize>(data: &[[u32; K]]) -> Vec<[i64; K]> {
 
 /// The weights named `name` (with exponent `rho` for "chord"); which weights
 /// a method accepts is decided in the core.
-pub fn weights(py: Python<'_>, name: &str, rho: f64) -> PyResult<Weights> {
-    let weights = Weights::from_name(name, rho).map_err(|e| mesh_error(py, e.to_string()))?;
+pub fn weights(name: &str, rho: f64) -> PyResult<Weights> {
+    let weights = Weights::from_name(name, rho).map_err(|e| mesh_error(e.to_string()))?;
     if matches!(weights, Weights::Chord { .. }) && !rho.is_finite() {
-        return Err(mesh_error(py, format!("rho must be finite, got {rho}")));
+        return Err(mesh_error(format!("rho must be finite, got {rho}")));
     }
     Ok(weights)
 }

@@ -7,11 +7,12 @@ use std::sync::Arc;
 
 use numpy::PyReadonlyArrayDyn;
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
+use pyo3::types::{PyDict, PyList};
 use spherify_mesh::io::PlyEncoding;
 use spherify_sparse::weights::Weights;
 use spherify_sparse::SolverKind;
 use spherify_sphere::from_points::from_points as core_from_points;
+use spherify_sphere::method_options::{OptionDefault, OptionKind, OptionValue};
 use spherify_sphere::theta_phi::{PoleChoice, ThetaPhiParams};
 use spherify_sphere::{
     embed as core_embed, improve_embedding, GenusZeroMesh, Method, MethodName, SphereError,
@@ -45,7 +46,59 @@ pub fn choices(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
     Ok(d)
 }
 
-fn method(py: Python<'_>, name: MethodName, options: &Options<'_>) -> PyResult<Method> {
+fn option_value(py: Python<'_>, value: OptionValue) -> PyResult<Bound<'_, PyAny>> {
+    Ok(match value {
+        OptionValue::Count(n) => n.into_pyobject(py)?.into_any(),
+        OptionValue::Number(x) => x.into_pyobject(py)?.into_any(),
+        OptionValue::Flag(b) => pyo3::types::PyBool::new(py, b).to_owned().into_any(),
+        OptionValue::Name(s) => s.into_pyobject(py)?.into_any(),
+    })
+}
+
+/// method_options() -> {method: [option, ...]}: the core's one table of
+/// every method's keyword options (and `improve`'s), each a dict with `name`,
+/// `kind` (count, number, flag, name, name_or_vertex_pair, name_or_point,
+/// points), `minimum` (counts), `choices` (names), `default` (a value, or
+/// None when the method decides), `default_by` ({name of `depends_on`:
+/// value} where the default depends on another option), `requires` ((option,
+/// name) or None) and `help`. Python's API, the batch and the CLI read it.
+#[pyfunction]
+pub fn method_options(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
+    let table = PyDict::new(py);
+    for method in MethodName::ALL.into_iter().chain([MethodName::Improve]) {
+        let rows = PyList::empty(py);
+        for option in method.options() {
+            let d = PyDict::new(py);
+            d.set_item("name", option.name)?;
+            d.set_item("kind", option.kind.name())?;
+            if let OptionKind::Count { minimum } = option.kind {
+                d.set_item("minimum", minimum)?;
+            }
+            d.set_item("choices", option.kind.choices().to_vec())?;
+            let (default, depends_on, default_by) = match option.default {
+                OptionDefault::Value(v) => (Some(option_value(py, v)?), None, None),
+                OptionDefault::Unset => (None, None, None),
+                OptionDefault::Depends { on, values } => {
+                    let by = PyDict::new(py);
+                    for (name, value) in values {
+                        by.set_item(name, option_value(py, value)?)?;
+                    }
+                    (None, Some(on), Some(by))
+                }
+            };
+            d.set_item("default", default)?;
+            d.set_item("depends_on", depends_on)?;
+            d.set_item("default_by", default_by)?;
+            d.set_item("requires", option.requires)?;
+            d.set_item("help", option.help)?;
+            rows.append(d)?;
+        }
+        table.set_item(method.as_str(), rows)?;
+    }
+    Ok(table)
+}
+
+fn method(name: MethodName, options: &Options<'_>) -> PyResult<Method> {
     match name {
         MethodName::Radial => crate::radial::method(options),
         MethodName::Relaxation => crate::relaxation::relaxation(options),
@@ -53,13 +106,12 @@ fn method(py: Python<'_>, name: MethodName, options: &Options<'_>) -> PyResult<M
         MethodName::Gotsman => crate::gotsman::method(options),
         MethodName::ThetaPhi => crate::theta_phi::method(options),
         MethodName::Progressive => crate::progressive::method(options),
-        MethodName::Improve => Err(mesh_error(
-            options.py(),
-            "\"improve\" is not a method of embed: call improve on a map",
-        )),
+        MethodName::Improve => {
+            Err(mesh_error("\"improve\" is not a method of embed: call improve on a map"))
+        }
         // from_str never names it: embed does not run it.
         MethodName::Points => {
-            Err(mesh_error(py, "points maps come from SphereMap.from_points, not from embed"))
+            Err(mesh_error("points maps come from SphereMap.from_points, not from embed"))
         }
     }
 }
@@ -78,9 +130,9 @@ pub fn embed(
     options: Option<&Bound<'_, PyDict>>,
     progress: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<CoreSphereMap> {
-    let name = MethodName::from_str(method).map_err(|e| mesh_error(py, e.to_string()))?;
-    let options = Options::new(py, name.as_str(), options)?;
-    let method = self::method(py, name, &options)?;
+    let name = MethodName::from_str(method).map_err(|e| mesh_error(e.to_string()))?;
+    let options = Options::new(py, name, options)?;
+    let method = self::method(name, &options)?;
     options.finish()?;
     let mesh_arg = mesh;
     let shared = Arc::clone(&mesh.mesh);
@@ -108,7 +160,7 @@ pub fn improve(
     options: Option<&Bound<'_, PyDict>>,
     progress: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<CoreSphereMap> {
-    let options = Options::new(py, "improve", options)?;
+    let options = Options::new(py, MethodName::Improve, options)?;
     let params = crate::progressive::improve_params(&options)?;
     options.finish()?;
     let shared = sphere_map.shared_mesh();
@@ -138,7 +190,7 @@ pub fn from_points(
     mesh: &CoreMesh,
     points: PyReadonlyArrayDyn<'_, f64>,
 ) -> PyResult<CoreSphereMap> {
-    let points = rows::<f64, 3>(py, &points, "points")?;
+    let points = rows::<f64, 3>(&points, "points")?;
     let caller = Arc::clone(&mesh.mesh);
     let shared = Arc::clone(&mesh.mesh);
     let result = crate::pool::detach(py, || {

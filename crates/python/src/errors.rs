@@ -1,32 +1,76 @@
-//! Core errors -> the Python exceptions of DESIGN.md, which are defined in
-//! `spherify/_errors.py` so that they can inherit from both `SpherifyError` and
-//! the matching builtin (`ValueError`, `RuntimeError`, `OSError`).
+//! Core errors -> the Python exceptions of DESIGN.md: the one module that
+//! maps errors. The exception classes are defined in `spherify/_errors.py`
+//! (they inherit from both `SpherifyError` and the matching builtin,
+//! `ValueError`, `RuntimeError` or `OSError`, which a class made in Rust
+//! cannot) and declared here once with PyO3's `import_exception!`.
 
-use pyo3::call::PyCallArgs;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use spherify_mesh::{Location, MeshError};
+use spherify_mesh::{Location, MeshError, UnknownName};
 use spherify_sparse::tutte::TutteError;
 use spherify_sparse::SparseError;
+use spherify_sphere::harmonics::HarmonicsError;
+use spherify_sphere::metrics::QualityError;
 use spherify_sphere::point_map::PointMapError;
 use spherify_sphere::{SphereEmbedding, SphereError};
 
 use crate::convert::to_numpy;
 
-/// Instantiates `spherify._errors.<name>(*args)` as a `PyErr`.
-pub fn spherify_error<'py>(py: Python<'py>, name: &str, args: impl PyCallArgs<'py>) -> PyErr {
-    let made = py
-        .import("spherify._errors")
-        .and_then(|module| module.getattr(name))
-        .and_then(|class| class.call1(args));
-    match made {
-        Ok(instance) => PyErr::from_value(instance),
-        Err(err) => err,
-    }
+/// The classes of `spherify._errors`, imported once (on first use).
+pub mod class {
+    pyo3::import_exception!(spherify._errors, SpherifyError);
+    pyo3::import_exception!(spherify._errors, MeshError);
+    pyo3::import_exception!(spherify._errors, TopologyError);
+    pyo3::import_exception!(spherify._errors, FormatError);
+    pyo3::import_exception!(spherify._errors, ConvergenceError);
+    pyo3::import_exception!(spherify._errors, MapError);
+    pyo3::import_exception!(spherify._errors, FileError);
 }
 
-pub fn mesh_error(py: Python<'_>, message: impl Into<String>) -> PyErr {
-    spherify_error(py, "MeshError", (message.into(),))
+/// A bad argument or bad data: `MeshError(message)`.
+pub fn mesh_error(message: impl Into<String>) -> PyErr {
+    class::MeshError::new_err(message.into())
+}
+
+/// A failure that is neither the mesh's nor an argument's (no worker
+/// thread could be started, a call from inside a progress callable).
+pub fn spherify_error(message: impl Into<String>) -> PyErr {
+    class::SpherifyError::new_err(message.into())
+}
+
+/// A name the core does not know (a weight, an encoding, a method).
+pub fn unknown_name(err: UnknownName) -> PyErr {
+    mesh_error(err.to_string())
+}
+
+/// The errno of an `io::ErrorKind` the operating system gave without one.
+fn errno_of_kind(kind: std::io::ErrorKind) -> Option<i32> {
+    use std::io::ErrorKind;
+    Some(match kind {
+        ErrorKind::NotFound => libc::ENOENT,
+        ErrorKind::PermissionDenied => libc::EACCES,
+        ErrorKind::AlreadyExists => libc::EEXIST,
+        ErrorKind::IsADirectory => libc::EISDIR,
+        ErrorKind::NotADirectory => libc::ENOTDIR,
+        _ => return None,
+    })
+}
+
+/// `FileError(errno, strerror, filename)`, which `FileError` turns into
+/// the subclass that is also the builtin of that errno (`FileNotFoundError`,
+/// ...), as `OSError` does; without an errno, `FileError("path: message")`.
+fn file_error(path: &str, source: &std::io::Error) -> PyErr {
+    match source.raw_os_error().or_else(|| errno_of_kind(source.kind())) {
+        Some(code) => {
+            // std writes an OS error as "<strerror> (os error N)"; Python's
+            // own OSError says only the strerror.
+            let text = std::io::Error::from_raw_os_error(code).to_string();
+            let suffix = format!(" (os error {code})");
+            let strerror = text.strip_suffix(&suffix).unwrap_or(&text).to_string();
+            class::FileError::new_err((code, strerror, path.to_string()))
+        }
+        None => class::FileError::new_err(format!("{path}: {source}")),
+    }
 }
 
 /// Maps every core mesh error to its Python exception.
@@ -38,22 +82,18 @@ pub fn to_py(py: Python<'_>, err: MeshError) -> PyErr {
                 Location::Byte(b) => (None, Some(b)),
                 Location::File => (None, None),
             };
-            spherify_error(py, "FormatError", (f.to_string(), f.path.clone(), line, offset))
+            class::FormatError::new_err((f.to_string(), f.path.clone(), line, offset))
         }
         // `FileError`: a SpherifyError and the builtin OSError subclass of the cause.
-        MeshError::Io { path, source } => spherify_error(
-            py,
-            "file_error",
-            (source.raw_os_error(), format!("{:?}", source.kind()), source.to_string(), path),
-        ),
+        MeshError::Io { path, source } => file_error(&path, &source),
         MeshError::Topology(t) => {
             let report = match crate::validate::report_to_py(py, &t.report) {
-                Ok(report) => report,
+                Ok(report) => report.unbind(),
                 Err(e) => return e,
             };
-            spherify_error(py, "TopologyError", (t.to_string(), report))
+            class::TopologyError::new_err((t.to_string(), report))
         }
-        other => mesh_error(py, other.to_string()),
+        other => mesh_error(other.to_string()),
     }
 }
 
@@ -79,7 +119,7 @@ fn convergence_error(
         Ok(())
     })();
     match filled {
-        Ok(()) => spherify_error(py, "ConvergenceError", (message, state)),
+        Ok(()) => class::ConvergenceError::new_err((message, state.unbind())),
         Err(e) => e,
     }
 }
@@ -94,7 +134,7 @@ pub fn sphere_error(py: Python<'_>, err: SphereError) -> PyErr {
             convergence_error(py, err.to_string(), points, *iterations, None, status.name())
         }
         SphereError::Solve(s) => sparse_error(py, s),
-        SphereError::InvalidStart { .. } => spherify_error(py, "MapError", (err.to_string(),)),
+        SphereError::InvalidStart { .. } => class::MapError::new_err(err.to_string()),
         SphereError::Insertion { .. } => convergence_error(
             py,
             err.to_string(),
@@ -103,7 +143,7 @@ pub fn sphere_error(py: Python<'_>, err: SphereError) -> PyErr {
             None,
             "insertion_failed",
         ),
-        other => mesh_error(py, other.to_string()),
+        other => mesh_error(other.to_string()),
     }
 }
 
@@ -117,12 +157,12 @@ pub fn sparse_error(py: Python<'_>, err: SparseError) -> PyErr {
             let rows: Vec<Vec<f64>> = (0..n).map(|i| last.iter().map(|c| c[i]).collect()).collect();
             let points = match numpy::PyArray2::from_vec2(py, &rows) {
                 Ok(a) => a.into_any(),
-                Err(e) => return mesh_error(py, e.to_string()),
+                Err(e) => return mesh_error(e.to_string()),
             };
             let message = err.to_string();
             convergence_error(py, message, points, iterations, Some(residual), "max_iterations")
         }
-        other => mesh_error(py, other.to_string()),
+        other => mesh_error(other.to_string()),
     }
 }
 
@@ -136,15 +176,29 @@ pub fn tutte_error(py: Python<'_>, err: TutteError) -> PyErr {
             convergence_error(py, message, points, iterations, Some(residual), "max_iterations")
         }
         TutteError::Solve(s) => sparse_error(py, s),
-        other => mesh_error(py, other.to_string()),
+        other => mesh_error(other.to_string()),
     }
 }
 
 /// `h^-1` of a map that is not a certified bijection is a `MapError`; bad
 /// query rows are `MeshError`s.
-pub fn point_map_error(py: Python<'_>, err: PointMapError) -> PyErr {
+pub fn point_map_error(err: PointMapError) -> PyErr {
     match err {
-        PointMapError::NotBijective(_) => spherify_error(py, "MapError", (err.to_string(),)),
-        other => mesh_error(py, other.to_string()),
+        PointMapError::NotBijective(_) => class::MapError::new_err(err.to_string()),
+        other => mesh_error(other.to_string()),
     }
+}
+
+/// A spherical-harmonic transform's error: a map that is not a bijection is
+/// a `MapError`, a bad degree or size a `MeshError`.
+pub fn harmonics_error(err: HarmonicsError) -> PyErr {
+    match err {
+        HarmonicsError::Map(e) => point_map_error(e),
+        other => mesh_error(other.to_string()),
+    }
+}
+
+/// A distortion measure's error (points that do not fit the mesh).
+pub fn quality_error(err: QualityError) -> PyErr {
+    mesh_error(err.to_string())
 }

@@ -16,8 +16,8 @@ use crate::relaxation::initial;
 pub fn method(options: &Options<'_>) -> PyResult<Method> {
     let defaults = GotsmanParams::default();
     Ok(Method::Gotsman(GotsmanParams {
-        weights: options.weights()?,
-        max_iter: options.count("max_iter", defaults.max_iter, 0)?,
+        weights: options.weights(defaults.weights)?,
+        max_iter: options.count("max_iter", defaults.max_iter)?,
         tol: options.number("tol", defaults.tol)?,
         strict: options.flag("strict", defaults.strict)?,
         initial: initial(options)?,

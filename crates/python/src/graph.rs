@@ -9,13 +9,11 @@ use crate::errors::mesh_error;
 use crate::mesh::CoreMesh;
 
 /// Whether edges weigh their length (`"length"`) or 1 (`"uniform"`).
-fn by_length(py: Python<'_>, name: &str) -> PyResult<bool> {
+fn by_length(name: &str) -> PyResult<bool> {
     match name {
         "uniform" => Ok(false),
         "length" => Ok(true),
-        other => {
-            Err(mesh_error(py, format!("weights must be 'length' or 'uniform', got {other:?}")))
-        }
+        other => Err(mesh_error(format!("weights must be 'length' or 'uniform', got {other:?}"))),
     }
 }
 
@@ -27,13 +25,12 @@ fn weights(mesh: &Mesh, by_length: bool) -> EdgeWeights<'_> {
     }
 }
 
-fn check_vertex(py: Python<'_>, mesh: &CoreMesh, v: i64, what: &str) -> PyResult<u32> {
+fn check_vertex(mesh: &CoreMesh, v: i64, what: &str) -> PyResult<u32> {
     let n = mesh.mesh.n_vertices();
     if v < 0 || v as u64 >= n as u64 {
-        return Err(mesh_error(
-            py,
-            format!("{what} vertex {v} is out of range (the mesh has {n} vertices)"),
-        ));
+        return Err(mesh_error(format!(
+            "{what} vertex {v} is out of range (the mesh has {n} vertices)"
+        )));
     }
     Ok(v as u32)
 }
@@ -50,14 +47,14 @@ pub fn dijkstra<'py>(
     source: i64,
     weights: &str,
 ) -> PyResult<Paths<'py>> {
-    let source = check_vertex(py, mesh, source, "source")?;
-    let by_length = by_length(py, weights)?;
+    let source = check_vertex(mesh, source, "source")?;
+    let by_length = by_length(weights)?;
     let paths = crate::progress::run_on_mesh(py, mesh, move |mesh| {
         let graph = Adjacency::from_faces(mesh.n_vertices(), mesh.faces());
         paths::dijkstra(&graph, source, self::weights(mesh, by_length))
     })?;
     // The source was checked above, so the search always runs.
-    let paths = paths.ok_or_else(|| mesh_error(py, "source vertex out of range"))?;
+    let paths = paths.ok_or_else(|| mesh_error("source vertex out of range"))?;
     let pred: Vec<i64> = paths
         .predecessors
         .iter()
@@ -77,9 +74,9 @@ pub fn shortest_path<'py>(
     target: i64,
     weights: &str,
 ) -> PyResult<(f64, Bound<'py, PyArray1<i64>>)> {
-    let source = check_vertex(py, mesh, source, "source")?;
-    let target = check_vertex(py, mesh, target, "target")?;
-    let by_length = by_length(py, weights)?;
+    let source = check_vertex(mesh, source, "source")?;
+    let target = check_vertex(mesh, target, "target")?;
+    let by_length = by_length(weights)?;
     let found = crate::progress::run_on_mesh(py, mesh, move |mesh| {
         let graph = Adjacency::from_faces(mesh.n_vertices(), mesh.faces());
         paths::dijkstra_to(&graph, source, target, self::weights(mesh, by_length))
@@ -89,6 +86,6 @@ pub fn shortest_path<'py>(
             let path: Vec<i64> = path.into_iter().map(i64::from).collect();
             Ok((length, path.into_pyarray(py)))
         }
-        None => Err(mesh_error(py, format!("vertex {target} cannot be reached from vertex {source}: they lie in different components"))),
+        None => Err(mesh_error(format!("vertex {target} cannot be reached from vertex {source}: they lie in different components"))),
     }
 }

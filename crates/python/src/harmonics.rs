@@ -4,18 +4,11 @@
 use numpy::{PyArray2, PyReadonlyArrayDyn};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use spherify_sphere::harmonics::{evaluate_with, fit_with, HarmonicsError};
+use spherify_sphere::harmonics::{evaluate_with, fit_with};
 
 use crate::convert::{rows, to_numpy};
-use crate::errors::{mesh_error, point_map_error};
+use crate::errors::harmonics_error;
 use crate::sphere_map::CoreSphereMap;
-
-fn harmonics_error(py: Python<'_>, err: HarmonicsError) -> PyErr {
-    match err {
-        HarmonicsError::Map(e) => point_map_error(py, e),
-        other => mesh_error(py, other.to_string()),
-    }
-}
 
 /// harmonics_fit(map, lmax, oversample=1) -> (coefficients ((lmax+1)^2, 3) float64, info dict).
 ///
@@ -34,7 +27,7 @@ pub fn harmonics_fit<'py>(
     // Through progress::run so that Ctrl-C stops a transform of high degree.
     let (coefficients, info) =
         crate::progress::run(py, None, |go_on| fit_with(point_map, lmax, oversample, go_on))?
-            .map_err(|e| harmonics_error(py, e))?;
+            .map_err(harmonics_error)?;
     let d = PyDict::new(py);
     d.set_item("n_theta", info.n_theta)?;
     d.set_item("n_phi", info.n_phi)?;
@@ -49,10 +42,10 @@ pub fn harmonics_evaluate<'py>(
     coefficients: PyReadonlyArrayDyn<'_, f64>,
     points: PyReadonlyArrayDyn<'_, f64>,
 ) -> PyResult<Bound<'py, PyArray2<f64>>> {
-    let coefficients = rows::<f64, 3>(py, &coefficients, "coefficients")?;
-    let points = rows::<f64, 3>(py, &points, "points")?;
+    let coefficients = rows::<f64, 3>(&coefficients, "coefficients")?;
+    let points = rows::<f64, 3>(&points, "points")?;
     let values =
         crate::progress::run(py, None, |go_on| evaluate_with(&coefficients, &points, go_on))?
-            .map_err(|e| harmonics_error(py, e))?;
+            .map_err(harmonics_error)?;
     Ok(to_numpy(py, &values))
 }

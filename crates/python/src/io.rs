@@ -6,7 +6,7 @@ use pyo3::types::{PyBytes, PyDict};
 use spherify_mesh::io::{self, PlyEncoding, VertexAttributes, WriteOptions};
 
 use crate::convert::{rows, to_numpy};
-use crate::errors::{mesh_error, to_py};
+use crate::errors::{to_py, unknown_name};
 use crate::mesh::CoreMesh;
 
 /// load(path) -> (CoreMesh, notes, attributes): reads OBJ, OFF, PLY or STL.
@@ -42,7 +42,7 @@ pub fn save(
     ply_encoding: &str,
     stl_binary: bool,
 ) -> PyResult<()> {
-    let (attributes, options) = write_options(py, sphere, uv, ply_encoding, stl_binary)?;
+    let (attributes, options) = write_options(sphere, uv, ply_encoding, stl_binary)?;
     crate::pool::detach(py, || io::write(&path, &mesh.mesh, &attributes, &options))?
         .map_err(|e| to_py(py, e))
 }
@@ -62,7 +62,7 @@ pub fn encode<'py>(
     ply_encoding: &str,
     stl_binary: bool,
 ) -> PyResult<Bound<'py, PyBytes>> {
-    let (attributes, options) = write_options(py, sphere, uv, ply_encoding, stl_binary)?;
+    let (attributes, options) = write_options(sphere, uv, ply_encoding, stl_binary)?;
     let bytes = crate::pool::detach(py, || {
         let format = io::format_from_path(&path)?;
         io::write_bytes(&mesh.mesh, &attributes, format, &options, &path.display().to_string())
@@ -81,18 +81,15 @@ pub fn write_atomic(py: Python<'_>, path: std::path::PathBuf, data: &[u8]) -> Py
 
 /// The attributes and options of `save` and `encode`, checked.
 fn write_options(
-    py: Python<'_>,
     sphere: Option<PyReadonlyArrayDyn<'_, f64>>,
     uv: Option<PyReadonlyArrayDyn<'_, f64>>,
     ply_encoding: &str,
     stl_binary: bool,
 ) -> PyResult<(VertexAttributes, WriteOptions)> {
-    let ply_encoding: PlyEncoding = ply_encoding
-        .parse()
-        .map_err(|e: spherify_mesh::UnknownName| mesh_error(py, e.to_string()))?;
+    let ply_encoding: PlyEncoding = ply_encoding.parse().map_err(unknown_name)?;
     let attributes = VertexAttributes {
-        sphere: sphere.map(|a| rows::<f64, 3>(py, &a, "sphere")).transpose()?,
-        uv: uv.map(|a| rows::<f64, 2>(py, &a, "uv")).transpose()?,
+        sphere: sphere.map(|a| rows::<f64, 3>(&a, "sphere")).transpose()?,
+        uv: uv.map(|a| rows::<f64, 2>(&a, "uv")).transpose()?,
     };
     Ok((attributes, WriteOptions { ply_encoding, stl_binary }))
 }

@@ -54,6 +54,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(embed::embed, m)?)?;
     m.add_function(wrap_pyfunction!(embed::methods, m)?)?;
     m.add_function(wrap_pyfunction!(embed::choices, m)?)?;
+    m.add_function(wrap_pyfunction!(embed::method_options, m)?)?;
     m.add_function(wrap_pyfunction!(embed::improve, m)?)?;
     m.add_function(wrap_pyfunction!(embed::from_points, m)?)?;
     m.add_function(wrap_pyfunction!(harmonics::harmonics_fit, m)?)?;

@@ -25,8 +25,8 @@ impl CoreMesh {
         vertices: PyReadonlyArrayDyn<'_, f64>,
         faces: PyReadonlyArrayDyn<'_, i64>,
     ) -> PyResult<Self> {
-        let positions = rows::<f64, 3>(py, &vertices, "vertices")?;
-        let faces = rows::<i64, 3>(py, &faces, "faces")?;
+        let positions = rows::<f64, 3>(&vertices, "vertices")?;
+        let faces = rows::<i64, 3>(&faces, "faces")?;
         let mesh = crate::pool::detach(py, || Mesh::from_signed(positions, &faces))?
             .map_err(|e| to_py(py, e))?;
         Ok(CoreMesh { mesh: Arc::new(mesh) })

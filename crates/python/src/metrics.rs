@@ -6,7 +6,7 @@ use pyo3::types::PyDict;
 use spherify_sphere::metrics;
 
 use crate::convert::rows;
-use crate::errors::mesh_error;
+use crate::errors::quality_error;
 use crate::mesh::CoreMesh;
 
 /// quality(mesh, points (n, 3) float64) -> dict of str to float (counts as
@@ -17,9 +17,9 @@ pub fn quality<'py>(
     mesh: &CoreMesh,
     points: PyReadonlyArrayDyn<'_, f64>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let points = rows::<f64, 3>(py, &points, "points")?;
+    let points = rows::<f64, 3>(&points, "points")?;
     let q = crate::progress::run_on_mesh(py, mesh, move |mesh| metrics::quality(mesh, &points))?
-        .map_err(|e| mesh_error(py, e.to_string()))?;
+        .map_err(quality_error)?;
     let d = PyDict::new(py);
     for (name, value) in q.fields() {
         d.set_item(name, value)?;
@@ -38,10 +38,10 @@ pub fn face_quality<'py>(
     mesh: &CoreMesh,
     points: PyReadonlyArrayDyn<'_, f64>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let points = rows::<f64, 3>(py, &points, "points")?;
+    let points = rows::<f64, 3>(&points, "points")?;
     let f =
         crate::progress::run_on_mesh(py, mesh, move |mesh| metrics::face_measures(mesh, &points))?
-            .map_err(|e| mesh_error(py, e.to_string()))?;
+            .map_err(quality_error)?;
     let d = PyDict::new(py);
     d.set_item("angle_max_deg", f.angle_max_deg.into_pyarray(py))?;
     d.set_item("conformal", f.conformal.into_pyarray(py))?;

@@ -35,7 +35,7 @@ thread_local! {
 }
 
 /// The pool of this process, built on first use (and again after a fork).
-fn pool(py: Python<'_>) -> PyResult<Arc<ThreadPool>> {
+fn pool() -> PyResult<Arc<ThreadPool>> {
     let pid = std::process::id();
     let mut slot = POOL.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
     if let Some((owner, pool)) = slot.as_ref() {
@@ -47,25 +47,22 @@ fn pool(py: Python<'_>) -> PyResult<Arc<ThreadPool>> {
         // Threads of the parent: never joined, never signalled (module doc).
         std::mem::forget(inherited);
     }
-    let built =
-        rayon::ThreadPoolBuilder::new().thread_name(|i| format!("spherify-{i}")).build().map_err(
-            |e| spherify_error(py, "SpherifyError", (format!("cannot start worker threads: {e}"),)),
-        )?;
+    let built = rayon::ThreadPoolBuilder::new()
+        .thread_name(|i| format!("spherify-{i}"))
+        .build()
+        .map_err(|e| spherify_error(format!("cannot start worker threads: {e}")))?;
     let built = Arc::new(built);
     *slot = Some((pid, Arc::clone(&built)));
     Ok(built)
 }
 
 /// Refuses a core call made from inside a progress callable (module doc).
-fn refuse_reentry(py: Python<'_>) -> PyResult<()> {
+fn refuse_reentry() -> PyResult<()> {
     if IN_CALLBACK.with(Cell::get) {
         return Err(spherify_error(
-            py,
-            "SpherifyError",
-            ("spherify functions cannot be called from inside a progress callback: the \
-              computation that called it holds the worker threads; do the work after the \
-              call returns"
-                .to_string(),),
+            "spherify functions cannot be called from inside a progress callback: the \
+             computation that called it holds the worker threads; do the work after the \
+             call returns",
         ));
     }
     Ok(())
@@ -73,14 +70,14 @@ fn refuse_reentry(py: Python<'_>) -> PyResult<()> {
 
 /// The pool a core call is to run on (`pool.install(work)`), or the refusal
 /// of a re-entrant call.
-pub fn get(py: Python<'_>) -> PyResult<Arc<ThreadPool>> {
-    refuse_reentry(py)?;
-    pool(py)
+pub fn get() -> PyResult<Arc<ThreadPool>> {
+    refuse_reentry()?;
+    pool()
 }
 
 /// Runs `f` on this process's pool with the GIL released.
 pub fn detach<R: Send>(py: Python<'_>, f: impl FnOnce() -> R + Send) -> PyResult<R> {
-    let pool = get(py)?;
+    let pool = get()?;
     Ok(py.detach(|| pool.install(f)))
 }
 

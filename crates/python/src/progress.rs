@@ -85,15 +85,12 @@ const WAKE_EVERY: Duration = Duration::from_millis(100);
 impl State {
     /// The state of one run, after refusing a progress argument that is
     /// neither None nor callable.
-    fn new(py: Python<'_>, callback: Option<&Bound<'_, PyAny>>) -> PyResult<State> {
+    fn new(callback: Option<&Bound<'_, PyAny>>) -> PyResult<State> {
         if let Some(c) = callback.filter(|c| !c.is_callable()) {
-            return Err(mesh_error(
-                py,
-                format!(
-                    "progress must be None or a callable taking (done, total), got {}",
-                    c.get_type().name()?
-                ),
-            ));
+            return Err(mesh_error(format!(
+                "progress must be None or a callable taking (done, total), got {}",
+                c.get_type().name()?
+            )));
         }
         Ok(State {
             callback: callback.map(|c| c.clone().unbind()),
@@ -105,12 +102,12 @@ impl State {
 
     /// What the run gives back: the error the callable or a signal handler
     /// raised, else the work's result.
-    fn finish<R>(&self, py: Python<'_>, result: Option<R>) -> PyResult<R> {
+    fn finish<R>(&self, result: Option<R>) -> PyResult<R> {
         match (lock(&self.error).take(), result) {
             (Some(err), _) => Err(err),
             (None, Some(result)) => Ok(result),
             (None, None) => {
-                Err(mesh_error(py, "internal error: the computation ended without a result"))
+                Err(mesh_error("internal error: the computation ended without a result"))
             }
         }
     }
@@ -159,8 +156,8 @@ pub fn run<R: Send>(
     callback: Option<&Bound<'_, PyAny>>,
     work: impl FnOnce(&(dyn Fn(usize, usize) -> bool + Sync)) -> R + Send,
 ) -> PyResult<R> {
-    let state = State::new(py, callback)?;
-    let pool = crate::pool::get(py)?;
+    let state = State::new(callback)?;
+    let pool = crate::pool::get()?;
     let finished = Slot::new();
     let result = std::thread::scope(|scope| {
         let (state, finished, pool) = (&state, &finished, &pool);
@@ -184,7 +181,7 @@ pub fn run<R: Send>(
             }
         }
     });
-    state.finish(py, result)
+    state.finish(result)
 }
 
 /// Input size (vertices or faces) from which a linear-time call without
@@ -235,8 +232,8 @@ pub fn run_detachable<R: Send + 'static>(
     callback: Option<&Bound<'_, PyAny>>,
     work: impl FnOnce(&(dyn Fn(usize, usize) -> bool + Sync)) -> R + Send + 'static,
 ) -> PyResult<R> {
-    let state = Arc::new(State::new(py, callback)?);
-    let pool = crate::pool::get(py)?;
+    let state = Arc::new(State::new(callback)?);
+    let pool = crate::pool::get()?;
     let finished: Arc<Slot<R>> = Arc::new(Slot::new());
     let worker = {
         let (state, finished) = (Arc::clone(&state), Arc::clone(&finished));
@@ -245,7 +242,7 @@ pub fn run_detachable<R: Send + 'static>(
             .spawn(move || {
                 finished.put(pool.install(|| work(&|done, total| state.report(done, total))));
             })
-            .map_err(|e| mesh_error(py, format!("cannot start a worker thread: {e}")))?
+            .map_err(|e| mesh_error(format!("cannot start a worker thread: {e}")))?
     };
     let mut stopping: Option<Instant> = None;
     let result = loop {
@@ -273,5 +270,5 @@ pub fn run_detachable<R: Send + 'static>(
             }
         }
     };
-    state.finish(py, result)
+    state.finish(result)
 }

@@ -14,10 +14,7 @@ use crate::options::Options;
 pub fn energy(options: &Options<'_>, default: Energy) -> PyResult<Energy> {
     let name = options.string("energy", default.name())?;
     Energy::from_name(&name).ok_or_else(|| {
-        mesh_error(
-            options.py(),
-            format!("energy = {name:?}: expected one of {}", Energy::NAMES.join(", ")),
-        )
+        mesh_error(format!("energy = {name:?}: expected one of {}", Energy::NAMES.join(", ")))
     })
 }
 
@@ -29,7 +26,7 @@ pub fn method(options: &Options<'_>) -> PyResult<Method> {
     let defaults = ProgressiveParams::for_energy(energy);
     Ok(Method::Progressive(ProgressiveParams {
         energy,
-        max_iter: options.count("max_iter", defaults.max_iter, 0)?,
+        max_iter: options.count("max_iter", defaults.max_iter)?,
         tolerance: options.number("tol", defaults.tolerance)?,
     }))
 }
@@ -39,7 +36,7 @@ pub fn improve_params(options: &Options<'_>) -> PyResult<ImproveParams> {
     let defaults = ImproveParams::default();
     Ok(ImproveParams {
         energy: energy(options, defaults.energy)?,
-        max_iter: options.count("max_iter", defaults.max_iter, 0)?,
+        max_iter: options.count("max_iter", defaults.max_iter)?,
         tolerance: options.number("tol", defaults.tolerance)?,
     })
 }

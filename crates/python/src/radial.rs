@@ -14,23 +14,23 @@ const EXPECTED: &str =
 
 /// "kernel", "centroid", or any length-3 sequence of numbers (a tuple, list or
 /// 1-D array); anything else is a MeshError.
-fn center_choice(py: Python<'_>, center: &Bound<'_, PyAny>) -> PyResult<Center> {
+fn center_choice(center: &Bound<'_, PyAny>) -> PyResult<Center> {
     if let Ok(name) = center.cast::<PyString>() {
         return match name.to_str()? {
             "kernel" => Ok(Center::Kernel),
             "centroid" => Ok(Center::Centroid),
-            other => Err(mesh_error(py, format!("{EXPECTED}, got {other:?}"))),
+            other => Err(mesh_error(format!("{EXPECTED}, got {other:?}"))),
         };
     }
     // Bytes are sequences of small ints; as a centre they are surely a mistake.
     if center.is_instance_of::<PyBytes>() || center.is_instance_of::<PyByteArray>() {
-        return Err(mesh_error(py, format!("{EXPECTED}, got bytes")));
+        return Err(mesh_error(format!("{EXPECTED}, got bytes")));
     }
     let bad = || {
-        mesh_error(
-            py,
-            format!("{EXPECTED}, got {}", center.repr().map(|r| r.to_string()).unwrap_or_default()),
-        )
+        mesh_error(format!(
+            "{EXPECTED}, got {}",
+            center.repr().map(|r| r.to_string()).unwrap_or_default()
+        ))
     };
     let mut point = Vec::with_capacity(3);
     for item in center.try_iter().map_err(|_| bad())? {
@@ -51,7 +51,7 @@ fn center_choice(py: Python<'_>, center: &Bound<'_, PyAny>) -> PyResult<Center> 
 /// point (x, y, z).
 pub fn method(options: &Options<'_>) -> PyResult<Method> {
     Ok(Method::Radial(match options.take("center")? {
-        Some(c) => center_choice(options.py(), &c)?,
-        None => Center::Kernel,
+        Some(c) => center_choice(&c)?,
+        None => Center::default(),
     }))
 }

@@ -16,22 +16,21 @@ use crate::options::Options;
 /// point (x, y, z), or `initial` points (n, 3); not both.
 pub fn initial(options: &Options<'_>) -> PyResult<Initial> {
     const EXPECTED: &str = "center must be 'centroid' or a point (x, y, z) of three finite numbers";
-    let py = options.py();
     let (center, points) = (options.take("center")?, options.take("initial")?);
     match (center, points) {
-        (Some(_), Some(_)) => Err(mesh_error(py, "give center or initial points, not both")),
+        (Some(_), Some(_)) => Err(mesh_error("give center or initial points, not both")),
         (None, Some(points)) => {
             let array = points
                 .extract::<PyReadonlyArrayDyn<'_, f64>>()
                 .map_err(|_| options.bad("initial", "an (n, 3) float64 array", &points))?;
-            Ok(Initial::Points(crate::convert::rows::<f64, 3>(py, &array, "initial")?))
+            Ok(Initial::Points(crate::convert::rows::<f64, 3>(&array, "initial")?))
         }
         (None, None) => Ok(Initial::Centroid),
         (Some(c), None) => {
             if let Ok(name) = c.cast::<PyString>() {
                 return match name.to_str()? {
                     "centroid" => Ok(Initial::Centroid),
-                    other => Err(mesh_error(py, format!("{EXPECTED}, got {other:?}"))),
+                    other => Err(mesh_error(format!("{EXPECTED}, got {other:?}"))),
                 };
             }
             let point = if c.is_instance_of::<PyBytes>() || c.is_instance_of::<PyByteArray>() {
@@ -41,13 +40,10 @@ pub fn initial(options: &Options<'_>) -> PyResult<Initial> {
             };
             match point {
                 Some(p) if p.iter().all(|x| x.is_finite()) => Ok(Initial::Center(p)),
-                _ => Err(mesh_error(
-                    py,
-                    format!(
-                        "{EXPECTED}, got {}",
-                        c.repr().map(|r| r.to_string()).unwrap_or_default()
-                    ),
-                )),
+                _ => Err(mesh_error(format!(
+                    "{EXPECTED}, got {}",
+                    c.repr().map(|r| r.to_string()).unwrap_or_default()
+                ))),
             }
         }
     }
@@ -59,9 +55,9 @@ pub fn initial(options: &Options<'_>) -> PyResult<Initial> {
 pub fn relaxation(options: &Options<'_>) -> PyResult<Method> {
     let defaults = RelaxationParams::default();
     Ok(Method::Relaxation(RelaxationParams {
-        weights: options.weights()?,
-        max_iter: options.count("max_iter", defaults.max_iter, 0)?,
-        check_every: options.count("check_every", defaults.check_every, 1)?,
+        weights: options.weights(defaults.weights)?,
+        max_iter: options.count("max_iter", defaults.max_iter)?,
+        check_every: options.count("check_every", defaults.check_every)?,
         tol: options.number("tol", defaults.tol)?,
         strict: options.flag("strict", defaults.strict)?,
         initial: initial(options)?,
@@ -77,8 +73,8 @@ pub fn alexa(options: &Options<'_>) -> PyResult<Method> {
         step: options
             .optional_number("c")?
             .map_or(AlexaStep::InverseLongestEdge, AlexaStep::Constant),
-        max_iter: options.count("max_iter", defaults.max_iter, 0)?,
-        check_every: options.count("check_every", defaults.check_every, 1)?,
+        max_iter: options.count("max_iter", defaults.max_iter)?,
+        check_every: options.count("check_every", defaults.check_every)?,
         tol: options.number("tol", defaults.tol)?,
         strict: options.flag("strict", defaults.strict)?,
         initial: initial(options)?,

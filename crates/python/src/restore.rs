@@ -23,19 +23,14 @@ enum Failed {
     Parts(RestoreError),
 }
 
-fn vertex_ids(
-    py: Python<'_>,
-    array: &PyReadonlyArrayDyn<'_, i64>,
-    what: &str,
-) -> PyResult<Vec<u32>> {
+fn vertex_ids(array: &PyReadonlyArrayDyn<'_, i64>, what: &str) -> PyResult<Vec<u32>> {
     let view = array.as_array();
     if view.ndim() != 1 {
-        return Err(mesh_error(py, format!("{what} must have shape (k,), got {:?}", view.shape())));
+        return Err(mesh_error(format!("{what} must have shape (k,), got {:?}", view.shape())));
     }
     view.iter()
         .map(|&v| {
-            u32::try_from(v)
-                .map_err(|_| mesh_error(py, format!("{what} holds {v}, not a vertex id")))
+            u32::try_from(v).map_err(|_| mesh_error(format!("{what} holds {v}, not a vertex id")))
         })
         .collect()
 }
@@ -68,28 +63,26 @@ pub fn restore_map(
     let method = match method {
         "points" => MethodName::Points,
         "improve" => MethodName::Improve,
-        name => MethodName::from_str(name).map_err(|e| mesh_error(py, e.to_string()))?,
+        name => MethodName::from_str(name).map_err(|e| mesh_error(e.to_string()))?,
     };
-    let status = status_from_name(status)
-        .ok_or_else(|| mesh_error(py, format!("unknown status {status:?}")))?;
-    let points = rows::<f64, 3>(py, &points, "points")?;
+    let status =
+        status_from_name(status).ok_or_else(|| mesh_error(format!("unknown status {status:?}")))?;
+    let points = rows::<f64, 3>(&points, "points")?;
     let theta_phi = match (poles, cut_path, theta_phi) {
         (None, None, None) => None,
         (Some((north, south)), Some(path), Some(uv)) => {
             let pole = |v: i64| {
-                u32::try_from(v).map_err(|_| mesh_error(py, format!("pole {v} is not a vertex id")))
+                u32::try_from(v).map_err(|_| mesh_error(format!("pole {v} is not a vertex id")))
             };
             Some(StoredThetaPhi {
                 poles: [pole(north)?, pole(south)?],
-                cut_path: vertex_ids(py, &path, "cut_path")?,
-                theta_phi: rows::<f64, 2>(py, &uv, "theta_phi")?,
+                cut_path: vertex_ids(&path, "cut_path")?,
+                theta_phi: rows::<f64, 2>(&uv, "theta_phi")?,
                 refinements,
                 re_embedded: [re_embedded.0, re_embedded.1],
             })
         }
-        _ => {
-            return Err(mesh_error(py, "poles, cut_path and theta_phi come together or not at all"))
-        }
+        _ => return Err(mesh_error("poles, cut_path and theta_phi come together or not at all")),
     };
     let stored = StoredMap { method, points, iterations, status, message, theta_phi };
     let caller = Arc::clone(&mesh.mesh);
@@ -101,7 +94,7 @@ pub fn restore_map(
     })?;
     let (mesh, embedding) = restored.map_err(|e| match e {
         Failed::Mesh(err) => sphere_error(py, err),
-        Failed::Parts(err) => mesh_error(py, err.to_string()),
+        Failed::Parts(err) => mesh_error(err.to_string()),
     })?;
     Ok(CoreSphereMap::new(mesh.shared_mesh(), caller, embedding, mesh.reoriented_faces()))
 }

@@ -16,16 +16,13 @@ pub fn check_sphere<'py>(
     mesh: &CoreMesh,
     points: PyReadonlyArrayDyn<'_, f64>,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let points = rows::<f64, 3>(py, &points, "points")?;
+    let points = rows::<f64, 3>(&points, "points")?;
     if points.len() != mesh.mesh.n_vertices() {
-        return Err(mesh_error(
-            py,
-            format!(
-                "points has {} rows, but the mesh has {} vertices",
-                points.len(),
-                mesh.mesh.n_vertices()
-            ),
-        ));
+        return Err(mesh_error(format!(
+            "points has {} rows, but the mesh has {} vertices",
+            points.len(),
+            mesh.mesh.n_vertices()
+        )));
     }
     let r = crate::pool::detach(py, || check(mesh.mesh.faces(), &points))?;
     report_to_py(py, &r)

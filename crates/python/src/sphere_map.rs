@@ -156,7 +156,7 @@ impl CoreSphereMap {
             _ => None,
         };
         array.ok_or_else(|| {
-            mesh_error(py, format!("no theta-phi array {name:?} in a {} map", self.method()))
+            mesh_error(format!("no theta-phi array {name:?} in a {} map", self.method()))
         })
     }
 
@@ -205,18 +205,18 @@ impl CoreSphereMap {
     ) -> PyResult<Bound<'py, PyArray2<f64>>> {
         let ids = face_ids.as_array();
         if ids.ndim() != 1 {
-            return Err(mesh_error(
-                py,
-                format!("face_ids must have shape (k,), got {:?}", ids.shape()),
-            ));
+            return Err(mesh_error(format!(
+                "face_ids must have shape (k,), got {:?}",
+                ids.shape()
+            )));
         }
         let ids: Vec<i64> = ids.iter().copied().collect();
-        let bary = rows::<f64, 3>(py, &bary, "bary")?;
+        let bary = rows::<f64, 3>(&bary, "bary")?;
         let map = self.point_map(py)?;
         // Through progress::run so that Ctrl-C stops a long batch.
         let points =
             crate::progress::run(py, None, |go_on| map.to_sphere_with(&ids, &bary, go_on))?
-                .map_err(|e| point_map_error(py, e))?;
+                .map_err(point_map_error)?;
         Ok(to_numpy(py, &points))
     }
 
@@ -234,10 +234,10 @@ impl CoreSphereMap {
         Bound<'py, PyArray2<f64>>,
         Bound<'py, PyArray1<f64>>,
     )> {
-        let points = rows::<f64, 3>(py, &points, "points")?;
+        let points = rows::<f64, 3>(&points, "points")?;
         let map = self.point_map(py)?;
         let out = crate::progress::run(py, None, |go_on| map.to_surface_with(&points, go_on))?
-            .map_err(|e| point_map_error(py, e))?;
+            .map_err(point_map_error)?;
         let faces: Vec<i64> = out.faces.into_iter().map(i64::from).collect();
         Ok((
             faces.into_pyarray(py),

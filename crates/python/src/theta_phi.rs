@@ -17,14 +17,10 @@ fn poles_expected() -> String {
     format!("poles must be {} or a (north, south) pair of vertex ids", names.join(", "))
 }
 
-fn pole_choice(
-    py: Python<'_>,
-    poles: &Bound<'_, PyAny>,
-    symmetry: SymmetryParams,
-) -> PyResult<PoleChoice> {
+fn pole_choice(poles: &Bound<'_, PyAny>, symmetry: SymmetryParams) -> PyResult<PoleChoice> {
     if let Ok(name) = poles.extract::<String>() {
         return PoleChoice::from_name(&name, symmetry)
-            .map_err(|_| mesh_error(py, format!("{}, got {name:?}", poles_expected())));
+            .map_err(|_| mesh_error(format!("{}, got {name:?}", poles_expected())));
     }
     // A bool is an int to Python; as a vertex id it is a mistake.
     let pair = poles.extract::<(Bound<'_, PyAny>, Bound<'_, PyAny>)>().ok().filter(|(n, s)| {
@@ -37,7 +33,7 @@ fn pole_choice(
         }
         _ => {
             let got = poles.repr().map(|r| r.to_string()).unwrap_or_default();
-            Err(mesh_error(py, format!("{}, got {got}", poles_expected())))
+            Err(mesh_error(format!("{}, got {got}", poles_expected())))
         }
     }
 }
@@ -69,12 +65,11 @@ fn symmetry_to_py<'py>(py: Python<'py>, sym: &Symmetry) -> PyResult<Bound<'py, P
     Ok(d)
 }
 
-/// `poles` ("fast_graph" default, "graph", "physical", "symmetry" or a
-/// (north, south) pair), `weights` ("uniform", "chord" with `rho`,
-/// "mean_value"; the core refuses the others), `max_refinements` (8),
-/// `symmetry_eps` (None: automatic) and `symmetry_max_score` (0.05).
+/// Theta-phi's options, as the core's table lists them: `poles` (a name or a
+/// (north, south) pair), `weights` with `rho`, `max_refinements`, and
+/// `symmetry_eps` and `symmetry_max_score` (only with `poles="symmetry"`,
+/// which the table's requirement enforces before this runs).
 pub fn method(options: &Options<'_>) -> PyResult<Method> {
-    let py = options.py();
     let defaults = ThetaPhiParams::default();
     let eps = options.optional_number("symmetry_eps")?;
     let max_score = options.optional_number("symmetry_max_score")?;
@@ -84,29 +79,13 @@ pub fn method(options: &Options<'_>) -> PyResult<Method> {
         ..SymmetryParams::default()
     };
     let poles = match options.take("poles")? {
-        Some(p) => pole_choice(py, &p, symmetry)?,
+        Some(p) => pole_choice(&p, symmetry)?,
         None => PoleChoice::FastGraph,
     };
-    // The symmetry options mean nothing to the other pole choices: taking
-    // them without a word would hide the caller's mistake.
-    let given: Vec<&str> = [("symmetry_eps", eps), ("symmetry_max_score", max_score)]
-        .iter()
-        .filter(|(_, value)| value.is_some())
-        .map(|(name, _)| *name)
-        .collect();
-    if !given.is_empty() && !matches!(poles, PoleChoice::Symmetry(_)) {
-        return Err(mesh_error(
-            py,
-            format!(
-                "theta_phi: {} only applies to poles=\"symmetry\"; pass poles=\"symmetry\" or leave it out",
-                given.join(" and ")
-            ),
-        ));
-    }
     Ok(Method::ThetaPhi(ThetaPhiParams {
         poles,
-        weights: options.weights()?,
-        max_refinements: options.count("max_refinements", defaults.max_refinements, 0)?,
+        weights: options.weights(defaults.weights)?,
+        max_refinements: options.count("max_refinements", defaults.max_refinements)?,
     }))
 }
 

@@ -8,7 +8,7 @@ use spherify_sparse::tutte::{self as core_tutte, BoundaryShape, TutteParams};
 use spherify_sparse::SolveParams;
 
 use crate::convert::{rows, to_numpy};
-use crate::errors::{mesh_error, to_py, tutte_error};
+use crate::errors::{mesh_error, to_py, tutte_error, unknown_name};
 use crate::mesh::CoreMesh;
 
 /// boundary_loop(mesh) -> (k,) int64, counter-clockwise; TopologyError unless a disk.
@@ -40,20 +40,17 @@ pub fn tutte<'py>(
     let boundary = match (boundary, polygon) {
         ("circle", None) => BoundaryShape::Circle,
         ("circle_length", None) => BoundaryShape::CircleByLength,
-        ("polygon", Some(points)) => BoundaryShape::Polygon(rows::<f64, 2>(py, &points, "boundary polygon")?),
-        (other, _) => {
-            return Err(mesh_error(
-                py,
-                format!("boundary must be 'circle', 'circle_length' or a (k, 2) array of points, got {other:?}"),
-            ))
+        ("polygon", Some(points)) => {
+            BoundaryShape::Polygon(rows::<f64, 2>(&points, "boundary polygon")?)
         }
+        (other, _) => return Err(mesh_error(format!(
+            "boundary must be 'circle', 'circle_length' or a (k, 2) array of points, got {other:?}"
+        ))),
     };
     let params = TutteParams {
-        weights: crate::convert::weights(py, weights, rho)?,
+        weights: crate::convert::weights(weights, rho)?,
         boundary,
-        solver: solver
-            .parse()
-            .map_err(|e: spherify_mesh::UnknownName| mesh_error(py, e.to_string()))?,
+        solver: solver.parse().map_err(unknown_name)?,
         solve: SolveParams { tol, max_iter, x0: None },
     };
     // Detachable: Ctrl-C inside one long factorisation (seconds at a million

@@ -24,8 +24,8 @@ pub fn check_raw<'py>(
     vertices: PyReadonlyArrayDyn<'_, f64>,
     faces: PyReadonlyArrayDyn<'_, i64>,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let positions = rows::<f64, 3>(py, &vertices, "vertices")?;
-    let faces = rows::<i64, 3>(py, &faces, "faces")?;
+    let positions = rows::<f64, 3>(&vertices, "vertices")?;
+    let faces = rows::<i64, 3>(&faces, "faces")?;
     let size = faces.len();
     let report =
         crate::progress::run_sized(py, size, move || validate::check_raw(&positions, &faces))?;

@@ -82,7 +82,7 @@ impl MethodName {
     /// [`MethodName::Points`], which [`embed`] does not run.
     pub fn with_defaults(self) -> Option<Method> {
         Some(match self {
-            MethodName::Radial => Method::Radial(Center::Kernel),
+            MethodName::Radial => Method::Radial(Center::default()),
             MethodName::Relaxation => Method::Relaxation(RelaxationParams::default()),
             MethodName::Alexa => Method::Alexa(AlexaParams::default()),
             MethodName::Gotsman => Method::Gotsman(GotsmanParams::default()),

@@ -141,6 +141,12 @@ pub struct GotsmanParams {
     pub initial: Initial,
 }
 
+impl GotsmanParams {
+    /// The weights eq. 5.10 accepts: positive (5.3) and symmetric. Mean-value
+    /// weights are not symmetric; cotangent weights can be negative.
+    pub const WEIGHTS: [&'static str; 2] = ["uniform", "chord"];
+}
+
 impl Default for GotsmanParams {
     fn default() -> GotsmanParams {
         GotsmanParams {
@@ -192,7 +198,7 @@ pub fn gotsman_with_progress(
             expected: "a finite number >= 0",
         });
     }
-    if matches!(params.weights, Weights::Cotangent | Weights::MeanValue) {
+    if !GotsmanParams::WEIGHTS.contains(&params.weights.name()) {
         return Err(SphereError::InvalidParameter {
             name: "weights",
             value: format!("{:?}", params.weights),

@@ -3,6 +3,8 @@
 //! Entry and results:
 //! * [`genus_zero`]: [`GenusZeroMesh`], the validated mesh every method takes (STYLE 5).
 //! * [`embed`]: one entry point, [`embed()`], for every method and its parameters.
+//! * [`method_options`]: the keyword options of every method, their kinds, defaults and
+//!   choices: the one table the bindings, the API, the batch and the CLI read.
 //! * [`embedding`]: [`SphereEmbedding`], the points and account every method returns.
 //! * [`from_points`]: a map made elsewhere, given as points, certified like the rest.
 //! * [`error`]: [`SphereError`], how a method fails.
@@ -71,6 +73,7 @@ pub mod initial;
 pub mod kernel;
 pub mod legendre;
 pub mod lp;
+pub mod method_options;
 pub mod metrics;
 pub mod mobius_centring;
 pub mod point_map;
@@ -87,6 +90,11 @@ pub mod theta_phi;
 pub mod validity;
 pub mod weight_bound;
 pub mod weight_matrix;
+
+/// README.md's Rust snippet, compiled as a doc test so that it stays true.
+#[cfg(doctest)]
+#[doc = include_str!("../../../README.md")]
+pub struct ReadmeSnippets;
 
 pub use embed::{embed, improve_embedding, Details, Embedding, Method, MethodName, UnknownMethod};
 pub use embedding::{SphereEmbedding, Status};

@@ -56,6 +56,14 @@ pub enum Center {
     Kernel,
 }
 
+impl Default for Center {
+    /// The kernel's deepest point: the one centre that is certain to see every
+    /// face when the mesh is star-shaped.
+    fn default() -> Self {
+        Center::Kernel
+    }
+}
+
 /// Projects every vertex radially from the chosen centre onto the unit sphere
 /// (thesis eq. 3.17). O(F) for [`Center::Kernel`] (the LP), O(n) otherwise.
 ///
