@@ -132,3 +132,50 @@ def test_a_folder_as_output_is_refused_before_the_work(
     assert "this is a folder" in captured.err + captured.out
     assert "vertices" not in captured.out  # nothing was mapped first
     assert list(folder.iterdir()) == []
+
+
+@pytest.mark.parametrize("command, extra", [
+    ("harmonics", ["--lmax", "4"]), ("remesh", ["--level", "1", "--samples", "100"]),
+    ("texture", ["--size", "16"]), ("morph", ["--target-dataset", "ellipsoid", "--frames", "2"]),
+])
+def test_the_applications_take_map_s_method_flags(
+        command: str, extra: list, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    # Issue 24, item 2: --energy, --poles, --weld and --progress were refused
+    # by the application commands; they take every flag of spherify map now.
+    out = tmp_path / ("x.obj" if command == "texture" else "x.ply")
+    assert cli.main([command, "--dataset", "icosphere", "--n-vertices", "200", "--energy",
+                     "conformal", "--weld", "--progress", "-o", str(out), *extra]) == 0, \
+        capsys.readouterr()
+    assert "map: progressive, certified" in capsys.readouterr().out
+    # An option of another method is refused as map refuses it (exit 2).
+    assert cli.main([command, "--dataset", "icosphere", "--n-vertices", "200", "--poles",
+                     "graph", "-o", str(out), *extra]) == 2
+    assert "--poles is an option of --method theta_phi" in capsys.readouterr().err
+    # The generated shape's size is bounded as for map (was unbounded).
+    with pytest.raises(SystemExit) as exit_:
+        cli.main([command, "--dataset", "icosphere", "--n-vertices", "1000000000",
+                  "-o", str(out), *extra])
+    assert exit_.value.code == 2
+
+
+def test_every_option_of_the_applications_has_help_with_its_default(
+        capsys: pytest.CaptureFixture[str]) -> None:
+    for command in ["harmonics", "remesh", "texture", "morph"]:
+        with pytest.raises(SystemExit):
+            cli.main([command, "--help"])
+        text = capsys.readouterr().out
+        for flag in ["--lmax", "--level", "--projection", "--pattern", "--size", "--frames",
+                     "--align"]:
+            if f"  {flag} " in text:
+                block = text.split(f"  {flag} ", 1)[1].split("\n  -", 1)[0]
+                assert "default:" in block, (command, flag, block)
+
+
+def test_version_and_a_plain_top_level_help(capsys: pytest.CaptureFixture[str]) -> None:
+    with pytest.raises(SystemExit) as exit_:
+        cli.main(["--version"])
+    assert exit_.value.code == 0 and capsys.readouterr().out.strip() == f"spherify {sp.__version__}"
+    with pytest.raises(SystemExit):
+        cli.main(["--help"])
+    text = capsys.readouterr().out
+    assert "``" not in text and "_cli_apps" not in text and "exit status" in text

@@ -16,13 +16,15 @@
                                    morph A into B (A's connectivity); writes K
                                    frames OUT_000 .. OUT_{K-1} with OUT's suffix
 
-Each maps the mesh first (``--method``, default theta-phi) and refuses, with
-exit status 1, a map that is not a certified bijection.
+Each maps the mesh first, with ``spherify map``'s method flags (``--method``,
+default progressive, and a flag for each option of the core's table), and
+refuses, with exit status 1, a map that is not a certified bijection.
 """
 
 from __future__ import annotations
 
 import argparse
+import sys
 import time
 import warnings
 from pathlib import Path
@@ -30,13 +32,14 @@ from typing import Any, Callable
 
 import numpy as np
 
-from . import datasets as _datasets
+from . import datasets
 from . import harmonics, texture
 from ._morph import morph
 from ._geometry_image import (from_geometry_image, geometry_image, octahedral_points,
                               save_geometry_image)
 from ._remesh import remesh_map, surface_distance
-from ._embed import embed, methods
+from ._cli_options import add_input_flags, add_method_flags, add_progress_flag, method_options_of
+from ._embed import embed
 from ._errors import SpherifyError, SpherifyWarning
 from ._mesh import Mesh, save
 from ._spheremap import SphereMap, ThetaPhiMap
@@ -47,10 +50,14 @@ def certified(m: SphereMap) -> bool:
     return m.tp_valid if isinstance(m, ThetaPhiMap) else m.valid
 
 
-def mapped(mesh: Mesh, method: str) -> SphereMap:
+def mapped(mesh: Mesh, args: argparse.Namespace) -> SphereMap:
+    """The map the application works through, with the method and options given."""
+    options = method_options_of(args)
+    method = args.method or "progressive"
+    progress = True if args.progress or sys.stderr.isatty() else None
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", SpherifyWarning)  # the verdict is printed instead
-        m = embed(mesh, method)
+        m = embed(mesh, method, progress=progress, **options)
     print(f"map: {m.method}, {'certified' if certified(m) else 'NOT certified'} "
           f"({m.flipped} faces flipped); {sum(m.seconds.values()):.3f} s")
     return m
@@ -69,7 +76,7 @@ def _cmd_harmonics(args: argparse.Namespace, load: Callable[[argparse.Namespace]
                    save_npz: Callable[..., None]) -> int:
     out = output_path(args)
     mesh = load(args)
-    m = mapped(mesh, args.method)
+    m = mapped(mesh, args)
     if not certified(m):
         print("refusing: the map is not a certified bijection")
         return 1
@@ -104,7 +111,7 @@ def _cmd_harmonics(args: argparse.Namespace, load: Callable[[argparse.Namespace]
 
 def _cmd_remesh(args: argparse.Namespace, load: Callable[[argparse.Namespace], Mesh]) -> int:
     out = output_path(args)
-    m = mapped(load(args), args.method)
+    m = mapped(load(args), args)
     if not certified(m):
         print("refusing: the map is not a certified bijection")
         return 1
@@ -134,8 +141,7 @@ def _cmd_remesh(args: argparse.Namespace, load: Callable[[argparse.Namespace], M
     return 0
 
 
-def _cmd_morph(args: argparse.Namespace, load: Callable[[argparse.Namespace], Mesh],
-               datasets: Any) -> int:
+def _cmd_morph(args: argparse.Namespace, load: Callable[[argparse.Namespace], Mesh]) -> int:
     out = output_path(args)
     if args.frames < 2:
         raise SpherifyError(f"--frames must be at least 2, got {args.frames}")
@@ -143,10 +149,10 @@ def _cmd_morph(args: argparse.Namespace, load: Callable[[argparse.Namespace], Me
     if args.target_dataset:
         b = datasets.make(args.target_dataset, args.n_vertices)
     elif args.target:
-        b = load(argparse.Namespace(dataset=None, mesh=args.target, n_vertices=0))
+        b = load(argparse.Namespace(dataset=None, mesh=args.target, n_vertices=0, weld=args.weld))
     else:
         raise SpherifyError("give the target mesh file or --target-dataset NAME")
-    m_a, m_b = mapped(a, args.method), mapped(b, args.method)
+    m_a, m_b = mapped(a, args), mapped(b, args)
     if not certified(m_b):
         print("refusing: the target's map is not a certified bijection")
         return 1
@@ -181,11 +187,11 @@ def _cmd_texture(args: argparse.Namespace, load: Callable[[argparse.Namespace], 
         raise SpherifyError(f"texture writes OBJ (with MTL and PNG): give OUT.obj, got {out}")
     if args.size < 2:
         raise SpherifyError(f"--size must be at least 2, got {args.size}")
-    m = mapped(load(args), args.method)
+    m = mapped(load(args), args)
     start = time.perf_counter()
     t = texture.uv(m, args.projection)
-    pattern = (_datasets.checkerboard if args.pattern == "checkerboard"
-               else _datasets.lat_long_grid)
+    pattern = (datasets.checkerboard if args.pattern == "checkerboard"
+               else datasets.lat_long_grid)
     image = t.bake(pattern, args.size)
     made = time.perf_counter()
     e1, e2 = t.uv[:, 1] - t.uv[:, 0], t.uv[:, 2] - t.uv[:, 0]
@@ -200,51 +206,58 @@ def _cmd_texture(args: argparse.Namespace, load: Callable[[argparse.Namespace], 
 
 
 def add_commands(sub: Any, load: Callable[[argparse.Namespace], Mesh],
-                 save_npz: Callable[..., None], datasets: Any) -> None:
-    """Registers the application subcommands on ``sub``."""
+                 save_npz: Callable[..., None]) -> None:
+    """Registers the application subcommands on ``sub``: each takes the
+    input, method and progress flags every mapping command takes."""
     def common(name: str, text: str) -> argparse.ArgumentParser:
-        p: argparse.ArgumentParser = sub.add_parser(name, help=text)
-        p.add_argument("mesh", nargs="?", help="mesh file (.obj .off .ply .stl)")
-        p.add_argument("--dataset", choices=datasets.names(), help="use a generated shape instead")
-        p.add_argument("--n-vertices", type=int, default=5000, help="size of the generated shape")
-        p.add_argument("--method", default="progressive", choices=methods(),
-                       help="the spherical map the application works through (default: "
-                            "progressive, certified on every mesh tried; theta_phi is faster)")
+        p: argparse.ArgumentParser = sub.add_parser(name, help=text, description=text)
+        add_input_flags(p)
+        add_method_flags(p)
+        add_progress_flag(p)
         p.add_argument("-o", "--output", required=True, help="output mesh file")
         return p
 
     p = common("harmonics", "spherical-harmonic fit, filter and rebuild (thesis 8.3)")
-    p.add_argument("--lmax", type=int, default=20, help="largest degree of the fit")
-    p.add_argument("--oversample", type=int, default=1, help="grid oversampling factor")
+    p.add_argument("--lmax", type=int, default=20, help="largest degree of the fit (default: 20)")
+    p.add_argument("--oversample", type=int, default=1,
+                   help="grid oversampling factor (default: 1)")
     p.add_argument("--lowpass", type=int, default=None, help="keep degrees up to this")
     p.add_argument("--gaussian", type=float, default=None,
                    help="heat-kernel smoothing of width SIGMA radians")
     p.add_argument("--sharpen", type=float, default=None, help="high-boost amount")
     p.add_argument("--sharpen-sigma", type=float, default=0.1,
-                   help="width of the smoothing the high-boost subtracts")
+                   help="width of the smoothing the high-boost subtracts (default: 0.1)")
     p.set_defaults(func=lambda args: _cmd_harmonics(args, load, save_npz))
 
     p = common("remesh", "semi-regular remesh or geometry image (thesis 8.1, 8.2)")
     kind = p.add_mutually_exclusive_group()
-    kind.add_argument("--level", type=int, default=4, help="icosphere subdivision level")
+    kind.add_argument("--level", type=int, default=4,
+                      help="icosphere subdivision level (default: 4)")
     kind.add_argument("--geometry-image", type=int, default=None, metavar="SIZE",
                       help="octahedral geometry image of odd SIZE instead")
     p.add_argument("--samples", type=int, default=100_000,
-                   help="random sphere points for the distance")
+                   help="random sphere points for the distance (default: 100000)")
     p.set_defaults(func=lambda args: _cmd_remesh(args, load))
 
     p = common("texture", "per-corner UVs and a baked texture, as OBJ + MTL (thesis 8.5)")
-    p.add_argument("--projection", default="cube", choices=list(texture.PROJECTIONS))
-    p.add_argument("--pattern", default="checkerboard", choices=["checkerboard", "grid"])
-    p.add_argument("--size", type=int, default=1024, help="atlas height in pixels")
+    p.add_argument("--projection", default="cube", choices=list(texture.PROJECTIONS),
+                   help="how the sphere is unfolded into the texture atlas (default: cube)")
+    p.add_argument("--pattern", default="checkerboard", choices=["checkerboard", "grid"],
+                   help="the procedural texture baked into the atlas (default: checkerboard)")
+    p.add_argument("--size", type=int, default=1024,
+                   help="atlas height in pixels (default: 1024)")
     p.set_defaults(func=lambda args: _cmd_texture(args, load))
 
     p = common("morph", "morph one mesh into another through their maps (thesis 8.4)")
     p.add_argument("target", nargs="?", help="the mesh to morph into")
     p.add_argument("--target-dataset", choices=datasets.names(),
                    help="use a generated shape as the target")
-    p.add_argument("--frames", type=int, default=5, help="frames from A (first) to B (last)")
-    p.add_argument("--align", default="rotation", choices=["rotation", "landmarks", "none"])
+    p.add_argument("--frames", type=int, default=5,
+                   help="frames from A (first) to B (last) (default: 5)")
+    p.add_argument("--align", default="rotation", choices=["rotation", "landmarks", "none"],
+                   help="how B's sphere is turned onto A's before the morph: the rotation "
+                        "that best matches them, the one that best matches --landmarks, or "
+                        "none (default: rotation)")
     p.add_argument("--landmarks", nargs="*", metavar="I:J",
                    help="vertex I of A corresponds to vertex J of B")
-    p.set_defaults(func=lambda args: _cmd_morph(args, load, datasets))
+    p.set_defaults(func=lambda args: _cmd_morph(args, load))

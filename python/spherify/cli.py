@@ -9,18 +9,18 @@
                                    gives a certified low-distortion map of every mesh;
                                    theta_phi is the fastest and the thesis's own
                                    bijection h (see README, "Which method when").
-                                   --poles, --weights and --symmetry-eps are theta-phi
-                                   options and need --method theta_phi; --energy needs
-                                   --method progressive. A progress bar shows on a
-                                   terminal (or with --progress) for progressive and
-                                   for --poles graph
+                                   Each option of a method is a flag (--poles,
+                                   --weights, --energy, --max-iter, ...), generated from
+                                   the core's table (sp.method_options); one the method
+                                   does not take is refused. A progress bar shows on a
+                                   terminal (or with --progress)
     spherify check MESH [--weld]   load, validate, orient and print the report; --weld
                                    (also for map and orient) first merges vertices at
                                    exactly the same position (a seam a file splits)
     spherify orient MESH -o OUT    write a consistently, outward-oriented copy
-    spherify harmonics ...         the applications of thesis ch. 8: see
-                                   ``spherify <command> --help`` and _cli_apps.py;
-                                   they map with the same default, --method to change
+    spherify harmonics|remesh|texture|morph ...
+                                   the applications of thesis ch. 8 (_cli_apps.py);
+                                   they take map's input, method and progress flags
     spherify batch INPUT... -o OUTDIR [--method M] [the method's options as for map]
                    [--workers N] [--timeout S] [--scheduler tcp://...]
                                    map many meshes (files, folders, lists of paths),
@@ -47,23 +47,17 @@ from typing import Any, Dict, List, Optional, Tuple, Union
 import numpy as np
 
 from . import _args, _cli_apps, _core, _files, _formats, datasets
-from ._embed import either, embed, method_options, methods
+from ._cli_options import (UsageError, add_input_flags, add_method_flags, add_progress_flag,
+                           method_options_of)
+from ._embed import embed, methods
 from ._errors import MeshError, SpherifyError, SpherifyWarning, TopologyError
 from ._mesh import Mesh, check, check_sphere, load, orient, save, weld
 from ._quality import quality
 from ._spheremap import ThetaPhiMap
 
 
-#: Sizes of generated shapes the command line accepts (a 10^7-vertex shape
-#: takes some 10 GB to map).
-N_VERTICES = (4, 10_000_000)
-
 #: Extensions of the mesh files spherify writes.
 MESH_EXTENSIONS = (".obj", ".off", ".ply", ".stl")
-
-
-class UsageError(SpherifyError):
-    """Bad arguments, found before any work is done (exit status 2)."""
 
 
 class _ReaderMayLeave(io.TextIOBase):
@@ -109,17 +103,6 @@ class _ReaderMayLeave(io.TextIOBase):
 
     def fileno(self) -> int:
         return int(self._stream.fileno())
-
-
-def _n_vertices(text: str) -> int:
-    try:
-        n = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
-    low, high = N_VERTICES
-    if not low <= n <= high:
-        raise argparse.ArgumentTypeError(f"{n} is outside the supported range {low} to {high:,}")
-    return n
 
 
 def _check_output(path: str) -> None:
@@ -235,65 +218,8 @@ def _save_sphere(mesh: Mesh, points: np.ndarray, out: Path) -> None:
               f"({verdict.n_negative + verdict.n_zero} faces flipped or collapsed)")
 
 
-def _command_line_options() -> Dict[str, Dict[str, Dict[str, Any]]]:
-    """Every option of every method that a command line can carry (all but
-    ``initial`` points), from the core's table: option name -> {method: the
-    table's row}, in the order the table lists them."""
-    options: Dict[str, Dict[str, Dict[str, Any]]] = {}
-    for method in methods():
-        for name, row in method_options(method).items():
-            if row["kind"] != "points":
-                options.setdefault(name, {})[method] = row
-    return options
-
-
-def _flag(name: str) -> str:
-    return "--" + name.replace("_", "-")
-
-
-def _method_options(args: argparse.Namespace) -> Dict[str, Any]:
-    """The options given for ``args.method``, checked against the core's
-    table: an option of another method is refused (UsageError, exit 2; under
-    the default method a ``--poles`` would otherwise be ignored, and the map
-    would not be the one asked for), and so are a name the method does not
-    accept, a count below its minimum and an option without the value of
-    the option it needs. Only the options given: the method fills in its own
-    defaults, and a batch's journal records what was asked."""
-    method = args.method or "progressive"
-    takes = method_options(method)
-    given = {name: getattr(args, name) for name in _command_line_options()
-             if getattr(args, name) is not None}
-    stray = [name for name in given if name not in takes]
-    if stray:
-        owners = [m for m in methods() if all(name in method_options(m) for name in stray)]
-        flags = [_flag(name) for name in stray]
-        what = f"{flags[0]} is an option" if len(flags) == 1 else f"{', '.join(flags)} are options"
-        them = "it" if len(flags) == 1 else "them"
-        if not owners:
-            raise UsageError(f"{', '.join(flags)} are not options of one method together: "
-                             "spherify map --help says which method takes each")
-        if args.method is None:
-            raise UsageError(f"{what} of --method {either(owners)}, and the default method is "
-                             f"{method}: add --method {either(owners)} to use {them}")
-        raise UsageError(f"{what} of --method {either(owners)}, not of --method {method}: use "
-                         f"--method {either(owners)}, or leave {them} out")
-    for name, value in given.items():
-        row = takes[name]
-        if row["choices"] and isinstance(value, str) and value not in row["choices"]:
-            raise UsageError(f"{_flag(name)} {value} is not one of --method {method}'s: it "
-                             f"takes {', '.join(row['choices'])}")
-        if row["kind"] == "count" and value < row["minimum"]:
-            raise UsageError(f"{_flag(name)} must be at least {row['minimum']}, got {value}")
-        if row["requires"] is not None:
-            other, needed = row["requires"]
-            if getattr(args, other) != needed:
-                raise UsageError(f"{_flag(name)} {value} only applies to {_flag(other)} {needed}: "
-                                 f"add {_flag(other)} {needed} to use it")
-    return given
-
-
 def _cmd_map(args: argparse.Namespace) -> int:
-    options = _method_options(args)
+    options = method_options_of(args)
     method = args.method or "progressive"
     _check_output(args.output)
     out = Path(args.output)
@@ -371,7 +297,7 @@ def _cmd_map(args: argparse.Namespace) -> int:
 
 def _cmd_batch(args: argparse.Namespace) -> int:
     from ._batch import batch
-    options = _method_options(args)
+    options = method_options_of(args)
 
     def show(message: Any, *_: Any, **__: Any) -> None:  # (a folder without meshes, ...)
         print(f"spherify: warning: {message}", file=sys.stderr)
@@ -402,92 +328,60 @@ def _cmd_batch(args: argparse.Namespace) -> int:
     return 0 if result.all_certified else 1
 
 
-def _default_words(row: Dict[str, Any]) -> str:
-    if row["default_by"] is not None:
-        by = ", ".join(f"{key} {value:g}" if isinstance(value, float) else f"{key} {value}"
-                       for key, value in row["default_by"].items())
-        return f"by {_flag(row['depends_on'])}: {by}"
-    value = row["default"]
-    if value is None:
-        return "automatic"
-    if isinstance(value, bool):
-        return "on" if value else "off"
-    return f"{value:g}" if isinstance(value, float) else str(value)
+DESCRIPTION = """\
+Map closed genus-0 triangle meshes one-to-one onto the unit sphere, and certify
+each map with exact predicates.
 
+Every command takes a mesh file (.obj .off .ply .stl .npz, FreeSurfer, .gii) or
+--dataset NAME [--n-vertices N] for a generated shape. Every command that maps
+takes --method and the method's options (spherify map --help lists them, with
+the methods that take each and their defaults).
 
-def _flag_help(rows: Dict[str, Dict[str, Any]]) -> str:
-    """What the flag does, for which methods, and each one's default, from
-    the core's table (methods that share a help text and a default are
-    named together)."""
-    groups: Dict[Tuple[str, str], List[str]] = {}
-    for method, row in rows.items():
-        groups.setdefault((row["help"], _default_words(row)), []).append(method)
-    parts = [f"--method {', '.join(owners)}: {text} (default: {default})"
-             for (text, default), owners in groups.items()]
-    return "; ".join(parts).replace("%", "%%")
+exit status: 0 success (a valid mesh; a certified map), 1 when the mesh has
+problems or a map could not be certified, 2 for bad arguments or unreadable input.
+"""
 
-
-def _add_method_flags(p: argparse.ArgumentParser) -> None:
-    """--method and a flag for every option of the core's table (the same
-    for ``map`` and ``batch``): its type, choices, help and defaults come
-    from the table, so the command line cannot drift from the methods."""
-    p.add_argument("--method", default=None, choices=methods(),
-                   help="the spherical method (default: progressive, a certified "
-                        "low-distortion map of every mesh; theta_phi is the fastest)")
-    for name, rows in _command_line_options().items():
-        kinds = {row["kind"] for row in rows.values()}
-        choices = sorted({c for row in rows.values() for c in row["choices"]})
-        extra: Dict[str, Any] = {}
-        if kinds == {"count"}:
-            extra["type"] = int
-        elif kinds == {"number"}:
-            extra["type"] = float
-        elif kinds == {"flag"}:
-            extra["action"] = argparse.BooleanOptionalAction
-        else:
-            # A name (or on the API also a point or a vertex pair, which
-            # the command line does not take).
-            extra["choices"] = choices
-        p.add_argument(_flag(name), default=None, help=_flag_help(rows), **extra)
+EPILOG = """\
+examples:
+  spherify map --dataset helix_tube --n-vertices 20000 -o helix_sphere.ply
+  spherify map bunny.ply -o bunny_sphere.ply --method theta_phi --poles symmetry
+  spherify check bunny.ply --weld
+  spherify batch meshes/ -o spheres/ --workers 2
+  spherify harmonics hand.obj -o hand_l32.ply --lmax 32
+"""
 
 
 def main(argv: Optional[List[str]] = None) -> int:
-    parser = argparse.ArgumentParser(prog="spherify", description=__doc__,
+    parser = argparse.ArgumentParser(prog="spherify", description=DESCRIPTION, epilog=EPILOG,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
-    sub = parser.add_subparsers(dest="command", required=True)
+    parser.add_argument("--version", action="version", version=f"spherify {_core.__version__}")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for name, func, text in [("map", _cmd_map, "map a mesh onto the sphere and certify it"),
                              ("check", _cmd_check, "validate a mesh, orient it, print the report"),
                              ("orient", _cmd_orient, "write a consistently outward-oriented copy")]:
-        p = sub.add_parser(name, help=text)
-        p.add_argument("mesh", nargs="?", help="mesh file (.obj .off .ply .stl .npz, a "
-                       "FreeSurfer surface such as lh.pial, .gii)")
-        p.add_argument("--dataset", choices=datasets.names(), help="use a generated shape instead")
-        p.add_argument("--n-vertices", type=_n_vertices, default=5000,
-                       help=f"size of the generated shape ({N_VERTICES[0]} to {N_VERTICES[1]:,})")
-        p.add_argument("--weld", action="store_true",
-                       help="first merge vertices at exactly the same position (a seam the "
-                            "exporter split; the report of such an open mesh suggests it)")
+        p = sub.add_parser(name, help=text, description=text)
+        add_input_flags(p)
         if name in ("orient", "map"):
             p.add_argument("-o", "--output", required=True, help="output mesh file")
         if name == "map":
-            _add_method_flags(p)
-            p.add_argument("--progress", action="store_true",
-                           help="--method progressive and --poles graph: show a progress bar "
-                                "even when stderr is not a terminal")
+            add_method_flags(p)
+            add_progress_flag(p)
         p.set_defaults(func=func)
-    p = sub.add_parser("batch", help="map many meshes, in parallel and resumably")
+    text = "map many meshes, in parallel and resumably"
+    p = sub.add_parser("batch", help=text, description=text)
     p.add_argument("inputs", nargs="+", help="mesh files, folders, or .txt files of paths")
     p.add_argument("-o", "--output", required=True, help="output folder")
-    _add_method_flags(p)
+    add_method_flags(p)
     p.add_argument("--weld", action="store_true",
                    help="first merge vertices at exactly the same position in each mesh")
     p.add_argument("--workers", type=int, default=None, help="local processes (default: cores)")
-    p.add_argument("--timeout", type=float, default=None, help="seconds per mesh")
-    p.add_argument("--scheduler", default=None, help="Dask scheduler address, tcp://host:port")
-    p.add_argument("--progress", action="store_true",
-                   help="show the progress bar even when stderr is not a terminal")
+    p.add_argument("--timeout", type=float, default=None,
+                   help="seconds per mesh (default: no limit)")
+    p.add_argument("--scheduler", default=None,
+                   help="Dask scheduler address, tcp://host:port (default: local processes)")
+    add_progress_flag(p)
     p.set_defaults(func=_cmd_batch)
-    _cli_apps.add_commands(sub, _load, _save_npz, datasets)
+    _cli_apps.add_commands(sub, _load, _save_npz)
     args = parser.parse_args(argv)
     stdout, sys.stdout = sys.stdout, _ReaderMayLeave(sys.stdout)
     try:
