@@ -142,8 +142,14 @@ def test_a_rerun_skips_what_is_done_and_redoes_what_changed(tmp_path: Path) -> N
     assert third.skipped == 5
     assert by_name(third.rows)[inputs[0].name]["n_vertices"] == sp.load(inputs[0]).n_vertices
     fourth = sp.batch(tmp_path / "in", out, workers=2, method="theta_phi")
-    assert fourth.skipped == 0 and fourth.counts["certified"] == 6  # (and the garbage)
-    assert all(r["tp_valid"] for r in fourth.rows if r["status"] == "done")
+    done = [r for r in fourth.rows if r["status"] == "done"]
+    assert fourth.skipped == 0 and len(done) == 6  # (and the garbage)
+    assert all(r["tp_valid"] for r in done)
+    # Certified means both outputs are what they claim: the sphere mesh a valid
+    # GC-embedding and the rectangle of h certified (issue 24, item 5: the
+    # rectangle alone counted theta-phi maps whose sphere meshes fold over).
+    assert all(r["certified"] == (r["valid"] and r["tp_valid"]) for r in done)
+    assert fourth.counts["certified"] == sum(r["valid"] for r in done)
     fifth = sp.batch(tmp_path / "in", out, workers=2, method="theta_phi", weights="mean_value")
     assert fifth.skipped == 0
 

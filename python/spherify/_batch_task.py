@@ -210,10 +210,15 @@ def map_task(task: Task) -> Mapped:
                                        - certify, 6)
             row["seconds_certify"] = round(certify, 6)
             row.update(valid=m.valid, flipped=m.flipped, margin=float(m.margin))
+            # Certified: what is written is what it claims to be. The sphere
+            # mesh is the minor-arc drawing, so it must be valid; a theta-phi
+            # map's .spheremap.npz carries h, whose rectangle must be
+            # certified too. (Counting the rectangle alone called batches of
+            # limbed shapes certified while their sphere meshes folded over.)
             certified = m.valid
             if isinstance(m, ThetaPhiMap):
                 row["tp_valid"] = m.tp_valid
-                certified = m.tp_valid
+                certified = m.valid and m.tp_valid
             row["certified"] = bool(certified)
         row["warnings"] = "; ".join(str(w.message) for w in caught) or None
     except BaseException as err:

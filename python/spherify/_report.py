@@ -174,7 +174,7 @@ class SphereReport:
 
     def __str__(self) -> str:
         verdict = "valid GC-embedding" if self.valid else "NOT a valid embedding"
-        return (f"SphereReport: {verdict}; faces +{self.n_positive} -{self.n_negative} "
-                f"0:{self.n_zero}; area sum {self.area_sum:.12g} (error {self.area_error:.3g}, "
+        return (f"SphereReport: {verdict}; of the faces {self.n_positive} positive, "
+                f"{self.n_negative} flipped, {self.n_zero} collapsed; area sum {self.area_sum:.12g} (error {self.area_error:.3g}, "
                 f"covers {self.covering_degree}x); max | |p| - 1 | = {self.max_norm_error:.3g}; "
                 f"smallest triangle {self.min_area_ratio:.3g} of the mean")

@@ -53,7 +53,7 @@ from ._embed import embed, methods
 from ._errors import MeshError, SpherifyError, SpherifyWarning, TopologyError
 from ._mesh import Mesh, check, check_sphere, load, orient, save, weld
 from ._quality import quality
-from ._spheremap import ThetaPhiMap
+from ._spheremap import SphereMap, ThetaPhiMap
 
 
 #: Extensions of the mesh files spherify writes.
@@ -218,6 +218,23 @@ def _save_sphere(mesh: Mesh, points: np.ndarray, out: Path) -> None:
               f"({verdict.n_negative + verdict.n_zero} faces flipped or collapsed)")
 
 
+def _outcome(m: SphereMap) -> str:
+    """How the method ended, where the message does not already say it: a
+    direct solve, the iterations of an iterative method, or that it ran out
+    of them. The progressive method's message counts its own sweeps, and its
+    sweep limit is how it normally ends."""
+    count = f"{m.iterations} iteration{'s' if m.iterations != 1 else ''}"
+    if m.method == "progressive":
+        return ""
+    if m.status == "direct":
+        return " (a direct solve)"
+    if m.status == "converged":
+        return f" (converged in {count})"
+    if m.status == "max_iterations":
+        return f" (stopped at its limit of {count})"
+    return f" ({m.status} after {count})"
+
+
 def _cmd_map(args: argparse.Namespace) -> int:
     options = method_options_of(args)
     method = args.method or "progressive"
@@ -256,7 +273,7 @@ def _cmd_map(args: argparse.Namespace) -> int:
     mapped = time.perf_counter()
     for note in m.notes:
         print(f"note: {note}")
-    print(f"method: {m.method} ({m.status}, {m.iterations} iterations): {m.message}")
+    print(f"method: {m.method}{_outcome(m)}: {m.message}")
     certified = m.valid
     if isinstance(m, ThetaPhiMap):
         print(f"poles: {m.poles[0]} (north), {m.poles[1]} (south); cut path of {len(m.cut_path)} vertices")
