@@ -21,6 +21,7 @@ from ._geometry_image import (from_geometry_image, geometry_image, load_geometry
                              save_geometry_image)
 from ._persist import load_map
 from ._batch import BatchResult, batch
+from ._threads import get_num_threads, set_num_threads
 
 __all__ = [
     "BatchResult",
@@ -51,6 +52,7 @@ __all__ = [
     "face_quality",
     "from_geometry_image",
     "geometry_image",
+    "get_num_threads",
     "harmonics",
     "load",
     "load_geometry_image",
@@ -65,6 +67,7 @@ __all__ = [
     "remesh_map",
     "save_geometry_image",
     "save",
+    "set_num_threads",
     "shortest_path",
     "surface_distance",
     "texture",

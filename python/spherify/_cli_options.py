@@ -45,10 +45,17 @@ def add_input_flags(p: argparse.ArgumentParser, what: str = "mesh file") -> None
                         "exporter split; the report of such an open mesh suggests it)")
 
 
-def add_progress_flag(p: argparse.ArgumentParser) -> None:
+def add_progress_flag(p: argparse.ArgumentParser, threads: bool = True) -> None:
+    """--progress, and --threads (how many threads the map runs on; not for
+    a batch, whose workers share the cores among them)."""
     p.add_argument("--progress", action="store_true",
                    help="show the progress bar even when stderr is not a terminal (it "
                         "shows on a terminal anyway)")
+    if not threads:
+        return
+    p.add_argument("--threads", type=int, default=None,
+                   help="worker threads of the map (default: RAYON_NUM_THREADS, else one "
+                        "per CPU); the result is the same for every count")
 
 
 def command_line_options() -> Dict[str, Dict[str, Dict[str, Any]]]:

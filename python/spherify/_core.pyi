@@ -7,7 +7,7 @@ import numpy.typing as npt
 
 from ._report import MeshReport, SphereReport
 
-__all__ = ["CoreMesh", "CoreSphereMap", "__version__", "boundary_loop", "check", "check_raw", "check_sphere", "choices", "dijkstra", "embed", "encode", "face_quality", "from_points", "harmonics_evaluate", "harmonics_fit", "improve", "load", "method_options", "methods", "orient", "quality", "restore_map", "save", "shortest_path", "tutte", "weld", "write_atomic"]
+__all__ = ["CoreMesh", "CoreSphereMap", "__version__", "boundary_loop", "check", "check_raw", "check_sphere", "choices", "dijkstra", "embed", "encode", "face_quality", "from_points", "get_num_threads", "harmonics_evaluate", "harmonics_fit", "improve", "load", "method_options", "methods", "orient", "quality", "restore_map", "save", "set_num_threads", "shortest_path", "tutte", "weld", "write_atomic"]
 
 __version__: str
 
@@ -102,6 +102,8 @@ def tutte(
 def methods() -> List[str]: ...
 def choices() -> Dict[str, List[str]]: ...
 def method_options() -> Dict[str, List[Dict[str, Any]]]: ...
+def set_num_threads(n: Optional[int]) -> None: ...
+def get_num_threads() -> int: ...
 def embed(
     mesh: CoreMesh,
     method: str,

@@ -54,6 +54,7 @@ from ._errors import MeshError, SpherifyError, SpherifyWarning, TopologyError
 from ._mesh import Mesh, check, check_sphere, load, orient, save, weld
 from ._quality import quality
 from ._spheremap import SphereMap, ThetaPhiMap
+from ._threads import set_num_threads
 
 
 #: Extensions of the mesh files spherify writes.
@@ -396,17 +397,22 @@ def main(argv: Optional[List[str]] = None) -> int:
                    help="seconds per mesh (default: no limit)")
     p.add_argument("--scheduler", default=None,
                    help="Dask scheduler address, tcp://host:port (default: local processes)")
-    add_progress_flag(p)
+    add_progress_flag(p, threads=False)
     p.set_defaults(func=_cmd_batch)
     _cli_apps.add_commands(sub, _load, _save_npz)
     args = parser.parse_args(argv)
     stdout, sys.stdout = sys.stdout, _ReaderMayLeave(sys.stdout)
+    threads = getattr(args, "threads", None)
     try:
+        if threads is not None:
+            set_num_threads(threads)
         return int(args.func(args))
     except (SpherifyError, OSError) as err:
         print(f"spherify: error: {err}", file=sys.stderr)
         return 2
     finally:
+        if threads is not None:
+            set_num_threads(None)  # main() may run inside a program that goes on
         sys.stdout.flush()
         sys.stdout = stdout
 

@@ -15,10 +15,12 @@
 //!   deadlock. Such a call is refused with `SpherifyError` instead: the
 //!   thread-local flag below is set while a callable runs.
 //!
-//! The size of the pool follows rayon's own rules (`RAYON_NUM_THREADS`, else
-//! the number of CPUs).
+//! The size of the pool is what `set_num_threads` asked for, else rayon's own
+//! rule (`RAYON_NUM_THREADS`, else the number of CPUs). Results do not depend
+//! on it: the core's parallel loops give the same bits for every thread count.
 
 use std::cell::Cell;
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 
 use pyo3::prelude::*;
@@ -28,6 +30,9 @@ use crate::errors::spherify_error;
 
 /// The pool and the process it was built in.
 static POOL: Mutex<Option<(u32, Arc<ThreadPool>)>> = Mutex::new(None);
+
+/// Threads the next pool is built with; 0 for rayon's own rule.
+static THREADS: AtomicUsize = AtomicUsize::new(0);
 
 thread_local! {
     /// True while this thread runs a Python progress callable for the core.
@@ -49,11 +54,35 @@ fn pool() -> PyResult<Arc<ThreadPool>> {
     }
     let built = rayon::ThreadPoolBuilder::new()
         .thread_name(|i| format!("spherify-{i}"))
+        .num_threads(THREADS.load(Ordering::Relaxed))
         .build()
         .map_err(|e| spherify_error(format!("cannot start worker threads: {e}")))?;
     let built = Arc::new(built);
     *slot = Some((pid, Arc::clone(&built)));
     Ok(built)
+}
+
+/// set_num_threads(n: int | None): the worker threads of later core calls;
+/// `None` for the default (`RAYON_NUM_THREADS`, else the number of CPUs).
+/// A call already running keeps its pool, which ends with it.
+#[pyfunction]
+#[pyo3(signature = (n))]
+pub fn set_num_threads(n: Option<usize>) -> PyResult<()> {
+    refuse_reentry()?;
+    THREADS.store(n.unwrap_or(0), Ordering::Relaxed);
+    let mut slot = POOL.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+    if let Some((owner, pool)) = slot.take() {
+        if owner != std::process::id() {
+            std::mem::forget(pool); // a parent's threads (module doc)
+        }
+    }
+    Ok(())
+}
+
+/// get_num_threads() -> the worker threads core calls run on.
+#[pyfunction]
+pub fn get_num_threads() -> PyResult<usize> {
+    Ok(pool()?.current_num_threads())
 }
 
 /// Refuses a core call made from inside a progress callable (module doc).
