@@ -5,6 +5,8 @@ The Rust core does the work; this package is its Python face. See README.md.
 
 from __future__ import annotations
 
+from typing import List
+
 from . import datasets, harmonics, plot, texture
 from ._core import __version__
 from ._errors import (ConvergenceError, FileError, FormatError, MapError, MeshError,
@@ -74,3 +76,8 @@ __all__ = [
     "tutte",
     "weld",
 ]
+
+
+def __dir__() -> List[str]:
+    """Only the public names (PEP 562): dir() lists what __all__ does."""
+    return sorted(__all__)

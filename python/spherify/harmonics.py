@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import math
 import numbers
-from typing import Any, Dict, Optional
+from typing import Any, Dict, List, Optional
 
 import numpy as np
 import numpy.typing as npt
@@ -218,3 +218,8 @@ def fit(m: SphereMap, lmax: int, *, oversample: int = 1) -> Harmonics:
     coefficients, info = _core.harmonics_fit(m._core, lmax, oversample)
     info["seconds"] = dict(info["seconds"])
     return Harmonics(coefficients, info)
+
+
+def __dir__() -> List[str]:
+    """Only the public names (PEP 562): dir() lists what __all__ does."""
+    return sorted(__all__)

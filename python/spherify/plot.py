@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import importlib
 from pathlib import Path
-from typing import Any, Optional, Tuple, Union
+from typing import Any, List, Optional, Tuple, Union
 
 import numpy as np
 
@@ -209,3 +209,8 @@ def rectangle(m: SphereMap, *, ax: Any = None, path: Optional[Union[str, Path]] 
 
 
 
+
+
+def __dir__() -> List[str]:
+    """Only the public names (PEP 562): dir() lists what __all__ does."""
+    return sorted(__all__)

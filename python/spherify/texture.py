@@ -52,7 +52,7 @@ import os
 import struct
 import zlib
 from pathlib import Path
-from typing import Any, Callable, Dict, Optional, Union
+from typing import Any, Callable, Dict, List, Optional, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -554,3 +554,8 @@ def _save_textured(mesh: Mesh, target: Path, uv: Any, texture: Any, sphere: Any,
         f = int(np.nonzero(~np.isfinite(corners).all(axis=(1, 2)))[0][0])
         raise MeshError(f"uv of face {f} is not finite")
     _write_obj(mesh, target, corners, label, texture)
+
+
+def __dir__() -> List[str]:
+    """Only the public names (PEP 562): dir() lists what __all__ does."""
+    return sorted(__all__)

@@ -85,3 +85,8 @@ def make(name: str, n_vertices: int, **kwargs: Any) -> Mesh:
     except (KeyError, TypeError):
         raise MeshError(f"unknown dataset {name!r}; choose one of {', '.join(_SHAPES)}") from None
     return build(n_vertices, **kwargs)
+
+
+def __dir__() -> List[str]:
+    """Only the public names (PEP 562): dir() lists what __all__ does."""
+    return sorted(__all__)
