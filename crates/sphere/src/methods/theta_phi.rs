@@ -1,22 +1,22 @@
 //! The theta-phi method (thesis ch. 6): a spherical parameterisation that is a
 //! bijection for every closed genus-0 mesh.
 //!
-//! 1. Poles n and s ([`crate::methods::theta_phi::poles`], thesis 6.2) and a shortest path between
-//!    them (6.2.4), or poles and a path near a symmetry plane
-//!    ([`crate::methods::theta_phi::symmetry`], 6.2.5); the path is made chordless and at least 4
+//! 1. Poles n and s ([`poles`], thesis 6.2) and a shortest path between them
+//!    (6.2.4, [`cut_path`]), or poles and a path near a symmetry plane
+//!    ([`symmetry`], 6.2.5); the path is made chordless and at least 4
 //!    vertices long (the thesis assumes k >= 2; we lengthen shorter paths so
 //!    the tetrahedron works too).
 //! 2. The mesh is cut open along the path into a disk (6.3, `spherify_mesh::cut`).
 //! 3. The disk is Tutte-embedded in the theta-phi rectangle [0, pi] x [0, 2 pi]
-//!    with the boundary of eq. 6.31 (6.4), and every triangle is checked with an
-//!    exact orientation predicate. Where double precision flipped or collapsed a
-//!    triangle, the solution is refined with residuals in double-double
-//!    (`spherify_sparse::refine`) and checked again.
+//!    with the boundary of eq. 6.31 (6.4, [`rectangle`]), and every triangle is
+//!    checked with an exact orientation predicate. Where double precision
+//!    flipped or collapsed a triangle, the solution is refined with residuals
+//!    in double-double (`spherify_sparse::refine`) and checked again.
 //! 4. The phi values around each pole must increase strictly (6.5.1); where they
 //!    do not, the disk is re-embedded with the pole's neighbours pinned as in
-//!    eq. 6.36-6.38.
-//! 5. The fold m(theta, phi) = (sin t cos p, sin t sin p, cos t) (eq. 6.35)
-//!    puts every vertex on the sphere.
+//!    eq. 6.36-6.38 ([`pole_fans`]).
+//! 5. The fold m(theta, phi) = (sin t cos p, sin t sin p, cos t) (eq. 6.35,
+//!    [`mod@fold`]) puts every vertex on the sphere.
 //!
 //! `tp_valid` certifies step 3 in floating point: the rectangle embedding has
 //! no flipped or zero-area triangle under exact predicates. That is the
@@ -29,6 +29,7 @@ mod cut_rotations;
 pub mod fold;
 pub mod pole_fans;
 pub mod poles;
+pub mod rectangle;
 pub mod symmetric_eigen;
 pub mod symmetry;
 
@@ -36,11 +37,10 @@ use std::time::Instant;
 
 use spherify_mesh::cut::{cut_open_with, CutError, CutMesh};
 use spherify_mesh::dijkstra::EdgeWeights;
-use spherify_mesh::{validate, HalfEdgeMesh, Mesh, TopologyError, TopologyProblem, UnknownName};
-use spherify_sparse::refine::refine_step;
-use spherify_sparse::tutte::{inverted_faces, FixedSystem, InvertedFaces, TutteError};
-use spherify_sparse::weights::{half_edge_weights, Weights};
-use spherify_sparse::Factorization;
+use spherify_mesh::graph::Adjacency;
+use spherify_mesh::{validate, Mesh, TopologyError, TopologyProblem, UnknownName};
+use spherify_sparse::tutte::{inverted_faces, InvertedFaces};
+use spherify_sparse::weights::Weights;
 
 use crate::embedding::{SphereEmbedding, Status};
 use crate::error::SphereError;
@@ -52,9 +52,10 @@ use crate::methods::theta_phi::pole_fans::{
     fan_of_ring, pin_fan, rectangle_boundary, strictly_increasing_phi,
 };
 use crate::methods::theta_phi::poles::Poles;
+use crate::methods::theta_phi::rectangle::{
+    disk_half_edges, rectangle_margin, RectangleSolver, Rows,
+};
 use crate::methods::theta_phi::symmetry::{Symmetry, SymmetryParams};
-
-use std::f64::consts::PI;
 
 /// How to choose the poles (thesis 6.2).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -66,7 +67,7 @@ pub enum PoleChoice {
     /// Farthest pair in space (6.2.1), exact.
     Physical,
     /// Poles and cut path near a symmetry plane (6.2.5); falls back to
-    /// `FastGraph` when no plane is convincing (see [`crate::methods::theta_phi::symmetry`]).
+    /// `FastGraph` when no plane is convincing (see [`symmetry`]).
     Symmetry(SymmetryParams),
     /// The caller's pair.
     Explicit(u32, u32),
@@ -172,18 +173,6 @@ fn check_weights(weights: Weights) -> Result<(), SphereError> {
     }
 }
 
-fn from_tutte(err: TutteError) -> SphereError {
-    match err {
-        TutteError::Topology(t) => SphereError::Topology(t),
-        TutteError::Solve(s) => SphereError::Solve(s),
-        other => SphereError::InvalidParameter {
-            name: "theta-phi embedding",
-            value: other.to_string(),
-            expected: "a solvable Tutte system",
-        },
-    }
-}
-
 fn from_cut(mesh: &Mesh, err: CutError) -> SphereError {
     match err {
         CutError::Topology(t) => SphereError::Topology(t),
@@ -219,31 +208,115 @@ pub fn theta_phi_with_progress(
     progress: &(dyn Fn(usize, usize) -> bool + Sync),
 ) -> Result<(SphereEmbedding, ThetaPhi), SphereError> {
     check_weights(params.weights)?;
-    let mut solver = RectangleSolver {
-        weights: params.weights,
-        max_refinements: params.max_refinements,
-        refinements: 0,
-        watch: Stopwatch::new(),
-    };
+    let mut solver = RectangleSolver::new(params.weights, params.max_refinements);
     let (he, mesh) = (mesh.half_edges(), mesh.mesh());
     let graph = he.adjacency();
     let lengths = EdgeWeights::Length(mesh.positions());
+    let ChosenPoles { poles: chosen, path: pole_path, symmetry: found_symmetry } =
+        choose_poles(mesh, &graph, lengths, params.poles, progress)?;
+    solver.watch.lap("poles");
+    go_on(progress, "poles")?;
+
+    let path = match pole_path {
+        Some(path) => finish_path(&graph, path, lengths),
+        None => cut_path(&graph, chosen.north, chosen.south, lengths),
+    }
+    .ok_or_else(|| topology(mesh, TopologyProblem::NotSphere))?;
+    let mut cut = cut_open_with(mesh, he, &path).map_err(|e| from_cut(mesh, e))?;
+    // The factorisation below is the memory peak; what only chose the poles
+    // and the path need not be alive then.
+    drop(graph);
+    solver.watch.lap("cut");
+
+    // Uniform weights (the default) need only the rotations of the cut
+    // disk, read from the sphere's half-edges; the other weights are computed
+    // on the disk's own half-edges (its face corners and boundary).
+    let cut_he = disk_half_edges(params.weights, &cut.mesh)?;
+    cut.mesh.forget_edge_table();
+    let rotations = CutRotations::new(he, mesh.faces(), &cut);
+    let k = path.len() - 2;
+    let n_vertices = mesh.n_vertices();
+    let fans = fans_of(&rotations, &chosen, mesh)?;
+
+    let mut fixed = rectangle_boundary(&cut.boundary, k, n_vertices);
+    solver.watch.lap("system");
+    go_on(progress, "cut")?;
+    let mut uv = solver.solve(Rows::of(cut_he, &rotations), &cut.mesh, &fixed, progress)?;
+    let re_embedded = pin_pole_fans(
+        &mut solver,
+        &mut uv,
+        &mut fixed,
+        PoleFans { fans: &fans, k, weights: params.weights, cut: &cut.mesh, rotations: &rotations },
+        progress,
+    )?;
+    let fans_monotone = fans.each_ref().map(|fan| strictly_increasing_phi(&uv, fan));
+    let inverted = inverted_faces(cut.mesh.faces(), &uv);
+    let tp_valid = inverted.is_empty();
+    let min_area_ratio = rectangle_margin(cut.mesh.faces(), &uv);
+    solver.watch.lap("check");
+    go_on(progress, "check")?;
+
+    let points = folded(&uv[..n_vertices], &chosen);
+    solver.watch.lap("fold");
+    let refinements = solver.refinements;
+
+    let details = ThetaPhi {
+        poles: chosen,
+        cut_path: path,
+        cut,
+        theta_phi: uv,
+        tp_valid,
+        inverted,
+        refinements,
+        re_embedded,
+        fans_monotone,
+        min_area_ratio,
+        symmetry: found_symmetry,
+    };
+    let embedding = SphereEmbedding {
+        points,
+        iterations: refinements,
+        status: Status::Direct,
+        message: message(&details),
+        seconds: solver.watch.seconds,
+    };
+    Ok((embedding, details))
+}
+
+/// What [`choose_poles`] found.
+struct ChosenPoles {
+    poles: Poles,
+    /// A shortest path between the poles when the pole search found one.
+    path: Option<Vec<u32>>,
+    /// What the symmetry method found, for `PoleChoice::Symmetry`.
+    symmetry: Option<Symmetry>,
+}
+
+/// The poles (thesis 6.2) chosen as `choice` says, the shortest path between
+/// them when the search found one, and what the symmetry method found.
+fn choose_poles(
+    mesh: &Mesh,
+    graph: &Adjacency,
+    lengths: EdgeWeights<'_>,
+    choice: PoleChoice,
+    progress: &(dyn Fn(usize, usize) -> bool + Sync),
+) -> Result<ChosenPoles, SphereError> {
     let mut found_symmetry = None;
     // A shortest path between the poles when the pole search found one.
     let mut pole_path = None;
     let fast_graph = |pole_path: &mut Option<Vec<u32>>| {
-        poles::fast_graph_with_path(&graph, 0, lengths).map(|(poles, path)| {
+        poles::fast_graph_with_path(graph, 0, lengths).map(|(poles, path)| {
             *pole_path = Some(path);
             poles
         })
     };
-    let chosen = match params.poles {
+    let chosen = match choice {
         PoleChoice::FastGraph => fast_graph(&mut pole_path),
-        PoleChoice::Graph => poles::graph(&graph, lengths, progress).map_err(|c| {
+        PoleChoice::Graph => poles::graph(graph, lengths, progress).map_err(|c| {
             SphereError::Cancelled { stage: "graph poles", done: c.done, total: c.total }
         })?,
         PoleChoice::Symmetry(sym_params) => {
-            let sym = symmetry::symmetry(mesh.positions(), mesh.faces(), &graph, &sym_params)?;
+            let sym = symmetry::symmetry(mesh.positions(), mesh.faces(), graph, &sym_params)?;
             let chosen = match (sym.fallback, sym.poles) {
                 (None, Some(p)) => {
                     pole_path = Some(sym.path.clone());
@@ -267,90 +340,88 @@ pub fn theta_phi_with_progress(
         }
     }
     .ok_or_else(|| topology(mesh, TopologyProblem::NotSphere))?;
-    solver.watch.lap("poles");
-    go_on(progress, "poles")?;
+    Ok(ChosenPoles { poles: chosen, path: pole_path, symmetry: found_symmetry })
+}
 
-    let path = match pole_path {
-        Some(path) => finish_path(&graph, path, lengths),
-        None => cut_path(&graph, chosen.north, chosen.south, lengths),
-    }
-    .ok_or_else(|| topology(mesh, TopologyProblem::NotSphere))?;
-    let mut cut = cut_open_with(mesh, he, &path).map_err(|e| from_cut(mesh, e))?;
-    // The factorisation below is the memory peak; what only chose the poles
-    // and the path need not be alive then.
-    drop(graph);
-    solver.watch.lap("cut");
-
-    // Uniform weights (the default) need only the rotations of the cut
-    // disk, read from the sphere's half-edges; the other weights are computed
-    // on the disk's own half-edges (its face corners and boundary).
-    let cut_he = disk_half_edges(params.weights, &cut.mesh)?;
-    cut.mesh.forget_edge_table();
-    let rotations = CutRotations::new(he, mesh.faces(), &cut);
-    let k = path.len() - 2;
-    let n_vertices = mesh.n_vertices();
+/// The north and south pole fans (6.5.1), from the rings of the poles in the
+/// cut disk.
+fn fans_of(
+    rotations: &CutRotations<'_>,
+    poles: &Poles,
+    mesh: &Mesh,
+) -> Result<[Vec<u32>; 2], SphereError> {
     let ring = |pole| {
         rotations.boundary_ring(pole).ok_or_else(|| topology(mesh, TopologyProblem::NotSphere))
     };
-    let north_fan = fan_of_ring(ring(chosen.north)?, false);
-    let south_fan = fan_of_ring(ring(chosen.south)?, true);
+    Ok([fan_of_ring(ring(poles.north)?, false), fan_of_ring(ring(poles.south)?, true)])
+}
 
-    let mut fixed = rectangle_boundary(&cut.boundary, k, n_vertices);
-    solver.watch.lap("system");
-    go_on(progress, "cut")?;
-    let rows = |cut_he: Option<HalfEdgeMesh>| match cut_he {
-        Some(he) => Rows::Disk(he),
-        None => Rows::Sphere(&rotations),
-    };
-    let mut uv = solver.solve(rows(cut_he), &cut.mesh, &fixed, progress)?;
+/// What re-embedding a pole fan needs besides the solver and the boundary.
+struct PoleFans<'a> {
+    /// The north and south fans (6.5.1).
+    fans: &'a [Vec<u32>; 2],
+    /// Inner vertices of the cut path.
+    k: usize,
+    weights: Weights,
+    cut: &'a Mesh,
+    rotations: &'a CutRotations<'a>,
+}
 
-    // Pole fans (6.5.1): re-embed with the fan pinned (6.38) where phi is not
-    // strictly increasing. Eq. 6.38 needs the fan's inner vertices to be free;
-    // when the poles are adjacent to other path vertices (tiny meshes such as
-    // the tetrahedron, where every vertex is on the boundary) there is nothing
-    // to pin, and the fan is reported as it is.
+/// Pole fans (6.5.1): re-embeds `uv` with a fan pinned (6.38) where phi is
+/// not strictly increasing, and says which fans were. Eq. 6.38 needs the
+/// fan's inner vertices to be free; when the poles are adjacent to other path
+/// vertices (tiny meshes such as the tetrahedron, where every vertex is on the
+/// boundary) there is nothing to pin, and the fan is reported as it is.
+fn pin_pole_fans(
+    solver: &mut RectangleSolver,
+    uv: &mut Vec<[f64; 2]>,
+    fixed: &mut [Option<[f64; 2]>],
+    pole_fans: PoleFans<'_>,
+    progress: &(dyn Fn(usize, usize) -> bool + Sync),
+) -> Result<[bool; 2], SphereError> {
+    let PoleFans { fans, k, weights, cut, rotations } = pole_fans;
     let mut re_embedded = [false; 2];
     // Pinning one fan moves the other pole's neighbours, which can turn that
     // fan back: look again after each re-embedding (at most once per pole).
     loop {
         let mut pinned = false;
-        for (side, fan) in [&north_fan, &south_fan].into_iter().enumerate() {
+        for (side, fan) in fans.iter().enumerate() {
             let inner = &fan[1..fan.len().saturating_sub(1).max(1)];
             if !re_embedded[side]
-                && !strictly_increasing_phi(&uv, fan)
+                && !strictly_increasing_phi(uv, fan)
                 && inner.iter().all(|&v| fixed[v as usize].is_none())
             {
-                pin_fan(&mut fixed, fan, k, side == 1);
+                pin_fan(fixed, fan, k, side == 1);
                 re_embedded[side] = true;
                 pinned = true;
             }
         }
         if !pinned {
-            break;
+            return Ok(re_embedded);
         }
-        uv = solver.solve(
-            rows(disk_half_edges(params.weights, &cut.mesh)?),
-            &cut.mesh,
-            &fixed,
+        *uv = solver.solve(
+            Rows::of(disk_half_edges(weights, cut)?, rotations),
+            cut,
+            fixed,
             progress,
         )?;
     }
-    let fans_monotone =
-        [strictly_increasing_phi(&uv, &north_fan), strictly_increasing_phi(&uv, &south_fan)];
-    let inverted = inverted_faces(cut.mesh.faces(), &uv);
-    let tp_valid = inverted.is_empty();
-    let min_area_ratio = rectangle_margin(cut.mesh.faces(), &uv);
-    solver.watch.lap("check");
-    go_on(progress, "check")?;
+}
 
-    // The fold (6.35); originals keep their labels in the cut mesh.
-    let mut points: Vec<[f64; 3]> = uv[..n_vertices].iter().copied().map(fold).collect();
-    points[chosen.north as usize] = [0.0, 0.0, 1.0];
-    points[chosen.south as usize] = [0.0, 0.0, -1.0];
-    solver.watch.lap("fold");
-    let refinements = solver.refinements;
+/// The fold (6.35) of the original vertices' `uv` (they keep their labels in
+/// the cut mesh), with the poles exactly at the poles.
+fn folded(uv: &[[f64; 2]], poles: &Poles) -> Vec<[f64; 3]> {
+    let mut points: Vec<[f64; 3]> = uv.iter().copied().map(fold).collect();
+    points[poles.north as usize] = [0.0, 0.0, 1.0];
+    points[poles.south as usize] = [0.0, 0.0, -1.0];
+    points
+}
 
-    let message = if tp_valid {
+/// The run's account in words: certified, or why double precision could not
+/// hold the embedding.
+fn message(details: &ThetaPhi) -> String {
+    let ThetaPhi { refinements, min_area_ratio, inverted, fans_monotone, .. } = details;
+    if details.tp_valid {
         format!(
             "theta-phi embedding certified flip-free in double precision ({refinements} refinement steps, thinnest triangle {min_area_ratio:.3e} of the rectangle)"
         )
@@ -362,28 +433,7 @@ pub fn theta_phi_with_progress(
             fans_monotone[0],
             fans_monotone[1]
         )
-    };
-    let embedding = SphereEmbedding {
-        points,
-        iterations: refinements,
-        status: Status::Direct,
-        message,
-        seconds: solver.watch.seconds,
-    };
-    let details = ThetaPhi {
-        poles: chosen,
-        cut_path: path,
-        cut,
-        theta_phi: uv,
-        tp_valid,
-        inverted,
-        refinements,
-        re_embedded,
-        fans_monotone,
-        min_area_ratio,
-        symmetry: found_symmetry,
-    };
-    Ok((embedding, details))
+    }
 }
 
 /// Wall-clock seconds per stage in first-seen order. A stage met again (the
@@ -422,125 +472,6 @@ fn go_on(
         Err(SphereError::Cancelled { stage, done: 0, total: 0 })
     }
 }
-
-/// The cut disk's own half-edges where `weights` need them (its face
-/// corners and boundary); uniform weights read the rows from the sphere's
-/// ([`Rows::Sphere`]) and get `None`.
-fn disk_half_edges(weights: Weights, cut: &Mesh) -> Result<Option<HalfEdgeMesh>, SphereError> {
-    Ok(match weights {
-        Weights::Uniform => None,
-        _ => Some(HalfEdgeMesh::new(cut)?),
-    })
-}
-
-/// The rectangle system assembled on the cut disk's own half-edges `he`
-/// with `weights`: any weights, and what [`Rows::Sphere`] gives bit for bit
-/// for uniform ones.
-fn disk_system(
-    cut: &Mesh,
-    he: &HalfEdgeMesh,
-    weights: Weights,
-    fixed: &[Option<[f64; 2]>],
-) -> Result<FixedSystem, SphereError> {
-    let weights =
-        half_edge_weights(cut.positions(), he, weights).map_err(|e| from_tutte(e.into()))?;
-    FixedSystem::assemble(he, &weights, fixed).map_err(from_tutte)
-}
-
-/// Where the rows of the rectangle system come from: the cut disk's own
-/// half-edges (any weights), or, for uniform weights, the rotations read from
-/// the sphere's half-edges (the same rows in the same order: [`CutRotations`]).
-enum Rows<'a> {
-    Disk(HalfEdgeMesh),
-    Sphere(&'a CutRotations<'a>),
-}
-
-/// What both rectangle solves (the first, and the one with pinned pole fans)
-/// share: the weights, the refinement budget, and the running counts.
-struct RectangleSolver {
-    weights: Weights,
-    max_refinements: usize,
-    /// Refinement steps taken, over all solves.
-    refinements: usize,
-    watch: Stopwatch,
-}
-
-impl RectangleSolver {
-    /// Solves the Tutte system of `cut` (whose rows come from `rows`) with
-    /// `fixed` boundary, then refines in double-double while triangles are
-    /// inverted and refinement still changes the solution.
-    ///
-    /// `rows` is taken by value so that the disk's half-edges and the weights
-    /// are freed once the system is assembled: the factor then has their
-    /// memory (at a million vertices they are ~130 MB next to a ~600 MB factor).
-    fn solve(
-        &mut self,
-        rows: Rows<'_>,
-        cut: &Mesh,
-        fixed: &[Option<[f64; 2]>],
-        progress: &(dyn Fn(usize, usize) -> bool + Sync),
-    ) -> Result<Vec<[f64; 2]>, SphereError> {
-        let system = match rows {
-            Rows::Sphere(rotations) => {
-                FixedSystem::assemble_rows(fixed, |i, out| rotations.uniform_edges(i, out))
-                    .map_err(from_tutte)?
-            }
-            Rows::Disk(he) => disk_system(cut, &he, self.weights, fixed)?,
-        };
-        let faces = cut.faces();
-        if system.free.is_empty() {
-            return Ok(system.fixed_positions(fixed));
-        }
-        self.watch.lap("system");
-        go_on(progress, "rectangle system")?;
-        let factor = Factorization::new(&system.matrix)?;
-        self.watch.lap("factor");
-        go_on(progress, "factorisation")?;
-        let mut uv = system.fixed_positions(fixed);
-        let mut x = factor.solve(&system.matrix, &system.rhs)?;
-        system.scatter(&mut uv, &x);
-        self.watch.lap("solve");
-        // One refinement step always: the plain solve leaves cond(A) * eps behind.
-        for step in 0..self.max_refinements {
-            if step > 0 {
-                let done = inverted_faces(faces, &uv).is_empty();
-                self.watch.lap("check");
-                if done {
-                    break;
-                }
-            }
-            go_on(progress, "refinement")?;
-            let changed = refine_step(&system.matrix, &factor, &system.rhs, &mut x)?;
-            self.refinements += 1;
-            system.scatter(&mut uv, &x);
-            self.watch.lap("refine");
-            // A step that changed no entry reached a fixed point: every
-            // further step would give these same bits. Where double precision
-            // cannot hold the embedding (long tubes, spikes) this ends after
-            // 2-3 steps instead of the whole budget.
-            if changed == 0 {
-                break;
-            }
-        }
-        Ok(uv)
-    }
-}
-
-/// The smallest signed triangle area of the theta-phi rectangle divided by
-/// the rectangle's area, 2 pi^2: [`ThetaPhi::min_area_ratio`].
-pub(crate) fn rectangle_margin(faces: &[[u32; 3]], uv: &[[f64; 2]]) -> f64 {
-    faces
-        .iter()
-        .map(|&[a, b, c]| {
-            let (a, b, c) = (uv[a as usize], uv[b as usize], uv[c as usize]);
-            0.5 * ((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]))
-        })
-        .fold(f64::INFINITY, f64::min)
-        / (2.0 * PI * PI)
-}
-
-mod system;
-pub use system::rectangle_system;
 
 #[cfg(test)]
 mod tests;

@@ -35,7 +35,7 @@ use crate::genus_zero::GenusZeroMesh;
 use crate::methods::theta_phi::fold::fold;
 use crate::methods::theta_phi::pole_fans::{pole_fan, rectangle_boundary, strictly_increasing_phi};
 use crate::methods::theta_phi::poles::Poles;
-use crate::methods::theta_phi::rectangle_margin;
+use crate::methods::theta_phi::rectangle::rectangle_margin;
 use crate::methods::theta_phi::ThetaPhi;
 /// How far stored theta-phi points may be from the fold of their rectangle.
 pub const FOLD_TOLERANCE: f64 = 1e-9;

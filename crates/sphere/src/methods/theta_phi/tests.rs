@@ -1,6 +1,8 @@
 //! Tests of the theta-phi pipeline (thesis ch. 6), beside it.
 use super::*;
 use crate::certificate::validity::check_sphere;
+use crate::methods::theta_phi::rectangle::rectangle_system;
+use std::f64::consts::PI;
 
 /// A test run: the points, and the rest through `Deref`.
 #[derive(Debug)]
