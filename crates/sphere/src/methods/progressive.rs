@@ -50,7 +50,9 @@ use crate::methods::progressive::authalic_newton::{
     authalic_newton, authalic_newton_rings, AuthalicSteps,
 };
 use crate::methods::progressive::distortion_energy::Energy;
-use crate::methods::progressive::flip_free::{check_tolerance, positive_star, Problem};
+use crate::methods::progressive::flip_free::{check_tolerance, positive_star, Optimised, Problem};
+use conformal::NotUsed;
+use hierarchy::Hierarchy;
 use ring_mesh::{Collapse, RingMesh};
 
 /// Optimise the current level when it has grown by this factor since the last time.
@@ -164,90 +166,7 @@ pub fn progressive(
     place_tetrahedron(&rings, &mut points);
     let problem =
         Problem { energy: params.energy, surface: positions, area_floor: area_floor(mesh) };
-    let mut optimised_at = 4usize;
-    // The last level's problem and area scale, for the moves of new vertices.
-    let mut level: Option<(Problem<'_>, f64)> = None;
-    let mut inserted = 0usize;
-    for round in hierarchy.rounds.iter().rev() {
-        let collapses = &hierarchy.collapses[round.clone()];
-        let shared: &[[f64; 3]] = &points;
-        let placed: Vec<Option<[f64; 3]>> = collapses
-            .par_iter()
-            .with_min_len(64)
-            .map(|c| placement::place(&c.ring, shared))
-            .collect();
-        // Undo the round last collapse first. A retry moves vertices, which
-        // may spoil the places found for the rest of the round: after one,
-        // each place is tested again before it is used.
-        let mut moved = false;
-        // The area scale for retries, measured once per round when needed.
-        let mut retry_scale: Option<f64> = None;
-        for (c, q) in collapses.iter().zip(placed).rev() {
-            let q = match q {
-                Some(q) if !moved || positive_star(q, &c.ring, &points) => Some(q),
-                _ if moved => placement::place(&c.ring, &points),
-                _ => None,
-            };
-            let q = match q {
-                Some(q) => q,
-                None => {
-                    moved = true;
-                    let k = *retry_scale.get_or_insert_with(|| {
-                        problem.area_scale(&problem.stars(&rings.rings), &points)
-                    });
-                    retry_placement(&problem, k, &rings, &mut points, c).ok_or(
-                        SphereError::Insertion { vertex: c.u as usize, neighbours: c.ring.len() },
-                    )?
-                }
-            };
-            insert(&mut rings, &mut points, c, q);
-        }
-        if let Some((level, k)) = level {
-            // Each new vertex moves once from its kernel's centre towards
-            // lower energy (measured on 200k-vertex `bumpy_blob`: 4 final
-            // sweeps instead of 9, 3.6 degrees of angle distortion instead
-            // of 4.3). No two share a face, so they move in parallel.
-            let shared: &[[f64; 3]] = &points;
-            let moves: Vec<Option<[f64; 3]>> = collapses
-                .par_iter()
-                .with_min_len(64)
-                .map(|c| level.move_vertex(k, c.u, &c.ring, shared))
-                .collect();
-            for (c, q) in collapses.iter().zip(moves) {
-                if let Some(q) = q {
-                    points[c.u as usize] = q;
-                }
-            }
-        }
-        inserted += collapses.len();
-        let done = n + inserted;
-        if !(go_on() && progress(done, total)) {
-            return Err(cancelled("insertion", done));
-        }
-        if rings.n_alive as f64 >= LEVEL_GROWTH * optimised_at as f64 && rings.n_alive < n {
-            optimised_at = rings.n_alive;
-            let at_level = Problem {
-                energy: params.energy.on_coarse_levels(),
-                ..problem.at_level(&rings.rings)
-            };
-            let sweeps = (LEVEL_MOVES / rings.n_alive).clamp(LEVEL_SWEEPS, MAX_LEVEL_SWEEPS);
-            let end = at_level
-                .optimise(&rings.rings, &mut points, sweeps, params.tolerance, &|_| !go_on())
-                .map_err(|_| cancelled("insertion", done))?;
-            if params.energy == Energy::Authalic && rings.n_alive >= AUTHALIC_LEVEL_MIN {
-                authalic_newton_rings(
-                    &rings.rings,
-                    positions,
-                    at_level.area_floor,
-                    &mut points,
-                    AUTHALIC_LEVEL_STEPS,
-                    &|| !go_on(),
-                )
-                .map_err(|_| cancelled("insertion", done))?;
-            }
-            level = Some((at_level, end.scale));
-        }
-    }
+    insert_levels(&hierarchy, &problem, params, &mut rings, &mut points, progress)?;
     seconds.push(("insertion", started.elapsed().as_secs_f64()));
 
     let started = Instant::now();
@@ -271,13 +190,156 @@ pub fn progressive(
     progress(total, total);
 
     let status = if end.converged { Status::Converged } else { Status::MaxIterations };
+    let message = message(&hierarchy, params.energy, &end, authalic, not_used);
+    Ok(SphereEmbedding { points, iterations: end.sweeps, status, message, seconds })
+}
+
+/// Steps 3 and 4 up to the finest level: undoes the rounds of `hierarchy`,
+/// last first ([`insert_round`]), moves each new vertex once, and lowers the
+/// energy whenever the mesh has grown by [`LEVEL_GROWTH`] ([`optimise_level`]).
+fn insert_levels(
+    hierarchy: &Hierarchy,
+    problem: &Problem<'_>,
+    params: &ProgressiveParams,
+    rings: &mut RingMesh,
+    points: &mut [[f64; 3]],
+    progress: &(dyn Fn(usize, usize) -> bool + Sync),
+) -> Result<(), SphereError> {
+    let n = points.len();
+    let total = 3 * n;
+    let go_on = || progress(0, 0);
+    let mut optimised_at = 4usize;
+    // The last level's problem and area scale, for the moves of new vertices.
+    let mut level: Option<(Problem<'_>, f64)> = None;
+    let mut inserted = 0usize;
+    for round in hierarchy.rounds.iter().rev() {
+        let collapses = &hierarchy.collapses[round.clone()];
+        insert_round(collapses, problem, rings, points)?;
+        if let Some((level, k)) = level {
+            move_new_vertices(collapses, &level, k, points);
+        }
+        inserted += collapses.len();
+        let done = n + inserted;
+        if !(go_on() && progress(done, total)) {
+            return Err(SphereError::Cancelled { stage: "insertion", done, total });
+        }
+        if rings.n_alive as f64 >= LEVEL_GROWTH * optimised_at as f64 && rings.n_alive < n {
+            optimised_at = rings.n_alive;
+            let level_done = || SphereError::Cancelled { stage: "insertion", done, total };
+            level = Some(optimise_level(problem, params, rings, points, &go_on, level_done)?);
+        }
+    }
+    Ok(())
+}
+
+/// Undoes one round of collapses, last collapse first, each vertex at the
+/// centre of its ring's kernel, or, when that kernel is too thin, after its
+/// neighbourhood has moved ([`retry_placement`]).
+fn insert_round(
+    collapses: &[Collapse],
+    problem: &Problem<'_>,
+    rings: &mut RingMesh,
+    points: &mut [[f64; 3]],
+) -> Result<(), SphereError> {
+    let shared: &[[f64; 3]] = points;
+    let placed: Vec<Option<[f64; 3]>> =
+        collapses.par_iter().with_min_len(64).map(|c| placement::place(&c.ring, shared)).collect();
+    // Undo the round last collapse first. A retry moves vertices, which
+    // may spoil the places found for the rest of the round: after one,
+    // each place is tested again before it is used.
+    let mut moved = false;
+    // The area scale for retries, measured once per round when needed.
+    let mut retry_scale: Option<f64> = None;
+    for (c, q) in collapses.iter().zip(placed).rev() {
+        let q = match q {
+            Some(q) if !moved || positive_star(q, &c.ring, points) => Some(q),
+            _ if moved => placement::place(&c.ring, points),
+            _ => None,
+        };
+        let q = match q {
+            Some(q) => q,
+            None => {
+                moved = true;
+                let k = *retry_scale.get_or_insert_with(|| {
+                    problem.area_scale(&problem.stars(&rings.rings), points)
+                });
+                retry_placement(problem, k, rings, points, c).ok_or(SphereError::Insertion {
+                    vertex: c.u as usize,
+                    neighbours: c.ring.len(),
+                })?
+            }
+        };
+        insert(rings, points, c, q);
+    }
+    Ok(())
+}
+
+/// Each new vertex moves once from its kernel's centre towards lower energy
+/// (measured on 200k-vertex `bumpy_blob`: 4 final sweeps instead of 9, 3.6
+/// degrees of angle distortion instead of 4.3). No two share a face, so they
+/// move in parallel.
+fn move_new_vertices(collapses: &[Collapse], level: &Problem<'_>, k: f64, points: &mut [[f64; 3]]) {
+    let shared: &[[f64; 3]] = points;
+    let moves: Vec<Option<[f64; 3]>> = collapses
+        .par_iter()
+        .with_min_len(64)
+        .map(|c| level.move_vertex(k, c.u, &c.ring, shared))
+        .collect();
+    for (c, q) in collapses.iter().zip(moves) {
+        if let Some(q) = q {
+            points[c.u as usize] = q;
+        }
+    }
+}
+
+/// Step 4 on a coarse level: flip-free sweeps of the coarse-level energy,
+/// then, for the authalic energy, global steps towards equal areas. Returns
+/// the level's problem and area scale for the moves of the next new vertices;
+/// `cancelled` is the error when `go_on` says stop.
+fn optimise_level<'p>(
+    problem: &'p Problem<'_>,
+    params: &ProgressiveParams,
+    rings: &RingMesh,
+    points: &mut [[f64; 3]],
+    go_on: &(dyn Fn() -> bool + Sync),
+    cancelled: impl Fn() -> SphereError,
+) -> Result<(Problem<'p>, f64), SphereError> {
+    let at_level =
+        Problem { energy: params.energy.on_coarse_levels(), ..problem.at_level(&rings.rings) };
+    let sweeps = (LEVEL_MOVES / rings.n_alive).clamp(LEVEL_SWEEPS, MAX_LEVEL_SWEEPS);
+    let end = at_level
+        .optimise(&rings.rings, points, sweeps, params.tolerance, &|_| !go_on())
+        .map_err(|_| cancelled())?;
+    if params.energy == Energy::Authalic && rings.n_alive >= AUTHALIC_LEVEL_MIN {
+        authalic_newton_rings(
+            &rings.rings,
+            problem.surface,
+            at_level.area_floor,
+            points,
+            AUTHALIC_LEVEL_STEPS,
+            &|| !go_on(),
+        )
+        .map_err(|_| cancelled())?;
+    }
+    Ok((at_level, end.scale))
+}
+
+/// The run's account in words: the hierarchy, the final sweeps, the global
+/// authalic steps, and why the conformal start was not used.
+fn message(
+    hierarchy: &Hierarchy,
+    energy: Energy,
+    end: &Optimised,
+    authalic: Option<AuthalicSteps>,
+    not_used: Option<NotUsed>,
+) -> String {
     let mut message = format!(
         "{} collapses in {} rounds undone; {} final sweeps of the {} energy, {:.4} per unit area \
          (last relative change {:.1e})",
         hierarchy.collapses.len(),
         hierarchy.rounds.len(),
         end.sweeps,
-        params.energy.name(),
+        energy.name(),
         end.energy,
         end.last_change
     );
@@ -293,7 +355,7 @@ pub fn progressive(
     if let Some(why) = not_used {
         message.push_str(&format!("; the global conformal start was not used: {}", why.reason));
     }
-    Ok(SphereEmbedding { points, iterations: end.sweeps, status, message, seconds })
+    message
 }
 
 /// Surface triangles below a millionth of the mean area count as that large.
