@@ -15,7 +15,7 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
-use crate::certificate::validity::check_sphere;
+use crate::certificate::validity::{check_sphere, SphereReport};
 use crate::embedding::{normalize, SphereEmbedding, Status};
 use crate::error::SphereError;
 
@@ -131,6 +131,35 @@ fn collapsed(cap: CapLimit, cos: f64) -> bool {
     }
 }
 
+/// Why the points are collapsing: they lie within a cap of cosine `cos`
+/// after `r` iterations, `resultant` the length of their mean.
+fn collapse_message(method: &str, r: usize, cos: f64, resultant: f64) -> String {
+    let radius = cos.clamp(-1.0, 1.0).acos().to_degrees();
+    let (when, advice) = if r == 0 {
+        (
+            "the initial points already lie".to_string(),
+            "; choose a centre inside the mesh, or other initial points",
+        )
+    } else {
+        (format!("after {r} iterations all points lie"), "")
+    };
+    format!(
+        "{method}: {when} within {radius:.3} degrees of one direction (mean resultant length \
+         {resultant:.4}), in an open hemisphere that the update never leaves and that holds no \
+         valid embedding: the drawing is collapsing towards one point (thesis 5.2){advice}"
+    )
+}
+
+/// What is still wrong after the last of `r` iterations.
+fn max_iter_message(method: &str, r: usize, n_faces: usize, report: &SphereReport) -> String {
+    let flipped = report.flipped_faces.len();
+    format!(
+        "{method}: no valid embedding after {r} iterations (max_iter): {flipped} of {} faces fail \
+         the orientation test, covering degree {}",
+        n_faces, report.covering_degree
+    )
+}
+
 /// The loop both methods share: `update(points, i)` is the new position of
 /// vertex `i` from the previous iterate (a Jacobi step). Tests for collapse
 /// after every iteration (O(N), fused with the sweep), for validity every
@@ -166,23 +195,7 @@ where
         }
         if let Some((cos, resultant)) = enclosing_cap(&points, sum) {
             if collapsed(cap, cos) {
-                let radius = cos.clamp(-1.0, 1.0).acos().to_degrees();
-                let (when, advice) = if r == 0 {
-                    (
-                        "the initial points already lie".to_string(),
-                        "; choose a centre inside the mesh, or other initial points",
-                    )
-                } else {
-                    (format!("after {r} iterations all points lie"), "")
-                };
-                break (
-                    Status::Collapsed,
-                    format!(
-                        "{method}: {when} within {radius:.3} degrees of one direction (mean resultant length \
-                         {resultant:.4}), in an open hemisphere that the update never leaves and that holds no \
-                         valid embedding: the drawing is collapsing towards one point (thesis 5.2){advice}"
-                    ),
-                );
+                break (Status::Collapsed, collapse_message(method, r, cos, resultant));
             }
         }
         let scheduled = r % controls.check_every == 0 || r == controls.max_iter;
@@ -195,16 +208,7 @@ where
                 );
             }
             if r == controls.max_iter {
-                let flipped = report.flipped_faces.len();
-                break (
-                    Status::MaxIterations,
-                    format!(
-                        "{method}: no valid embedding after {r} iterations (max_iter): {flipped} of {} faces fail \
-                         the orientation test, covering degree {}",
-                        faces.len(),
-                        report.covering_degree
-                    ),
-                );
+                break (Status::MaxIterations, max_iter_message(method, r, faces.len(), &report));
             }
         }
         let (moved, new_sum) = sweep(&points, &mut next, &update);

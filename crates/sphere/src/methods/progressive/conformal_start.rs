@@ -101,24 +101,8 @@ pub fn conformal_start(
     // (measured on soccerball: mean angle distortion 2.6 degrees with the
     // corners fixed). K is singular (constants); the sources sum to zero, so
     // grounding one vertex outside the face makes it definite.
-    let ground = (0..mesh.n_vertices() as u32).find(|v| ![a, b, c].contains(v)).unwrap_or(0);
-    let mut fixed: Vec<Option<[f64; 2]>> = vec![None; mesh.n_vertices()];
-    fixed[ground as usize] = Some([0.0, 0.0]);
     let weights = cotangent_weights(positions, he, area_floor);
-    let mut system = FixedSystem::assemble(he, &weights, &fixed).map_err(NoStart::Solve)?;
-    let sources = pole_sources([a, b, c].map(|v| positions[v as usize]), area_floor);
-    for (&v, source) in [a, b, c].iter().zip(sources) {
-        // The free vertices are numbered in increasing order.
-        if let Ok(row) = system.free.binary_search(&v) {
-            system.rhs[0][row] += source[0];
-            system.rhs[1][row] += source[1];
-        }
-    }
-    let (solution, _) =
-        solve(&system.matrix, &system.rhs, SolverKind::Direct, &SolveParams::default())
-            .map_err(|e| NoStart::Solve(e.into()))?;
-    let mut uv = system.fixed_positions(&fixed);
-    system.scatter(&mut uv, &solution);
+    let uv = planar_map(mesh, &weights, [a, b, c], area_floor)?;
     if stop() {
         return Err(NoStart::Stopped);
     }
@@ -129,21 +113,7 @@ pub fn conformal_start(
     // packing it into a cap a few digits wide, centring starts close, and
     // step 3 has half the mesh to solve.
     let mass = vertex_areas(positions, faces, area_floor);
-    let total: f64 = mass.iter().sum();
-    let mut centre_uv = [0.0; 2];
-    for (p, &m) in uv.iter().zip(&mass) {
-        centre_uv[0] += m * p[0] / total;
-        centre_uv[1] += m * p[1] / total;
-    }
-    let mut radii: Vec<f64> =
-        uv.iter().map(|p| (p[0] - centre_uv[0]).hypot(p[1] - centre_uv[1])).collect();
-    let middle = radii.len() / 2;
-    let median = *radii.select_nth_unstable_by(middle, f64::total_cmp).1;
-    let unit = if median > 0.0 && median.is_finite() { 1.0 / median } else { 1.0 };
-    let z: Vec<[f64; 2]> = uv
-        .par_iter()
-        .map(|p| [(p[0] - centre_uv[0]) * unit, (p[1] - centre_uv[1]) * unit])
-        .collect();
+    let z = scaled(&uv, &mass);
 
     // Step 3. The discrete pole spreads an error of about h / r around the
     // removed face (h the edge length, r the distance): measured on
@@ -190,6 +160,54 @@ pub fn conformal_start(
         return Err(NoStart::NotValid(Box::new(report)));
     }
     Ok(ConformalStart { points, removed_face: removed, centred, report })
+}
+
+/// Step 1 of [`conformal_start`]: the map of the mesh onto the plane that
+/// sends the face `[a, b, c]` to infinity, by solving K z = b with `weights`
+/// the cotangent stiffness matrix (the comment at the call says why).
+fn planar_map(
+    mesh: &GenusZeroMesh,
+    weights: &[f64],
+    [a, b, c]: [u32; 3],
+    area_floor: f64,
+) -> Result<Vec<[f64; 2]>, NoStart> {
+    let ground = (0..mesh.n_vertices() as u32).find(|v| ![a, b, c].contains(v)).unwrap_or(0);
+    let mut fixed: Vec<Option<[f64; 2]>> = vec![None; mesh.n_vertices()];
+    fixed[ground as usize] = Some([0.0, 0.0]);
+    let mut system =
+        FixedSystem::assemble(mesh.half_edges(), weights, &fixed).map_err(NoStart::Solve)?;
+    let sources = pole_sources([a, b, c].map(|v| mesh.positions()[v as usize]), area_floor);
+    for (&v, source) in [a, b, c].iter().zip(sources) {
+        // The free vertices are numbered in increasing order.
+        if let Ok(row) = system.free.binary_search(&v) {
+            system.rhs[0][row] += source[0];
+            system.rhs[1][row] += source[1];
+        }
+    }
+    let (solution, _) =
+        solve(&system.matrix, &system.rhs, SolverKind::Direct, &SolveParams::default())
+            .map_err(|e| NoStart::Solve(e.into()))?;
+    let mut uv = system.fixed_positions(&fixed);
+    system.scatter(&mut uv, &solution);
+    Ok(uv)
+}
+
+/// Step 2 of [`conformal_start`]: `uv` moved and scaled (a Möbius
+/// transformation too) so that half the vertices lie inside the unit circle
+/// around the centre weighted by `mass`.
+fn scaled(uv: &[[f64; 2]], mass: &[f64]) -> Vec<[f64; 2]> {
+    let total: f64 = mass.iter().sum();
+    let mut centre_uv = [0.0; 2];
+    for (p, &m) in uv.iter().zip(mass) {
+        centre_uv[0] += m * p[0] / total;
+        centre_uv[1] += m * p[1] / total;
+    }
+    let mut radii: Vec<f64> =
+        uv.iter().map(|p| (p[0] - centre_uv[0]).hypot(p[1] - centre_uv[1])).collect();
+    let middle = radii.len() / 2;
+    let median = *radii.select_nth_unstable_by(middle, f64::total_cmp).1;
+    let unit = if median > 0.0 && median.is_finite() { 1.0 / median } else { 1.0 };
+    uv.par_iter().map(|p| [(p[0] - centre_uv[0]) * unit, (p[1] - centre_uv[1]) * unit]).collect()
 }
 
 /// The point of the unit sphere over z = 1 / w (see

@@ -313,16 +313,8 @@ fn largest_component(h: &Adjacency, in_r: &[bool]) -> Vec<u32> {
     best
 }
 
-/// The symmetry method (thesis 6.2.5) on a closed mesh with vertex graph
-/// `graph`. Never fails on a valid mesh: when no plane will do, the result
-/// says why in `fallback` and the caller picks poles another way. Errors only
-/// for an `eps` that is not a positive finite number.
-pub fn symmetry(
-    positions: &[[f64; 3]],
-    faces: &[[u32; 3]],
-    graph: &Adjacency,
-    params: &SymmetryParams,
-) -> Result<Symmetry, SphereError> {
+/// Refuses an `eps`, `min_spread` or `max_score` outside its range.
+fn check_params(params: &SymmetryParams) -> Result<(), SphereError> {
     if let Some(eps) = params.eps {
         if !(eps > 0.0 && eps.is_finite()) {
             return Err(SphereError::InvalidParameter {
@@ -346,6 +338,46 @@ pub fn symmetry(
             expected: "a number in [0, 1]",
         });
     }
+    Ok(())
+}
+
+/// Where the two sweeps on the band start: the vertex of `component` farthest
+/// along the longest in-plane axis of plane `k` (the smallest id on a tie).
+///
+/// The thesis starts the two sweeps at an arbitrary vertex. But H is mostly
+/// a closed band (where the plane meets the surface), on which every vertex
+/// has an antipode, so the start decides where the poles go. Starting at
+/// the end of the longest in-plane axis of the ellipsoid puts the poles
+/// near the two ends of that axis: far apart in space, not by numbering.
+fn start_vertex(
+    positions: &[[f64; 3]],
+    centre: [f64; 3],
+    planes: &[Plane],
+    k: usize,
+    component: &[u32],
+) -> Option<u32> {
+    let axis = long_axis_in(planes, k);
+    let reach = |v: u32| dot(axis, sub(positions[v as usize], centre));
+    component.iter().copied().reduce(|a, b| {
+        if reach(b) > reach(a) || (reach(b) == reach(a) && b < a) {
+            b
+        } else {
+            a
+        }
+    })
+}
+
+/// The symmetry method (thesis 6.2.5) on a closed mesh with vertex graph
+/// `graph`. Never fails on a valid mesh: when no plane will do, the result
+/// says why in `fallback` and the caller picks poles another way. Errors only
+/// for an `eps` that is not a positive finite number.
+pub fn symmetry(
+    positions: &[[f64; 3]],
+    faces: &[[u32; 3]],
+    graph: &Adjacency,
+    params: &SymmetryParams,
+) -> Result<Symmetry, SphereError> {
+    check_params(params)?;
     let mut result = Symmetry {
         centre: [f64::NAN; 3],
         planes: Vec::new(),
@@ -383,20 +415,7 @@ pub fn symmetry(
     let component = largest_component(&h, &in_r);
     let size = component.len();
     result.component = size;
-    // The thesis starts the two sweeps at an arbitrary vertex. But H is mostly
-    // a closed band (where the plane meets the surface), on which every vertex
-    // has an antipode, so the start decides where the poles go. Starting at
-    // the end of the longest in-plane axis of the ellipsoid puts the poles
-    // near the two ends of that axis: far apart in space, not by numbering.
-    let axis = long_axis_in(&result.planes, k);
-    let reach = |v: u32| dot(axis, sub(positions[v as usize], centre));
-    let Some(start) = component.iter().copied().reduce(|a, b| {
-        if reach(b) > reach(a) || (reach(b) == reach(a) && b < a) {
-            b
-        } else {
-            a
-        }
-    }) else {
+    let Some(start) = start_vertex(positions, centre, &result.planes, k, &component) else {
         result.fallback = Some(too_small(0, 0));
         return Ok(result);
     };

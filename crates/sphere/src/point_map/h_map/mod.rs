@@ -75,6 +75,118 @@ pub struct ThetaPhiMap {
     problem: Option<String>,
 }
 
+/// The stretched pole cells (thesis 6.6.2) of every face with a pole corner,
+/// a face with both poles giving one cell per pole (split at the point of n-s
+/// at the height of its third corner), and a face and corner at each pole.
+fn pole_cells(
+    faces: &[[u32; 3]],
+    uv: &[[f64; 2]],
+    poles: [u32; 2],
+) -> (Vec<PoleCell>, [(u32, usize); 2]) {
+    let [north, south] = poles;
+    let mut cells: Vec<PoleCell> = Vec::new();
+    let mut pole_corners = [(u32::MAX, 0usize); 2];
+    for (f, face) in faces.iter().enumerate() {
+        let corner_of = |v: u32| face.iter().position(|&x| x == v);
+        let corners = [corner_of(north), corner_of(south)];
+        for side in 0..2 {
+            if let Some(c) = corners[side] {
+                if pole_corners[side].0 == u32::MAX {
+                    pole_corners[side] = (f as u32, c);
+                }
+            }
+        }
+        for side in 0..2 {
+            let Some(pc) = corners[side] else { continue };
+            let (ca, cb) = ((pc + 1) % 3, (pc + 2) % 3);
+            let point = |corner: usize| -> [f64; 3] {
+                let mut w = [0.0; 3];
+                match corners[1 - side] {
+                    Some(other) if other == corner => {
+                        // The split point c on n-s at the height of x (the third corner).
+                        let x = 3 - pc - other;
+                        let (ut, up, uo) = (
+                            uv[face[x] as usize][0],
+                            uv[face[pc] as usize][0],
+                            uv[face[other] as usize][0],
+                        );
+                        let tau = (ut - up) / (uo - up);
+                        w[pc] = 1.0 - tau;
+                        w[other] = tau;
+                    }
+                    _ => w[corner] = 1.0,
+                }
+                w
+            };
+            let (a, b) = (point(ca), point(cb));
+            let at = |w: [f64; 3]| {
+                let mut p = [0.0; 2];
+                for k in 0..3 {
+                    let q = uv[face[k] as usize];
+                    p[0] += w[k] * q[0];
+                    p[1] += w[k] * q[1];
+                }
+                p
+            };
+            let (ua, ub) = (at(a), at(b));
+            cells.push(PoleCell {
+                face: f as u32,
+                pole_corner: pc,
+                pole_theta: uv[poles[side] as usize][0],
+                a,
+                b,
+                ua,
+                ub,
+                psi_a: ua[1],
+                psi_b: ub[1],
+                vertical: true,
+            });
+        }
+    }
+    (cells, pole_corners)
+}
+
+/// The pieces of the rectangle point location can return (the faces without
+/// pole corners, the pole cells, the flat pieces), their boxes, and each
+/// face's pieces as `part_regions[part_start[f]..part_start[f + 1]]`.
+fn regions(
+    faces: &[[u32; 3]],
+    [north, south]: [u32; 2],
+    uv: &[[f64; 2]],
+    cells: &[PoleCell],
+    flats: &[FlatPiece],
+) -> (Vec<Region>, Vec<Aabb<2>>, Vec<u32>, Vec<u32>) {
+    let mut regions = Vec::with_capacity(faces.len() + cells.len() + flats.len());
+    let mut boxes = Vec::with_capacity(regions.capacity());
+    let mut parts: Vec<(u32, u32)> = Vec::with_capacity(cells.len() + flats.len());
+    for (f, face) in faces.iter().enumerate() {
+        if !face.contains(&north) && !face.contains(&south) {
+            regions.push(Region::Triangle(f as u32));
+            boxes.push(Aabb::around(&face.map(|v| uv[v as usize])));
+        }
+    }
+    for (i, cell) in cells.iter().enumerate() {
+        parts.push((cell.face, regions.len() as u32));
+        regions.push(Region::Pole(i as u32));
+        boxes.push(Aabb::around(&cell.corners()));
+    }
+    for (i, flat) in flats.iter().enumerate() {
+        parts.push((flat.face, regions.len() as u32));
+        regions.push(Region::Flat(i as u32));
+        boxes.push(Aabb::around(&flat.positions));
+    }
+    parts.sort_unstable();
+    let mut part_start = vec![0u32; faces.len() + 1];
+    for &(f, _) in &parts {
+        part_start[f as usize + 1] += 1;
+    }
+    for f in 0..faces.len() {
+        part_start[f + 1] += part_start[f];
+    }
+    let part_regions = parts.into_iter().map(|(_, r)| r).collect();
+    (regions, boxes, part_start, part_regions)
+}
+
 impl ThetaPhiMap {
     /// Builds h from the cut mesh's faces (in the input's face order), the
     /// rectangle embedding `uv` (thesis 6.4) and the poles. Never fails: when
@@ -82,65 +194,7 @@ impl ThetaPhiMap {
     /// says why and `to_surface` must not be trusted.
     pub fn new(faces: &[[u32; 3]], uv: &[[f64; 2]], north: u32, south: u32) -> Self {
         let poles = [north, south];
-        let mut cells: Vec<PoleCell> = Vec::new();
-        let mut pole_corners = [(u32::MAX, 0usize); 2];
-        for (f, face) in faces.iter().enumerate() {
-            let corner_of = |v: u32| face.iter().position(|&x| x == v);
-            let corners = [corner_of(north), corner_of(south)];
-            for side in 0..2 {
-                if let Some(c) = corners[side] {
-                    if pole_corners[side].0 == u32::MAX {
-                        pole_corners[side] = (f as u32, c);
-                    }
-                }
-            }
-            for side in 0..2 {
-                let Some(pc) = corners[side] else { continue };
-                let (ca, cb) = ((pc + 1) % 3, (pc + 2) % 3);
-                let point = |corner: usize| -> [f64; 3] {
-                    let mut w = [0.0; 3];
-                    match corners[1 - side] {
-                        Some(other) if other == corner => {
-                            // The split point c on n-s at the height of x (the third corner).
-                            let x = 3 - pc - other;
-                            let (ut, up, uo) = (
-                                uv[face[x] as usize][0],
-                                uv[face[pc] as usize][0],
-                                uv[face[other] as usize][0],
-                            );
-                            let tau = (ut - up) / (uo - up);
-                            w[pc] = 1.0 - tau;
-                            w[other] = tau;
-                        }
-                        _ => w[corner] = 1.0,
-                    }
-                    w
-                };
-                let (a, b) = (point(ca), point(cb));
-                let at = |w: [f64; 3]| {
-                    let mut p = [0.0; 2];
-                    for k in 0..3 {
-                        let q = uv[face[k] as usize];
-                        p[0] += w[k] * q[0];
-                        p[1] += w[k] * q[1];
-                    }
-                    p
-                };
-                let (ua, ub) = (at(a), at(b));
-                cells.push(PoleCell {
-                    face: f as u32,
-                    pole_corner: pc,
-                    pole_theta: uv[poles[side] as usize][0],
-                    a,
-                    b,
-                    ua,
-                    ub,
-                    psi_a: ua[1],
-                    psi_b: ub[1],
-                    vertical: true,
-                });
-            }
-        }
+        let (mut cells, pole_corners) = pole_cells(faces, uv, poles);
         let mut problem = None;
         for side in 0..2 {
             if let Err(why) = assign_psi(&mut cells, faces, poles, side) {
@@ -155,34 +209,7 @@ impl ThetaPhiMap {
             ));
         }
 
-        let mut regions = Vec::with_capacity(faces.len() + cells.len() + flats.len());
-        let mut boxes = Vec::with_capacity(regions.capacity());
-        let mut parts: Vec<(u32, u32)> = Vec::with_capacity(cells.len() + flats.len());
-        for (f, face) in faces.iter().enumerate() {
-            if !face.contains(&north) && !face.contains(&south) {
-                regions.push(Region::Triangle(f as u32));
-                boxes.push(Aabb::around(&face.map(|v| uv[v as usize])));
-            }
-        }
-        for (i, cell) in cells.iter().enumerate() {
-            parts.push((cell.face, regions.len() as u32));
-            regions.push(Region::Pole(i as u32));
-            boxes.push(Aabb::around(&cell.corners()));
-        }
-        for (i, flat) in flats.iter().enumerate() {
-            parts.push((flat.face, regions.len() as u32));
-            regions.push(Region::Flat(i as u32));
-            boxes.push(Aabb::around(&flat.positions));
-        }
-        parts.sort_unstable();
-        let mut part_start = vec![0u32; faces.len() + 1];
-        for &(f, _) in &parts {
-            part_start[f as usize + 1] += 1;
-        }
-        for f in 0..faces.len() {
-            part_start[f + 1] += part_start[f];
-        }
-        let part_regions = parts.into_iter().map(|(_, r)| r).collect();
+        let (regions, boxes, part_start, part_regions) = regions(faces, poles, uv, &cells, &flats);
         let locator = Bvh::new(&boxes);
         ThetaPhiMap {
             faces: faces.to_vec(),
