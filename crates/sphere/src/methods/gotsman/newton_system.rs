@@ -97,26 +97,7 @@ pub(super) fn newton_step(
         .collect();
     let rhs: Vec<f64> =
         (0..n).flat_map(|i| [dot3(bases[i][0], b[i]), dot3(bases[i][1], b[i])]).collect();
-    let nnz = 4 * w.nnz() + 2 * n;
-    let (mut rows, mut cols, mut values) =
-        (Vec::with_capacity(nnz), Vec::with_capacity(nnz), Vec::with_capacity(nnz));
-    for i in 0..n {
-        let (nbrs, ws) = w.row(i);
-        for a in 0..2 {
-            let row = (2 * i + a) as u32;
-            for (&j, &wij) in nbrs.iter().zip(ws) {
-                for c in 0..2 {
-                    rows.push(row);
-                    cols.push(2 * j + c as u32);
-                    values.push(wij * dot3(bases[i][a], bases[j as usize][c]));
-                }
-            }
-            rows.push(row);
-            cols.push(row);
-            values.push(-x[4 * i + 3]);
-        }
-    }
-    let reduced = CsrMatrix::from_triplets(2 * n, 2 * n, &rows, &cols, &values)?;
+    let reduced = reduced_matrix(w, x, &bases)?;
     let t = match solve(&reduced, &[rhs], SolverKind::Auto, &SolveParams::default()) {
         Ok((mut t, _)) => match t.pop() {
             Some(t) if t.len() == 2 * n => t,
@@ -159,6 +140,36 @@ pub(super) fn newton_step(
         step[4 * i + 3] = a;
     }
     Ok(step.iter().all(|s| s.is_finite()).then_some(step))
+}
+
+/// The `2n x 2n` matrix of the tangent unknowns of [`newton_step`]: block
+/// `(i, j)` is `w_ij T_i^T T_j`, and the diagonal gets `-alpha_i`.
+fn reduced_matrix(
+    w: &CsrMatrix,
+    x: &[f64],
+    bases: &[[[f64; 3]; 2]],
+) -> Result<CsrMatrix, SparseError> {
+    let n = w.n_rows();
+    let nnz = 4 * w.nnz() + 2 * n;
+    let (mut rows, mut cols, mut values) =
+        (Vec::with_capacity(nnz), Vec::with_capacity(nnz), Vec::with_capacity(nnz));
+    for i in 0..n {
+        let (nbrs, ws) = w.row(i);
+        for a in 0..2 {
+            let row = (2 * i + a) as u32;
+            for (&j, &wij) in nbrs.iter().zip(ws) {
+                for c in 0..2 {
+                    rows.push(row);
+                    cols.push(2 * j + c as u32);
+                    values.push(wij * dot3(bases[i][a], bases[j as usize][c]));
+                }
+            }
+            rows.push(row);
+            cols.push(row);
+            values.push(-x[4 * i + 3]);
+        }
+    }
+    CsrMatrix::from_triplets(2 * n, 2 * n, &rows, &cols, &values)
 }
 
 /// An orthonormal basis of the plane perpendicular to `v` (not zero).
