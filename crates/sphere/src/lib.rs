@@ -2,9 +2,11 @@
 //!
 //! The folders follow the roles: the methods make a map, the certificate says
 //! whether it is one, the point maps use it, the applications build on it.
-//! Dependencies run one way: `applications` -> `point_map` -> `methods` ->
-//! `certificate` and the entry files; no folder reaches into another's
-//! private helpers.
+//! Dependencies run one way: `applications` use `point_map`, which uses the
+//! methods' results (through `embed`) and the theta-phi fold and rectangle;
+//! `methods` use `certificate` and the shared types (`genus_zero`,
+//! `embedding`, `error`); `certificate` uses nothing above it. Only tests
+//! reach the other way (the methods' tests measure with `applications`).
 //!
 //! Entry and results:
 //! * [`genus_zero`]: [`GenusZeroMesh`], the validated mesh every method takes (STYLE 5).
@@ -31,6 +33,7 @@
 //!   * [`methods::theta_phi::symmetric_eigen`]: 3x3 symmetric eigen-decomposition for that plane (eq. 6.15).
 //!   * [`methods::theta_phi::cut_path`]: the chordless, lengthened north-south cut path (6.2.4).
 //!   * `methods::theta_phi::cut_rotations`: the cut disk's connectivity read from the sphere's half-edges (6.3).
+//!   * [`methods::theta_phi::rectangle`]: the cut disk's Tutte embedding in the rectangle, refined and measured (6.4).
 //!   * [`methods::theta_phi::pole_fans`]: the rectangle boundary and the pole fans (6.4, 6.5.1, eq. 6.31, 6.36-6.38).
 //!   * [`methods::theta_phi::fold`]: the fold m onto the sphere and its inverse (eq. 6.35, 6.57).
 //! * [`methods::progressive`]: progressive meshes with exact insertion and flip-free optimisation (9.3.3).
