@@ -1,3 +1,5 @@
+//! Tests of the progressive method (thesis 9.3.3) and of improve, beside them.
+
 use super::*;
 use crate::certificate::validity::check_sphere;
 use spherify_mesh::solids::{bumpy, capsule, helix, icosphere, octahedron, tetrahedron};

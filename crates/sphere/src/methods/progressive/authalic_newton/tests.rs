@@ -1,3 +1,5 @@
+//! Tests of the global authalic steps (thesis 9.3.3), beside them.
+
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use super::*;

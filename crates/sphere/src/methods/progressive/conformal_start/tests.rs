@@ -1,3 +1,5 @@
+//! Tests of the global conformal start, beside it.
+
 use super::*;
 use crate::applications::metrics::{face_measures, quality};
 use crate::methods::progressive::area_floor;
