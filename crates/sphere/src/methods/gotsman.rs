@@ -245,6 +245,10 @@ struct Run {
 }
 
 /// The dogleg trust-region Newton iteration (module documentation).
+///
+/// About 90 lines: the outer Newton loop and the inner trust-region loop
+/// update the same iterate, residual, radius and counts, and read more
+/// plainly together than with that state passed between two functions.
 fn newton(
     w: &CsrMatrix,
     mut x: Vec<f64>,

@@ -251,19 +251,14 @@ fn mean_abs_log(faces: &[[u32; 3]], points: &[[f64; 3]], target: &[f64]) -> f64 
     sum / faces.len().max(1) as f64
 }
 
-/// The Levenberg-Marquardt step: a tangent vector per vertex.
-fn direction(
+/// Per face: the six unknowns it touches (two tangent components at each
+/// corner, in `basis`) and the gradient of its residual with respect to them.
+fn jacobian_rows(
     faces: &[[u32; 3]],
     points: &[[f64; 3]],
-    target: &[f64],
-    lambda: f64,
-) -> Result<Vec<[f64; 3]>, SphereError> {
-    let n = points.len();
-    let res = residuals(faces, points, target);
-    let basis: Vec<([f64; 3], [f64; 3])> = points.par_iter().map(|&p| tangent_basis(p)).collect();
-    // Per face: the six unknowns it touches and the gradient of its
-    // residual with respect to them.
-    let rows: Vec<([u32; 6], [f64; 6])> = faces
+    basis: &[([f64; 3], [f64; 3])],
+) -> Vec<([u32; 6], [f64; 6])> {
+    faces
         .par_iter()
         .map(|&face| {
             let p = face.map(|v| points[v as usize]);
@@ -286,10 +281,14 @@ fn direction(
             }
             (idx, ja)
         })
-        .collect();
-    // The faces at each vertex, with the vertex's corner: the matrix is built
-    // row by row in parallel, without a triplet list (which at 36 entries
-    // per face was most of the memory).
+        .collect()
+}
+
+/// The faces at each vertex, with the vertex's corner: vertex `v`'s are
+/// `corners[start[v]..start[v + 1]]`. The matrix is built row by row in
+/// parallel from them, without a triplet list (which at 36 entries per face
+/// was most of the memory).
+fn vertex_corners(faces: &[[u32; 3]], n: usize) -> (Vec<usize>, Vec<(u32, usize)>) {
     let mut start = vec![0usize; n + 1];
     for face in faces {
         for &v in face {
@@ -307,6 +306,21 @@ fn direction(
             fill[v as usize] += 1;
         }
     }
+    (start, corners)
+}
+
+/// The Levenberg-Marquardt step: a tangent vector per vertex.
+fn direction(
+    faces: &[[u32; 3]],
+    points: &[[f64; 3]],
+    target: &[f64],
+    lambda: f64,
+) -> Result<Vec<[f64; 3]>, SphereError> {
+    let n = points.len();
+    let res = residuals(faces, points, target);
+    let basis: Vec<([f64; 3], [f64; 3])> = points.par_iter().map(|&p| tangent_basis(p)).collect();
+    let rows = jacobian_rows(faces, points, &basis);
+    let (start, corners) = vertex_corners(faces, n);
     // Unknown r is component r % 2 of vertex r / 2; at a face's corner i it
     // is the face's local unknown 2 i + r % 2.
     let at = |r: usize| {

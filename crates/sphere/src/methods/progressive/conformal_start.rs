@@ -78,6 +78,9 @@ pub enum NoStart {
 /// # Errors
 /// [`NoStart`] when a solve fails, the map is not a valid GC-embedding, or
 /// `stop()` said so.
+///
+/// Slightly over 80 lines because the comments of steps 1 and 3 say why the
+/// pole and its repair are made this way.
 pub fn conformal_start(
     mesh: &GenusZeroMesh,
     area_floor: f64,

@@ -86,16 +86,10 @@ fn keeps_normals(positions: &[[f64; 3]], u: u32, v: u32, ring: &[u32]) -> bool {
     })
 }
 
-/// Collapses `mesh` down to four vertices, calling `report(removed)` after
-/// each round; it returns `false` to stop (then `None`).
-pub fn decimate(
-    mesh: &mut RingMesh,
-    positions: &[[f64; 3]],
-    report: &mut dyn FnMut(usize) -> bool,
-) -> Option<Hierarchy> {
-    let n = mesh.rings.len();
-    let per_vertex: Vec<(Quadric, f64)> = mesh
-        .rings
+/// Each vertex's quadric (the sum of its faces' plane quadrics) and the
+/// area of its faces.
+fn vertex_quadrics(mesh: &RingMesh, positions: &[[f64; 3]]) -> Vec<(Quadric, f64)> {
+    mesh.rings
         .par_iter()
         .enumerate()
         .map(|(i, ring)| {
@@ -114,7 +108,18 @@ pub fn decimate(
             }
             (quadric, area)
         })
-        .collect();
+        .collect()
+}
+
+/// Collapses `mesh` down to four vertices, calling `report(removed)` after
+/// each round; it returns `false` to stop (then `None`).
+pub fn decimate(
+    mesh: &mut RingMesh,
+    positions: &[[f64; 3]],
+    report: &mut dyn FnMut(usize) -> bool,
+) -> Option<Hierarchy> {
+    let n = mesh.rings.len();
+    let per_vertex = vertex_quadrics(mesh, positions);
     // A fixed order of summation: the same weight on every thread count.
     let total_area: f64 = per_vertex.iter().map(|x| x.1).sum();
     // Each face is seen from its three corners, in the area sum too.
