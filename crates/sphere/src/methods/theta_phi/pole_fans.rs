@@ -5,17 +5,17 @@
 //! eq. 6.31. The neighbours of each pole must then have strictly increasing
 //! phi, or the fold (eq. 6.35) turns the pole's fan over; where they do not,
 //! the fan is pinned on a convex arc and the disk embedded again (eq. 6.38).
+//!
+//! The boundary, the fans and their test are public: a stored theta-phi map
+//! is checked against them again when it is restored
+//! ([`crate::point_map::restore`]).
 
 use spherify_mesh::HalfEdgeMesh;
 use std::f64::consts::PI;
 
 /// The boundary of eq. 6.31: u_n = (0, pi), u_{p_i} = (i h, 0), u_s = (pi, pi),
 /// u_{N+i} = ((k + 1 - i) h, 2 pi), h = pi / (k + 1), as (theta, phi).
-pub(crate) fn rectangle_boundary(
-    boundary: &[u32],
-    k: usize,
-    n_original: usize,
-) -> Vec<Option<[f64; 2]>> {
+pub fn rectangle_boundary(boundary: &[u32], k: usize, n_original: usize) -> Vec<Option<[f64; 2]>> {
     let h = PI / (k as f64 + 1.0);
     let mut fixed = vec![None; n_original + k];
     fixed[boundary[0] as usize] = Some([0.0, PI]);
@@ -30,7 +30,7 @@ pub(crate) fn rectangle_boundary(
 /// The neighbours of a pole in the cut mesh, ordered by increasing phi in a
 /// valid embedding: P_n = (p_1, v_1, ..., v_l, N+k) for the north pole, and
 /// (p_k, ..., N+1) for the south pole (thesis 6.5.1).
-pub(crate) fn pole_fan(he: &HalfEdgeMesh, pole: u32, south: bool) -> Vec<u32> {
+pub fn pole_fan(he: &HalfEdgeMesh, pole: u32, south: bool) -> Vec<u32> {
     fan_of_ring(he.vertex_ring(pole), south)
 }
 
@@ -43,7 +43,8 @@ pub(crate) fn fan_of_ring(ring: Vec<u32>, south: bool) -> Vec<u32> {
     }
 }
 
-pub(crate) fn strictly_increasing_phi(uv: &[[f64; 2]], fan: &[u32]) -> bool {
+/// Whether phi increases strictly along `fan` in `uv` (thesis 6.5.1).
+pub fn strictly_increasing_phi(uv: &[[f64; 2]], fan: &[u32]) -> bool {
     fan.windows(2).all(|w| uv[w[0] as usize][1] < uv[w[1] as usize][1])
 }
 
