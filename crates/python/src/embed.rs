@@ -11,9 +11,9 @@ use pyo3::types::{PyDict, PyList};
 use spherify_mesh::io::PlyEncoding;
 use spherify_sparse::weights::Weights;
 use spherify_sparse::SolverKind;
-use spherify_sphere::from_points::from_points as core_from_points;
 use spherify_sphere::method_options::{OptionDefault, OptionKind, OptionValue};
-use spherify_sphere::theta_phi::{PoleChoice, ThetaPhiParams};
+use spherify_sphere::methods::theta_phi::{PoleChoice, ThetaPhiParams};
+use spherify_sphere::point_map::from_points::from_points as core_from_points;
 use spherify_sphere::{
     embed as core_embed, improve_embedding, GenusZeroMesh, Method, MethodName, SphereError,
 };
@@ -42,7 +42,10 @@ pub fn choices(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
     d.set_item("poles", PoleChoice::NAMES.to_vec())?;
     d.set_item("solvers", SolverKind::NAMES.to_vec())?;
     d.set_item("ply_encodings", PlyEncoding::NAMES.to_vec())?;
-    d.set_item("energies", spherify_sphere::distortion_energy::Energy::NAMES.to_vec())?;
+    d.set_item(
+        "energies",
+        spherify_sphere::methods::progressive::distortion_energy::Energy::NAMES.to_vec(),
+    )?;
     Ok(d)
 }
 

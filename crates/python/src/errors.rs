@@ -9,8 +9,8 @@ use pyo3::types::PyDict;
 use spherify_mesh::{Location, MeshError, UnknownName};
 use spherify_sparse::tutte::TutteError;
 use spherify_sparse::SparseError;
-use spherify_sphere::harmonics::HarmonicsError;
-use spherify_sphere::metrics::QualityError;
+use spherify_sphere::applications::harmonics::HarmonicsError;
+use spherify_sphere::applications::metrics::QualityError;
 use spherify_sphere::point_map::PointMapError;
 use spherify_sphere::{SphereEmbedding, SphereError};
 

@@ -2,7 +2,7 @@
 //! 5.1, eq. 5.10), solved by sparse Newton with a dogleg trust region.
 
 use pyo3::prelude::*;
-use spherify_sphere::gotsman::GotsmanParams;
+use spherify_sphere::methods::gotsman::GotsmanParams;
 use spherify_sphere::Method;
 
 use crate::options::Options;

@@ -1,10 +1,10 @@
 //! `harmonics_fit` and `harmonics_evaluate`: the spherical-harmonic transform
-//! of `spherify_sphere::harmonics` (thesis 8.3) for `spherify.harmonics`.
+//! of `spherify_sphere::applications::harmonics` (thesis 8.3) for `spherify.harmonics`.
 
 use numpy::{PyArray2, PyReadonlyArrayDyn};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use spherify_sphere::harmonics::{evaluate_with, fit_with};
+use spherify_sphere::applications::harmonics::{evaluate_with, fit_with};
 
 use crate::convert::{rows, to_numpy};
 use crate::errors::harmonics_error;

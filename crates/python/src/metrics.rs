@@ -1,9 +1,9 @@
-//! `quality`: the distortion measures of `spherify_sphere::metrics` as a dict.
+//! `quality`: the distortion measures of `spherify_sphere::applications::metrics` as a dict.
 
 use numpy::{IntoPyArray, PyReadonlyArrayDyn};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use spherify_sphere::metrics;
+use spherify_sphere::applications::metrics;
 
 use crate::convert::rows;
 use crate::errors::quality_error;

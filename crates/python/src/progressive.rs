@@ -2,9 +2,9 @@
 //! both lower one of the core's distortion energies with flip-free moves.
 
 use pyo3::prelude::*;
-use spherify_sphere::distortion_energy::Energy;
-use spherify_sphere::improve::ImproveParams;
-use spherify_sphere::progressive::ProgressiveParams;
+use spherify_sphere::methods::progressive::distortion_energy::Energy;
+use spherify_sphere::methods::progressive::improve::ImproveParams;
+use spherify_sphere::methods::progressive::ProgressiveParams;
 use spherify_sphere::Method;
 
 use crate::errors::mesh_error;

@@ -3,7 +3,7 @@
 
 use pyo3::prelude::*;
 use pyo3::types::{PyByteArray, PyBytes, PyString};
-use spherify_sphere::radial::Center;
+use spherify_sphere::methods::radial::Center;
 use spherify_sphere::Method;
 
 use crate::errors::mesh_error;

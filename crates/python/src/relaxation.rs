@@ -4,9 +4,9 @@
 use numpy::PyReadonlyArrayDyn;
 use pyo3::prelude::*;
 use pyo3::types::{PyByteArray, PyBytes, PyString};
-use spherify_sphere::alexa::{AlexaParams, AlexaStep};
-use spherify_sphere::initial::Initial;
-use spherify_sphere::relaxation::RelaxationParams;
+use spherify_sphere::methods::alexa::{AlexaParams, AlexaStep};
+use spherify_sphere::methods::initial::Initial;
+use spherify_sphere::methods::relaxation::RelaxationParams;
 use spherify_sphere::Method;
 
 use crate::errors::mesh_error;

@@ -1,5 +1,5 @@
 //! `restore_map`: a `CoreSphereMap` rebuilt from stored parts (a
-//! `.spheremap.npz`, a pickle) by `spherify_sphere::restore`, which computes
+//! `.spheremap.npz`, a pickle) by `spherify_sphere::point_map::restore`, which computes
 //! every certificate again. Nothing here decides validity.
 
 use std::str::FromStr;
@@ -7,7 +7,7 @@ use std::sync::Arc;
 
 use numpy::PyReadonlyArrayDyn;
 use pyo3::prelude::*;
-use spherify_sphere::restore::{
+use spherify_sphere::point_map::restore::{
     restore, status_from_name, RestoreError, StoredMap, StoredThetaPhi,
 };
 use spherify_sphere::{GenusZeroMesh, MethodName, SphereError};

@@ -3,8 +3,8 @@
 use numpy::IntoPyArray;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use spherify_sphere::symmetry::{Symmetry, SymmetryParams};
-use spherify_sphere::theta_phi::{PoleChoice, ThetaPhi, ThetaPhiParams};
+use spherify_sphere::methods::theta_phi::symmetry::{Symmetry, SymmetryParams};
+use spherify_sphere::methods::theta_phi::{PoleChoice, ThetaPhi, ThetaPhiParams};
 use spherify_sphere::Method;
 
 use crate::convert::{to_i64_rows, to_numpy};
@@ -44,7 +44,7 @@ fn symmetry_to_py<'py>(py: Python<'py>, sym: &Symmetry) -> PyResult<Bound<'py, P
     d.set_item("centre", sym.centre.to_vec())?;
     let planes: Vec<[f64; 3]> = sym.planes.iter().map(|p| p.normal).collect();
     d.set_item("normals", to_numpy(py, &planes))?;
-    let column = |f: fn(&spherify_sphere::symmetry::Plane) -> f64| -> Vec<f64> {
+    let column = |f: fn(&spherify_sphere::methods::theta_phi::symmetry::Plane) -> f64| -> Vec<f64> {
         sym.planes.iter().map(f).collect()
     };
     d.set_item("variances", column(|p| p.variance))?;

@@ -43,9 +43,11 @@ pub fn tutte<'py>(
         ("polygon", Some(points)) => {
             BoundaryShape::Polygon(rows::<f64, 2>(&points, "boundary polygon")?)
         }
-        (other, _) => return Err(mesh_error(format!(
+        (other, _) => {
+            return Err(mesh_error(format!(
             "boundary must be 'circle', 'circle_length' or a (k, 2) array of points, got {other:?}"
-        ))),
+        )))
+        }
     };
     let params = TutteParams {
         weights: crate::convert::weights(weights, rho)?,

@@ -7,8 +7,8 @@
 
 use criterion::{criterion_group, criterion_main, Criterion, SamplingMode};
 use spherify_mesh::solids::{bumpy, helix};
-use spherify_sphere::progressive::{progressive, ProgressiveParams};
-use spherify_sphere::theta_phi::{theta_phi, ThetaPhiParams};
+use spherify_sphere::methods::progressive::{progressive, ProgressiveParams};
+use spherify_sphere::methods::theta_phi::{theta_phi, ThetaPhiParams};
 use spherify_sphere::GenusZeroMesh;
 use std::hint::black_box;
 

@@ -16,7 +16,8 @@
 //! numeric factorisation (`spherify_sparse::ordering_report`).
 //! `REPS=k` repeats the factorisations k times and prints every repeat.
 
-use spherify_sphere::theta_phi::{rectangle_system, theta_phi, ThetaPhiParams};
+use spherify_sphere::methods::theta_phi::rectangle::rectangle_system;
+use spherify_sphere::methods::theta_phi::{theta_phi, ThetaPhiParams};
 use spherify_sphere::GenusZeroMesh;
 use std::path::Path;
 

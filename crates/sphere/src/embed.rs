@@ -8,17 +8,18 @@ use std::fmt;
 use std::str::FromStr;
 use std::time::Instant;
 
-use crate::alexa::{alexa_with_progress, AlexaParams};
+use crate::certificate::validity::{check_sphere, SphereReport};
 use crate::embedding::SphereEmbedding;
 use crate::error::SphereError;
 use crate::genus_zero::GenusZeroMesh;
-use crate::gotsman::{gotsman_with_progress, GotsmanParams};
-use crate::improve::{improve, ImproveParams};
-use crate::progressive::{progressive, ProgressiveParams};
-use crate::radial::{radial_map, Center, KernelPoint};
-use crate::relaxation::{relaxation_with_progress, RelaxationParams};
-use crate::theta_phi::{theta_phi_with_progress, ThetaPhi, ThetaPhiParams};
-use crate::validity::{check_sphere, SphereReport};
+use crate::methods::alexa::{alexa_with_progress, AlexaParams};
+use crate::methods::gotsman::{gotsman_with_progress, GotsmanParams};
+use crate::methods::progressive::improve::{improve, ImproveParams};
+use crate::methods::progressive::{progressive, ProgressiveParams};
+use crate::methods::radial::kernel::KernelPoint;
+use crate::methods::radial::{radial_map, Center};
+use crate::methods::relaxation::{relaxation_with_progress, RelaxationParams};
+use crate::methods::theta_phi::{theta_phi_with_progress, ThetaPhi, ThetaPhiParams};
 
 /// A spherical method and its parameters.
 #[derive(Debug, Clone)]
@@ -49,7 +50,7 @@ pub enum MethodName {
     /// Not a method of [`embed`]: a map lowered by [`improve_embedding`].
     Improve,
     /// Not a method [`embed`] runs: points made elsewhere, certified by
-    /// [`crate::from_points::from_points`]. So it is not in [`MethodName::ALL`]
+    /// [`crate::point_map::from_points::from_points`]. So it is not in [`MethodName::ALL`]
     /// and has no parameters.
     Points,
 }
@@ -202,7 +203,7 @@ pub fn embed(
     method: &Method,
     progress: &(dyn Fn(usize, usize) -> bool + Sync),
 ) -> Result<Embedding, SphereError> {
-    crate::geometry_range::check_geometry(mesh)?;
+    crate::certificate::geometry_range::check_geometry(mesh)?;
     let (result, details) = match method {
         Method::Radial(center) => {
             let r = radial_map(mesh, *center)?;

@@ -5,7 +5,7 @@
 //! [`SphereEmbedding`]: one point on the unit sphere per vertex plus an honest
 //! account of how the method ended. Whether the points form a valid
 //! GC-embedding is decided separately and exactly by
-//! [`crate::validity::check_sphere`]; methods never claim validity themselves.
+//! [`crate::certificate::validity::check_sphere`]; methods never claim validity themselves.
 
 /// How an iterative method ended.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

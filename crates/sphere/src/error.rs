@@ -30,14 +30,14 @@ pub enum SphereError {
     /// A map that was to be improved is not a valid GC-embedding.
     #[error("the map to improve is not a valid GC-embedding ({flipped} faces not positive, covering degree {degree}): improve only starts from a valid map")]
     InvalidStart { flipped: usize, degree: i64 },
-    /// Points given for a map ([`crate::from_points`]) do not match the mesh.
+    /// Points given for a map ([`crate::point_map::from_points`]) do not match the mesh.
     #[error("points has {points} rows, but the mesh has {vertices} vertices")]
     PointCount { points: usize, vertices: usize },
     /// A given point with no direction: not finite, or the zero vector.
     #[error("points row {row}: {point:?} has no direction (not finite, or zero)")]
     BadPoint { row: usize, point: [f64; 3] },
     /// Coordinates no method can map in double precision: a degenerate mesh,
-    /// or one too large or too small ([`crate::geometry_range`]).
+    /// or one too large or too small ([`crate::certificate::geometry_range`]).
     #[error("{message}")]
     Geometry { message: String },
     /// A progress callback asked a long stage to stop.

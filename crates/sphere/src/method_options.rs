@@ -13,16 +13,16 @@
 
 use spherify_sparse::weights::Weights;
 
-use crate::alexa::AlexaParams;
-use crate::distortion_energy::Energy;
 use crate::embed::MethodName;
-use crate::gotsman::GotsmanParams;
-use crate::improve::ImproveParams;
-use crate::progressive::ProgressiveParams;
-use crate::radial::Center;
-use crate::relaxation::RelaxationParams;
-use crate::symmetry::SymmetryParams;
-use crate::theta_phi::{PoleChoice, ThetaPhiParams};
+use crate::methods::alexa::AlexaParams;
+use crate::methods::gotsman::GotsmanParams;
+use crate::methods::progressive::distortion_energy::Energy;
+use crate::methods::progressive::improve::ImproveParams;
+use crate::methods::progressive::ProgressiveParams;
+use crate::methods::radial::Center;
+use crate::methods::relaxation::RelaxationParams;
+use crate::methods::theta_phi::symmetry::SymmetryParams;
+use crate::methods::theta_phi::{PoleChoice, ThetaPhiParams};
 
 /// What an option's value may be.
 #[derive(Debug, Clone, PartialEq)]

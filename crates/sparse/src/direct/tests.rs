@@ -1,3 +1,5 @@
+//! Tests of the direct solvers (Cholesky and LU) against dense solves, beside them.
+
 use super::*;
 use crate::test_support::{dense_solve, grid_laplacian, mean_value_like, random_spd, rel_err};
 

@@ -1,3 +1,6 @@
+//! Tests of the nested-dissection ordering: a permutation, its fill, its
+//! determinism, and the reference it was made faster from.
+
 use super::*;
 use crate::test_support::grid_laplacian;
 use crate::CsrMatrix;

@@ -1,0 +1,12 @@
+//! The spherical methods, one file or folder per family, and the few helpers
+//! more than one family shares.
+
+pub mod alexa;
+pub mod gotsman;
+pub mod initial;
+pub mod progressive;
+pub mod radial;
+pub mod relaxation;
+pub mod relaxation_loop;
+pub mod theta_phi;
+pub mod weight_matrix;

@@ -1,0 +1,492 @@
+//! Flip-free vertex moves on the sphere (thesis 9.3.2: local updates that keep
+//! every triangle positively oriented).
+//!
+//! A vertex `p` with ring `r_0 .. r_{m-1}` owns the faces `(p, r_j, r_j+1)`.
+//! Moving it along `p + t D` changes each det[p, r_j, r_j+1] linearly in `t`,
+//! so the largest step that keeps every face positive has a closed form. A
+//! move is a Newton step of the vertex's share of a [`Energy`] in the tangent
+//! plane (the 2x2 Hessian by differences of the exact gradient), cut to a
+//! fraction of that safe step and backtracked until the energy falls (Armijo).
+//! The new point is normalised and its faces are then tested with the exact
+//! predicate on the very doubles that are stored: a move that fails the test
+//! is not taken. Vertices of one colour class share no face, so a class moves
+//! in parallel and the result does not depend on the number of threads.
+
+use rayon::prelude::*;
+use spherify_mesh::predicates::{det3_sign, Sign};
+use spherify_mesh::vec3::{add, cross, det3, dot, norm, scale, sub};
+
+use crate::embedding::normalize;
+use crate::methods::progressive::distortion_energy::{
+    face_energy, face_energy_hessian, Energy, Reference,
+};
+
+/// The energy to lower and the surface it measures against.
+#[derive(Debug, Clone, Copy)]
+pub struct Problem<'a> {
+    pub energy: Energy,
+    /// Surface positions, one per vertex.
+    pub surface: &'a [[f64; 3]],
+    /// Surface triangles smaller than this count as this large (see
+    /// [`Reference::new`]).
+    pub area_floor: f64,
+}
+
+/// Every vertex's ring and the surface reference of each face around it,
+/// vertex by vertex in ring order, in three flat arrays: built once for the
+/// many sweeps over one connectivity. Building the references was a quarter
+/// of a move's time, and a sweep that reads rings from one array instead of
+/// one allocation per vertex waits far less on memory.
+#[derive(Debug, Clone)]
+pub struct Stars {
+    start: Vec<usize>,
+    ring: Vec<u32>,
+    refs: Vec<Reference>,
+}
+
+impl Stars {
+    /// Number of vertices (removed ones have an empty ring).
+    pub fn len(&self) -> usize {
+        self.start.len() - 1
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    pub fn ring(&self, i: u32) -> &[u32] {
+        &self.ring[self.start[i as usize]..self.start[i as usize + 1]]
+    }
+
+    /// The references of the faces `(i, r_j, r_j+1)`, in ring order.
+    pub fn refs(&self, i: u32) -> &[Reference] {
+        &self.refs[self.start[i as usize]..self.start[i as usize + 1]]
+    }
+}
+
+/// A move shorter than this fraction of the vertex's shortest edge does not
+/// wake its neighbours for the next sweep of [`Problem::optimise`].
+pub const NOTICEABLE: f64 = 1e-3;
+/// At a coarse level of a progressive mesh ([`Problem::at_level`]), surface
+/// triangles below this fraction of the level's mean face area count as that
+/// large: three nearly collinear survivors of the decimation make a face with
+/// almost no area, which an isometric map would copy onto the sphere.
+pub const LEVEL_AREA_FLOOR: f64 = 1e-2;
+/// Backtracking halvings before a move is given up.
+const MAX_HALVINGS: usize = 12;
+/// Fraction of the largest flip-free step a move may take.
+const SAFE_FRACTION: f64 = 0.8;
+
+impl Problem<'_> {
+    fn reference(&self, i: u32, a: u32, b: u32) -> Reference {
+        let s = self.surface;
+        Reference::new(s[i as usize], s[a as usize], s[b as usize], self.area_floor)
+    }
+
+    /// The references of the faces around `i`, in ring order.
+    fn references(&self, i: u32, ring: &[u32]) -> Vec<Reference> {
+        let m = ring.len();
+        (0..m).map(|j| self.reference(i, ring[j], ring[(j + 1) % m])).collect()
+    }
+
+    /// The rings and references of every vertex of `rings`.
+    pub fn stars(&self, rings: &[Vec<u32>]) -> Stars {
+        let mut start = Vec::with_capacity(rings.len() + 1);
+        start.push(0);
+        for ring in rings {
+            start.push(start[start.len() - 1] + ring.len());
+        }
+        let ring = rings.concat();
+        let refs = rings
+            .par_iter()
+            .enumerate()
+            .flat_map_iter(|(i, ring)| {
+                let m = ring.len();
+                (0..m).map(move |j| self.reference(i as u32, ring[j], ring[(j + 1) % m]))
+            })
+            .collect();
+        Stars { start, ring, refs }
+    }
+
+    /// Sum of image areas (det / 2, see [`crate::methods::progressive::distortion_energy`]) over
+    /// surface areas of the current faces:
+    /// the `k` that gives mesh and image equal total area.
+    pub fn area_scale(&self, stars: &Stars, points: &[[f64; 3]]) -> f64 {
+        let per_vertex: Vec<(f64, f64)> = (0..stars.len() as u32)
+            .into_par_iter()
+            .map(|i| {
+                let mut sums = (0.0, 0.0);
+                let (ring, refs) = (stars.ring(i), stars.refs(i));
+                let m = ring.len();
+                for j in 0..m {
+                    let [p, pa, pb] = [i, ring[j], ring[(j + 1) % m]].map(|v| points[v as usize]);
+                    sums.0 += 0.5 * det3(p, pa, pb);
+                    sums.1 += refs[j].area;
+                }
+                sums
+            })
+            .collect();
+        // A fixed order of summation: the same scale on every thread count.
+        let (chord, surface) = per_vertex.iter().fold((0.0, 0.0), |s, x| (s.0 + x.0, s.1 + x.1));
+        if surface > 0.0 && chord > 0.0 {
+            chord / surface
+        } else {
+            1.0
+        }
+    }
+
+    /// Total energy of the current faces, each face seen from its smallest corner.
+    pub fn total_energy(&self, k: f64, stars: &Stars, points: &[[f64; 3]]) -> f64 {
+        let per_vertex: Vec<f64> = (0..stars.len() as u32)
+            .into_par_iter()
+            .map(|i| {
+                let (ring, refs) = (stars.ring(i), stars.refs(i));
+                let m = ring.len();
+                let p = points[i as usize];
+                (0..m)
+                    .filter(|&j| i < ring[j] && i < ring[(j + 1) % m])
+                    .map(|j| {
+                        let (a, b) = (points[ring[j] as usize], points[ring[(j + 1) % m] as usize]);
+                        face_energy(self.energy, &refs[j], k, p, a, b)
+                    })
+                    .sum::<f64>()
+            })
+            .collect();
+        // A fixed order of summation: the same total on every thread count.
+        per_vertex.iter().sum::<f64>()
+    }
+
+    /// One flip-free move of vertex `i`: the new point, or `None` when no step
+    /// lowers the energy and passes the exact test.
+    pub fn move_vertex(
+        &self,
+        k: f64,
+        i: u32,
+        ring: &[u32],
+        points: &[[f64; 3]],
+    ) -> Option<[f64; 3]> {
+        let refs = self.references(i, ring);
+        self.step(k, i, ring, &refs, points, &mut Vec::new()).map(|(q, _)| q)
+    }
+
+    /// [`Problem::move_vertex`] with the references of `i`'s faces given and
+    /// a buffer for its ring's points; also returns the length of the
+    /// vertex's shortest edge before the move (which also bounds the step).
+    fn step(
+        &self,
+        k: f64,
+        i: u32,
+        ring: &[u32],
+        refs: &[Reference],
+        points: &[[f64; 3]],
+        corners: &mut Vec<[f64; 3]>,
+    ) -> Option<([f64; 3], f64)> {
+        let p = points[i as usize];
+        let star = Star::gather(refs, ring, points, corners);
+        let (e0, g, hess) = star.hessian(self.energy, k, p);
+        if !e0.is_finite() {
+            return None;
+        }
+        let (e1, e2) = tangent_basis(p);
+        let gt = [dot(g, e1), dot(g, e2)];
+        let gnorm = (gt[0] * gt[0] + gt[1] * gt[1]).sqrt();
+        if gnorm == 0.0 || !gnorm.is_finite() {
+            return None;
+        }
+        let reach = star.corners.iter().map(|&r| norm(sub(r, p))).fold(f64::INFINITY, f64::min);
+        // Newton direction in the tangent plane: p(s) = (p + s) / |p + s|
+        // = p + s - |s|^2 p / 2 + ..., so the Hessian in s is E^T H E - (g . p) I.
+        let he =
+            |u: [f64; 3], v: [f64; 3]| dot(u, [dot(hess[0], v), dot(hess[1], v), dot(hess[2], v)]);
+        let radial = dot(g, p);
+        let (h00, h11, h01) = (he(e1, e1) - radial, he(e2, e2) - radial, he(e1, e2));
+        let mut dir = None;
+        let det = h00 * h11 - h01 * h01;
+        if det > 0.0 && h00 > 0.0 {
+            let d = [-(h11 * gt[0] - h01 * gt[1]) / det, -(h00 * gt[1] - h01 * gt[0]) / det];
+            let len = (d[0] * d[0] + d[1] * d[1]).sqrt();
+            if len.is_finite() && len > 0.0 {
+                let cap = (0.5 * reach / len).min(1.0);
+                dir = Some([d[0] * cap, d[1] * cap]);
+            }
+        }
+        let d = dir.unwrap_or([-gt[0] * 0.25 * reach / gnorm, -gt[1] * 0.25 * reach / gnorm]);
+        let slope = gt[0] * d[0] + gt[1] * d[1];
+        if slope >= 0.0 {
+            return None;
+        }
+        let step = add(scale(e1, d[0]), scale(e2, d[1]));
+        // det[p + t step, a, b] = det[p, a, b] + t det[step, a, b].
+        let mut t_safe = f64::INFINITY;
+        for (_, a, b) in star.faces() {
+            let rate = det3(step, a, b);
+            if rate < 0.0 {
+                t_safe = t_safe.min(-det3(p, a, b) / rate);
+            }
+        }
+        let mut t = (SAFE_FRACTION * t_safe).min(1.0);
+        for _ in 0..MAX_HALVINGS {
+            if let Some(q) = normalize(add(p, scale(step, t))) {
+                let e = star.energy(self.energy, k, q);
+                if e <= e0 + 1e-4 * t * slope && positive_fan(q, star.corners) {
+                    return Some((q, reach));
+                }
+            }
+            t *= 0.5;
+        }
+        None
+    }
+
+    /// One pass over `classes` (vertex sets of which no two share a face),
+    /// class after class, the vertices of a class in parallel, skipping those
+    /// not `active` (all, when `None`). Returns the vertices that moved by
+    /// more than [`NOTICEABLE`] of their shortest edge; `stop()` is asked
+    /// between classes.
+    pub fn sweep(
+        &self,
+        k: f64,
+        classes: &[Vec<u32>],
+        stars: &Stars,
+        points: &mut [[f64; 3]],
+        active: Option<&[bool]>,
+        stop: &(dyn Fn() -> bool + Sync),
+    ) -> Result<Vec<u32>, Stopped> {
+        let mut moved = Vec::new();
+        for class in classes {
+            if stop() {
+                return Err(Stopped);
+            }
+            let shared: &[[f64; 3]] = points;
+            let moves: Vec<Option<([f64; 3], bool)>> = class
+                .par_iter()
+                .with_min_len(64)
+                .map_init(Vec::new, |corners, &i| {
+                    if active.is_some_and(|a| !a[i as usize]) {
+                        return None;
+                    }
+                    let (ring, refs) = (stars.ring(i), stars.refs(i));
+                    let (q, shortest) = self.step(k, i, ring, refs, shared, corners)?;
+                    Some((q, norm(sub(q, shared[i as usize])) > NOTICEABLE * shortest))
+                })
+                .collect();
+            for (&i, q) in class.iter().zip(moves) {
+                if let Some((q, noticeable)) = q {
+                    points[i as usize] = q;
+                    if noticeable {
+                        moved.push(i);
+                    }
+                }
+            }
+        }
+        Ok(moved)
+    }
+}
+
+/// The faces around one vertex: each face's surface reference, and the
+/// ring's points gathered once for the several evaluations of a move.
+struct Star<'a> {
+    refs: &'a [Reference],
+    corners: &'a [[f64; 3]],
+}
+
+impl<'a> Star<'a> {
+    fn gather(
+        refs: &'a [Reference],
+        ring: &[u32],
+        points: &[[f64; 3]],
+        corners: &'a mut Vec<[f64; 3]>,
+    ) -> Star<'a> {
+        corners.clear();
+        corners.extend(ring.iter().map(|&r| points[r as usize]));
+        Star { refs, corners }
+    }
+
+    /// Each face's reference and its two corners other than the vertex.
+    fn faces(&self) -> impl Iterator<Item = (&Reference, [f64; 3], [f64; 3])> + '_ {
+        let m = self.corners.len();
+        self.refs
+            .iter()
+            .enumerate()
+            .map(move |(j, r)| (r, self.corners[j], self.corners[(j + 1) % m]))
+    }
+
+    fn energy(&self, energy: Energy, k: f64, p: [f64; 3]) -> f64 {
+        self.faces().map(|(r, a, b)| face_energy(energy, r, k, p, a, b)).sum()
+    }
+
+    fn hessian(&self, energy: Energy, k: f64, p: [f64; 3]) -> (f64, [f64; 3], [[f64; 3]; 3]) {
+        let mut total = (0.0, [0.0; 3], [[0.0; 3]; 3]);
+        for (r, a, b) in self.faces() {
+            let (e, g, h) = face_energy_hessian(energy, r, k, p, a, b);
+            total.0 += e;
+            total.1 = add(total.1, g);
+            for (row, h_row) in total.2.iter_mut().zip(h) {
+                *row = add(*row, h_row);
+            }
+        }
+        total
+    }
+}
+
+/// Refuses a stopping tolerance that is negative or not finite.
+pub fn check_tolerance(tolerance: f64) -> Result<(), crate::error::SphereError> {
+    if tolerance >= 0.0 && tolerance.is_finite() {
+        return Ok(());
+    }
+    Err(crate::error::SphereError::InvalidParameter {
+        name: "tolerance",
+        value: tolerance.to_string(),
+        expected: "a finite number >= 0",
+    })
+}
+
+/// A sweep was asked to stop.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Stopped;
+
+/// Whether every face `(p, r_j, r_j+1)` is positively oriented, exactly.
+pub fn positive_star(p: [f64; 3], ring: &[u32], points: &[[f64; 3]]) -> bool {
+    all_positive(p, ring.len(), |j| points[ring[j] as usize])
+}
+
+/// [`positive_star`] with the ring's points given in order.
+fn positive_fan(p: [f64; 3], corners: &[[f64; 3]]) -> bool {
+    all_positive(p, corners.len(), |j| corners[j])
+}
+
+fn all_positive(p: [f64; 3], m: usize, corner: impl Fn(usize) -> [f64; 3]) -> bool {
+    (0..m).all(|j| det3_sign(p, corner(j), corner((j + 1) % m)) == Sign::Positive)
+}
+
+/// An orthonormal basis of the plane orthogonal to the unit vector `p`.
+pub fn tangent_basis(p: [f64; 3]) -> ([f64; 3], [f64; 3]) {
+    let axis = if p[0].abs() <= p[1].abs() && p[0].abs() <= p[2].abs() {
+        [1.0, 0.0, 0.0]
+    } else if p[1].abs() <= p[2].abs() {
+        [0.0, 1.0, 0.0]
+    } else {
+        [0.0, 0.0, 1.0]
+    };
+    let e1 = cross(p, axis);
+    let e1 = scale(e1, 1.0 / norm(e1));
+    (e1, cross(p, e1))
+}
+
+/// Greedy colouring of the vertices with non-empty rings, in index order:
+/// each class holds vertices no two of which are neighbours (so no two share
+/// a face). Deterministic.
+pub fn colour_classes(rings: &[Vec<u32>]) -> Vec<Vec<u32>> {
+    const NONE: u16 = u16::MAX;
+    let mut colour = vec![NONE; rings.len()];
+    let mut classes: Vec<Vec<u32>> = Vec::new();
+    let mut used: Vec<bool> = Vec::new();
+    for (i, ring) in rings.iter().enumerate() {
+        if ring.is_empty() {
+            continue;
+        }
+        used.iter_mut().for_each(|u| *u = false);
+        for &r in ring {
+            let c = colour[r as usize];
+            if c != NONE {
+                used[c as usize] = true;
+            }
+        }
+        let c = used.iter().position(|u| !u).unwrap_or(used.len());
+        if c == used.len() {
+            used.push(false);
+            classes.push(Vec::new());
+        }
+        colour[i] = c as u16;
+        classes[c].push(i as u32);
+    }
+    classes
+}
+
+/// How [`Problem::optimise`] ended.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Optimised {
+    pub sweeps: usize,
+    /// Total energy per unit of (scaled) surface area at the end.
+    pub energy: f64,
+    /// Relative fall of the energy in the last sweep.
+    pub last_change: f64,
+    pub converged: bool,
+    /// The area scale `k` of the last sweep (see [`Problem::area_scale`]).
+    pub scale: f64,
+}
+
+impl Problem<'_> {
+    /// Sweeps over every vertex with a ring until the energy falls by less
+    /// than `tolerance` (relative) in a sweep, or `max_sweeps` sweeps.
+    pub fn optimise(
+        &self,
+        rings: &[Vec<u32>],
+        points: &mut [[f64; 3]],
+        max_sweeps: usize,
+        tolerance: f64,
+        stop: &(dyn Fn(usize) -> bool + Sync),
+    ) -> Result<Optimised, Stopped> {
+        let stars = self.stars(rings);
+        let classes = colour_classes(rings);
+        let mut active = vec![true; rings.len()];
+        let mut k = self.area_scale(&stars, points);
+        let mut energy = self.total_energy(k, &stars, points);
+        let mut result =
+            Optimised { sweeps: 0, energy, last_change: f64::INFINITY, converged: false, scale: k };
+        while result.sweeps < max_sweeps {
+            let sweeps = result.sweeps;
+            let moved = self.sweep(k, &classes, &stars, points, Some(&active), &|| stop(sweeps))?;
+            result.sweeps += 1;
+            // Only what moved, and its neighbours, can still go down much.
+            active.iter_mut().for_each(|a| *a = false);
+            for &v in &moved {
+                active[v as usize] = true;
+                for &r in stars.ring(v) {
+                    active[r as usize] = true;
+                }
+            }
+            k = self.area_scale(&stars, points);
+            let next = self.total_energy(k, &stars, points);
+            result.last_change = (energy - next).abs() / energy.abs().max(f64::MIN_POSITIVE);
+            energy = next;
+            if moved.is_empty() || result.last_change < tolerance {
+                result.converged = true;
+                break;
+            }
+        }
+        // Per vertex, then in a fixed order: the same on every thread count.
+        let per_vertex: Vec<f64> = (0..stars.len() as u32)
+            .into_par_iter()
+            .map(|i| stars.refs(i).iter().map(|r| r.area).sum())
+            .collect();
+        let surface_area = per_vertex.iter().sum::<f64>() / 3.0;
+        result.energy = energy / (k * surface_area).max(f64::MIN_POSITIVE);
+        result.scale = k;
+        Ok(result)
+    }
+
+    /// This problem on a coarse level of a progressive mesh: surface triangles
+    /// smaller than [`LEVEL_AREA_FLOOR`] times the level's mean face area
+    /// count as that large.
+    pub fn at_level(&self, rings: &[Vec<u32>]) -> Problem<'_> {
+        let (area, corners): (f64, usize) = rings
+            .par_iter()
+            .enumerate()
+            .map(|(i, ring)| {
+                let m = ring.len();
+                let area: f64 =
+                    (0..m).map(|j| self.reference(i as u32, ring[j], ring[(j + 1) % m]).area).sum();
+                (area, m)
+            })
+            .collect::<Vec<_>>()
+            .into_iter()
+            .fold((0.0, 0), |t, x| (t.0 + x.0, t.1 + x.1));
+        // Each face is seen from its three corners.
+        let mean = (area / 3.0) / (corners / 3).max(1) as f64;
+        let floor = LEVEL_AREA_FLOOR * mean;
+        Problem {
+            area_floor: self.area_floor.max(if floor.is_finite() { floor } else { 0.0 }),
+            ..*self
+        }
+    }
+}

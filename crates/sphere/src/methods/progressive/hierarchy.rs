@@ -1,0 +1,219 @@
+//! The progressive mesh (Hoppe 1996; thesis 9.3.3): half-edge collapses down
+//! to a tetrahedron, in rounds of independent collapses.
+//!
+//! Each round scores every vertex `u` by its cheapest legal collapse `u -> v`
+//! and makes collapses greedily, cheapest first, skipping any `u` that was
+//! in the ring of a vertex already removed in the round. So no vertex
+//! removed in a round is a neighbour of another, and each one's ring holds
+//! only vertices that outlive the round: when the progressive method undoes
+//! the round (last collapse first), every re-inserted vertex can be placed
+//! from positions known before the round, all of them in parallel. The
+//! stars the round's collapses turn into fans share no face, so the
+//! insertions do not disturb one another. The result depends on nothing but
+//! the mesh.
+//!
+//! The score is the quadric error of Garland and Heckbert (1997) accumulated
+//! over collapses, plus a small multiple of the squared edge length: flat
+//! regions go first, and the tips of limbs and spikes, where the planes
+//! disagree, stay until the coarse levels (the flat-to-extrusive order of Hu,
+//! Fu and Liu 2018), so that they receive their share of the sphere early. A
+//! collapse is skipped when it would turn a surface face over or raise a
+//! degree above [`MAX_DEGREE`]; only when no collapse passes these does a
+//! round fall back to the link condition alone, which every sphere
+//! triangulation but the tetrahedron passes for some edge (Steinitz), so the
+//! hierarchy always reaches four vertices.
+
+use rayon::prelude::*;
+use spherify_mesh::vec3::{cross, dot, norm, sub, triangle_area};
+
+use super::ring_mesh::{Collapse, RingMesh};
+
+/// Degree above which a collapse is only taken when nothing else is left.
+const MAX_DEGREE: usize = 12;
+/// Weight of the squared edge length (times the mean face area) in the score.
+const LENGTH_WEIGHT: f64 = 1e-3;
+
+/// Collapses in the order they were made, grouped in rounds.
+#[derive(Debug, Clone, Default)]
+pub struct Hierarchy {
+    pub collapses: Vec<Collapse>,
+    pub rounds: Vec<std::ops::Range<usize>>,
+}
+
+/// A symmetric 4x4 quadric, upper triangle by rows.
+type Quadric = [f64; 10];
+
+fn plane_quadric(p: [f64; 3], q: [f64; 3], r: [f64; 3]) -> Quadric {
+    let n = cross(sub(q, p), sub(r, p));
+    let twice_area = norm(n);
+    if twice_area == 0.0 || !twice_area.is_finite() {
+        return [0.0; 10];
+    }
+    let [a, b, c] = n.map(|x| x / twice_area);
+    let d = -(a * p[0] + b * p[1] + c * p[2]);
+    let w = 0.5 * twice_area;
+    [a * a, a * b, a * c, a * d, b * b, b * c, b * d, c * c, c * d, d * d].map(|x| w * x)
+}
+
+fn quadric_at(q: &Quadric, p: [f64; 3]) -> f64 {
+    let [x, y, z] = p;
+    q[0] * x * x
+        + 2.0 * q[1] * x * y
+        + 2.0 * q[2] * x * z
+        + 2.0 * q[3] * x
+        + q[4] * y * y
+        + 2.0 * q[5] * y * z
+        + 2.0 * q[6] * y
+        + q[7] * z * z
+        + 2.0 * q[8] * z
+        + q[9]
+}
+
+/// Whether moving `u` onto `v` keeps every remaining face of `u`'s star from
+/// turning over on the surface (and from becoming degenerate).
+fn keeps_normals(positions: &[[f64; 3]], u: u32, v: u32, ring: &[u32]) -> bool {
+    let m = ring.len();
+    let (pu, pv) = (positions[u as usize], positions[v as usize]);
+    (0..m).all(|j| {
+        let (a, b) = (ring[j], ring[(j + 1) % m]);
+        if a == v || b == v {
+            return true;
+        }
+        let (pa, pb) = (positions[a as usize], positions[b as usize]);
+        let before = cross(sub(pa, pu), sub(pb, pu));
+        let after = cross(sub(pa, pv), sub(pb, pv));
+        dot(before, after) > 0.0
+    })
+}
+
+/// Each vertex's quadric (the sum of its faces' plane quadrics) and the
+/// area of its faces.
+fn vertex_quadrics(mesh: &RingMesh, positions: &[[f64; 3]]) -> Vec<(Quadric, f64)> {
+    mesh.rings
+        .par_iter()
+        .enumerate()
+        .map(|(i, ring)| {
+            let (mut quadric, mut area) = ([0.0; 10], 0.0);
+            let m = ring.len();
+            for j in 0..m {
+                let [p, a, b] = [
+                    positions[i],
+                    positions[ring[j] as usize],
+                    positions[ring[(j + 1) % m] as usize],
+                ];
+                for (x, y) in quadric.iter_mut().zip(plane_quadric(p, a, b)) {
+                    *x += y;
+                }
+                area += triangle_area(p, a, b);
+            }
+            (quadric, area)
+        })
+        .collect()
+}
+
+/// Collapses `mesh` down to four vertices, calling `report(removed)` after
+/// each round; it returns `false` to stop (then `None`).
+pub fn decimate(
+    mesh: &mut RingMesh,
+    positions: &[[f64; 3]],
+    report: &mut dyn FnMut(usize) -> bool,
+) -> Option<Hierarchy> {
+    let n = mesh.rings.len();
+    let per_vertex = vertex_quadrics(mesh, positions);
+    // A fixed order of summation: the same weight on every thread count.
+    let total_area: f64 = per_vertex.iter().map(|x| x.1).sum();
+    // Each face is seen from its three corners, in the area sum too.
+    let n_corners: usize = mesh.rings.iter().map(Vec::len).sum();
+    let mut quadrics: Vec<Quadric> = per_vertex.into_iter().map(|x| x.0).collect();
+    let length_weight = LENGTH_WEIGHT * total_area / n_corners.max(1) as f64;
+    let mut alive: Vec<u32> = (0..n as u32).collect();
+    let mut locked = vec![u32::MAX; n];
+    let mut hierarchy = Hierarchy::default();
+    let mut round = 0u32;
+    while mesh.n_alive > 4 {
+        let mut careful = true;
+        let mut taken = take_round(mesh, positions, &quadrics, length_weight, &alive, careful);
+        if taken.is_empty() {
+            careful = false;
+            taken = take_round(mesh, positions, &quadrics, length_weight, &alive, careful);
+        }
+        let start = hierarchy.collapses.len();
+        for (_, u, v) in taken {
+            if mesh.n_alive <= 4 {
+                break;
+            }
+            // No vertex of a ring collapsed this round collapses itself in
+            // the same round. So an unlocked `u` was no neighbour of any
+            // vertex removed before it, and its ring is the one it was
+            // scored with; `v`'s may have grown, so the degree and link
+            // condition are asked again.
+            let ring = &mesh.rings[u as usize];
+            if locked[u as usize] == round
+                || (careful && mesh.rings[v as usize].len() + ring.len() - 4 > MAX_DEGREE)
+                || !mesh.can_collapse(u, v)
+            {
+                continue;
+            }
+            for &r in ring {
+                locked[r as usize] = round;
+            }
+            let qu = quadrics[u as usize];
+            for (x, y) in quadrics[v as usize].iter_mut().zip(qu) {
+                *x += y;
+            }
+            hierarchy.collapses.push(mesh.collapse(u, v));
+        }
+        if hierarchy.collapses.len() == start {
+            // Cannot happen on a closed genus-0 mesh (see the module notes).
+            return None;
+        }
+        hierarchy.rounds.push(start..hierarchy.collapses.len());
+        alive.retain(|&v| mesh.is_alive(v));
+        round += 1;
+        if !report(n - mesh.n_alive) {
+            return None;
+        }
+    }
+    Some(hierarchy)
+}
+
+/// Every alive vertex's cheapest legal collapse, cheapest first.
+fn take_round(
+    mesh: &RingMesh,
+    positions: &[[f64; 3]],
+    quadrics: &[Quadric],
+    length_weight: f64,
+    alive: &[u32],
+    careful: bool,
+) -> Vec<(f64, u32, u32)> {
+    let mut scored: Vec<(f64, u32, u32)> = alive
+        .par_iter()
+        .with_min_len(256)
+        .map_init(Vec::new, |candidates: &mut Vec<(f64, u32)>, &u| {
+            // Cost every edge first, then test legality cheapest first: the
+            // cheapest edge is nearly always legal, and the legality tests
+            // cost far more than the quadric.
+            let ring = &mesh.rings[u as usize];
+            candidates.clear();
+            candidates.extend(ring.iter().map(|&v| {
+                let q: Quadric =
+                    std::array::from_fn(|i| quadrics[u as usize][i] + quadrics[v as usize][i]);
+                let edge = sub(positions[u as usize], positions[v as usize]);
+                let cost = quadric_at(&q, positions[v as usize]).max(0.0)
+                    + length_weight * dot(edge, edge);
+                (cost, v)
+            }));
+            candidates.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+            candidates.iter().find_map(|&(cost, v)| {
+                let legal = (!careful
+                    || (mesh.rings[v as usize].len() + ring.len() - 4 <= MAX_DEGREE
+                        && keeps_normals(positions, u, v, ring)))
+                    && mesh.can_collapse(u, v);
+                legal.then_some((cost, u, v))
+            })
+        })
+        .flatten()
+        .collect();
+    scored.par_sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    scored
+}
