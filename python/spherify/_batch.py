@@ -101,7 +101,7 @@ def expand_inputs(inputs: Iterable[PathLike]) -> List[Path]:
         elif path.is_file():
             found.append(path)
         elif path.exists():
-            what = special_kind(path.stat().st_mode) or "not a regular file"
+            what = special_kind(path) or "not a regular file"
             raise MeshError(f"batch input {path} is {what}, not a mesh file: only regular "
                             "files are read")
         else:

@@ -283,7 +283,7 @@ def _cmd_map(args: argparse.Namespace) -> int:
     if out.exists() and not out.is_file():
         # OUT is read back for the hash its .npz records: a pipe would wait
         # for a writer for ever, a device would give a hash of nothing.
-        what = _files.special_kind(out.stat().st_mode) or "not a regular file"
+        what = _files.special_kind(out) or "not a regular file"
         raise UsageError(f"-o {out}: this is {what}; spherify map writes OUT and records its "
                          "hash in OUT's .npz, so OUT must be a regular file")
     start = time.perf_counter()
