@@ -15,6 +15,8 @@ Writing is in :mod:`spherify._atomic`.
 from __future__ import annotations
 
 import functools
+import hashlib
+import os
 from pathlib import Path
 from typing import Any, Callable, Optional, TypeVar, cast
 
@@ -40,6 +42,16 @@ def require_regular_file(path: Path) -> None:
     raises ``FileNotFoundError`` / ``IsADirectoryError``.
     """
     _core.require_regular_file(path)
+
+
+def file_sha256(path: "os.PathLike[str] | str") -> str:
+    """SHA-256 of the bytes of the file at ``path``, as 64 hex digits (read
+    in blocks of 1 MiB, so a large file is never held whole)."""
+    digest = hashlib.sha256()
+    with open(path, "rb") as handle:
+        for block in iter(lambda: handle.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()
 
 
 def file_errors(function: Function) -> Function:
