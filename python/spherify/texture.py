@@ -60,7 +60,7 @@ import numpy.typing as npt
 from ._atomic import write_bytes_atomically
 from ._errors import FormatError, MeshError
 from ._files import file_errors
-from ._geometry_image import _chunk
+from ._geometry_image import _chunk, octahedron_unfolded
 from ._mesh import Mesh
 from ._quality import quality
 from ._spheremap import SphereMap
@@ -312,13 +312,7 @@ def _octahedral_inverse(s: np.ndarray, t: np.ndarray) -> np.ndarray:
         right, left = s > 1, s < -1
         t[right | left] = -t[right | left]
         s[right], s[left] = 2 - s[right], -2 - s[left]
-    sx, sy = np.where(s >= 0, 1.0, -1.0), np.where(t >= 0, 1.0, -1.0)
-    lower = np.abs(s) + np.abs(t) > 1
-    x = np.where(lower, sx * (1 - np.abs(t)), s)
-    y = np.where(lower, sy * (1 - np.abs(s)), t)
-    z = np.where(lower, -1.0, 1.0) * (1 - np.abs(x) - np.abs(y))
-    d: np.ndarray = np.stack([x, y, z], axis=-1)
-    return d
+    return octahedron_unfolded(s, t)
 
 
 def _nearest_copies(w: np.ndarray, reference: np.ndarray) -> np.ndarray:
