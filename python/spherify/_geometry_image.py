@@ -25,6 +25,7 @@ from typing import Tuple, Union
 
 import numpy as np
 
+from . import _args
 from ._atomic import write_bytes_atomically
 from ._errors import FormatError, MeshError
 from ._files import file_errors, require_regular_file
@@ -38,10 +39,10 @@ PathLike = Union[str, "os.PathLike[str]"]
 
 
 def _size(size: object) -> int:
-    if isinstance(size, bool) or not isinstance(size, (int, np.integer)) or not 3 <= size <= 8193 \
-            or size % 2 == 0:
+    n = _args.integer(size, "size", 3, 8193)
+    if n % 2 == 0:
         raise MeshError(f"size must be an odd integer in 3..8193, got {size!r}")
-    return int(size)
+    return n
 
 
 def octahedral_points(size: int) -> np.ndarray:
