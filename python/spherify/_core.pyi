@@ -8,7 +8,7 @@ import numpy.typing as npt
 
 from ._report import MeshReport, SphereReport
 
-__all__ = ["AtomicWrite", "CoreMesh", "CoreSphereMap", "__version__", "boundary_loop", "check", "check_raw", "check_sphere", "choices", "dijkstra", "embed", "encode", "face_quality", "from_points", "harmonics_evaluate", "harmonics_fit", "improve", "is_stale_temporary", "is_temporary", "load", "methods", "orient", "quality", "remove_stale_temporaries", "require_regular_file", "restore_map", "save", "shortest_path", "special_kind", "temporary_path", "tutte", "weld", "write_atomic"]
+__all__ = ["AtomicWrite", "CoreMesh", "CoreSphereMap", "__version__", "boundary_loop", "check", "check_raw", "check_sphere", "choices", "dijkstra", "embed", "encode", "face_quality", "from_points", "harmonics_evaluate", "harmonics_fit", "improve", "is_stale_temporary", "is_temporary", "load", "methods", "orient", "quality", "remove_stale_temporaries", "require_regular_file", "restore_map", "save", "save_textured_obj", "shortest_path", "special_kind", "temporary_path", "tutte", "weld", "write_atomic"]
 
 __version__: str
 
@@ -68,6 +68,13 @@ def save(
     uv: Optional[npt.NDArray[np.float64]] = None,
     ply_encoding: str = "binary_little_endian",
     stl_binary: bool = True,
+) -> None: ...
+def save_textured_obj(
+    mesh: CoreMesh,
+    path: str | PathLike[str],
+    corners: npt.NDArray[np.float64],
+    label: str,
+    material_library: Optional[str] = None,
 ) -> None: ...
 def write_atomic(path: str | PathLike[str], data: bytes) -> None: ...
 

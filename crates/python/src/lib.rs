@@ -41,6 +41,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(io::save, m)?)?;
     m.add_function(wrap_pyfunction!(io::write_atomic, m)?)?;
     m.add_function(wrap_pyfunction!(io::encode, m)?)?;
+    m.add_function(wrap_pyfunction!(io::save_textured_obj, m)?)?;
     m.add_class::<files::AtomicWrite>()?;
     m.add_function(wrap_pyfunction!(files::temporary_path, m)?)?;
     m.add_function(wrap_pyfunction!(files::is_temporary, m)?)?;

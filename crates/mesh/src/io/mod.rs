@@ -229,6 +229,33 @@ pub fn write(
     atomic::write_file(path, |out| encode(out, mesh, attributes, format, options))
 }
 
+/// Writes a textured OBJ atomically: texture coordinates per face corner
+/// (`corners`, three per face in face order; an atlas cuts the sphere into
+/// pieces, which one uv per vertex cannot hold), a comment naming the layout
+/// (`label`) and, with `material_library`, the `mtllib` / `usemtl texture`
+/// lines of its MTL file (which the caller writes).
+pub fn write_textured_obj(
+    path: &Path,
+    mesh: &Mesh,
+    corners: &[[f64; 2]],
+    label: &str,
+    material_library: Option<&str>,
+) -> Result<(), MeshError> {
+    if corners.len() != 3 * mesh.n_faces() {
+        return Err(file_error(
+            &path.display().to_string(),
+            format!(
+                "{} texture corners for {} triangles: one per face corner is needed",
+                corners.len(),
+                mesh.n_faces()
+            ),
+        ));
+    }
+    atomic::write_file(path, |out| {
+        obj::write_per_corner(out, mesh, corners, label, material_library)
+    })
+}
+
 /// Writes `bytes` to `path` with the same atomic writer as [`write()`]
 /// (temporary beside it, sync, rename; links followed, mode kept, stale
 /// temporaries of dead writers removed): for files other than meshes that
