@@ -148,7 +148,7 @@ enum Into {
 impl PendingWrite {
     /// Starts a write of `path`: refuses a folder, a pipe that no process
     /// reads and anything else that is not a regular file, a character
-    /// device or a pipe, as [`write_file`] does; removes the temporaries of
+    /// device or a pipe, as the mesh writers do; removes the temporaries of
     /// dead writers beside a regular target; creates the (empty) temporary.
     pub fn begin(path: &Path) -> Result<Self, MeshError> {
         let (temporary, into) = match stream_target(path)? {
@@ -387,7 +387,7 @@ fn sync_folder(target: &Path) {
 const TEMP_NAME_KEPT: usize = 200;
 
 /// `dir/.name.tmp-PID-N` beside the target, so the final rename stays within one
-/// file system; `name` cut to [`TEMP_NAME_KEPT`] bytes (PID-N keeps it unique).
+/// file system; `name` cut to `TEMP_NAME_KEPT` (200) bytes (PID-N keeps it unique).
 pub fn temp_path(path: &Path) -> Result<PathBuf, MeshError> {
     let name = path.file_name().ok_or_else(|| {
         MeshError::io(

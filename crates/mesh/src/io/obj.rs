@@ -5,6 +5,8 @@
 //! OBJ keeps texture coordinates per face corner; spherify keeps one uv per vertex.
 //! The `vt` data becomes [`VertexAttributes::uv`] only when that loses nothing
 //! (every corner names a `vt` and each vertex always names the same one).
+//! A texture atlas is written with one `vt` per face corner
+//! ([`write_per_corner`], for `sp.texture`).
 
 use super::text::{self, next_token, skip_space, take_f64, trim_end, Lines};
 use super::{finish, line_error, LoadedMesh, Triangles, VertexAttributes};
