@@ -14,8 +14,8 @@ import numpy as np
 import pytest
 
 import spherify as sp
+from spherify import cli
 
-cli = pytest.importorskip("spherify.cli")
 
 V = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])
 F = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]], dtype=np.int64)

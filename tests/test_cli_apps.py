@@ -9,8 +9,7 @@ import numpy as np
 import pytest
 
 import spherify as sp
-
-cli = pytest.importorskip("spherify.cli")
+from spherify import cli
 
 
 def test_harmonics_writes_the_rebuilt_surface_and_the_coefficients(

@@ -281,6 +281,22 @@ def test_bad_vertex_count_raises(bad):
         make_arrays("ellipsoid", bad)
 
 
+@pytest.mark.parametrize("call", [
+    lambda: spherify.datasets.icosphere(True),
+    lambda: spherify.datasets.ellipsoid(n_vertices=True),
+    lambda: spherify.datasets.bumpy_blob(n_vertices=500, bumps=np.bool_(True)),
+    lambda: spherify.datasets.urchin(n_vertices=500, spikes=True),
+    lambda: spherify.datasets.checkerboard(np.eye(3), squares=True),
+    lambda: spherify.remesh_map(spherify.embed(spherify.datasets.icosphere(1)), level=True),
+    lambda: spherify.geometry_image(spherify.embed(spherify.datasets.icosphere(1)), size=True),
+])
+def test_integer_arguments_refuse_bools_with_one_message(call):
+    """Every integer argument goes through one checker: a bool is not a count
+    (the shapes took icosphere(True) for icosphere(1))."""
+    with pytest.raises(spherify.MeshError, match=r"must be an (odd )?integer"):
+        call()
+
+
 def test_unknown_name_raises():
     with pytest.raises(ValueError, match="unknown dataset"):
         make_arrays("teapot", 1000)

@@ -16,9 +16,8 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 import spherify as sp
+from spherify import cli
 from spherify import _formats
-
-cli = pytest.importorskip("spherify.cli")
 
 
 def blob() -> sp.Mesh:

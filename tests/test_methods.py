@@ -65,7 +65,6 @@ OUT_OF_RANGE: Dict[str, List[Dict[str, Any]]] = {
 # progressive method's collapse order and sweep order are broken by vertex id):
 # deterministic for one input, but a relabelled mesh gets another valid map.
 ORDER_DEPENDENT = {"progressive"}
-KNOWN_BUGS: Dict[Tuple[str, str], str] = {}
 # Meshes a method may refuse, by the MeshError's message.
 REFUSES = {"radial": "not star-shaped"}
 
@@ -371,9 +370,7 @@ def _out_of_range_cases() -> Iterator[Any]:
     for method in METHODS:
         for options in OUT_OF_RANGE[method]:
             (key, value), = options.items()
-            bug = KNOWN_BUGS.get((method, key))
-            marks = [pytest.mark.xfail(raises=OverflowError, strict=True, reason=bug)] if bug else []
-            yield pytest.param(method, options, marks=marks, id=f"{method}-{key}={value!r}")
+            yield pytest.param(method, options, id=f"{method}-{key}={value!r}")
 
 
 @pytest.mark.parametrize("method, options", list(_out_of_range_cases()))

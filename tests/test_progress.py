@@ -11,9 +11,8 @@ from typing import List, Tuple
 import pytest
 
 import spherify as sp
+from spherify import cli
 from spherify._progress import TextProgress
-
-cli = pytest.importorskip("spherify.cli")
 
 
 def test_callable_sees_increasing_counts_ending_at_total() -> None:

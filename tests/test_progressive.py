@@ -52,6 +52,9 @@ def test_valid_and_far_from_the_floor_on_the_datasets(name: str, energy: str) ->
 # 300 vertices and 50 of 300-2,000 per energy, non-star-shaped and sliver-rich
 # ones included. The conformal energy may start from a global conformal map,
 # used only when the exact test certifies it: slivers and folds must fall back.
+# Hundreds of maps per energy: ~45 s each on two busy cores, more than
+# the suite's 120 s default leaves room for on a slow runner.
+@pytest.mark.timeout(400)
 @pytest.mark.parametrize("energy", ENERGIES)
 @settings(max_examples=500, deadline=None)
 @given(surface=mg.surfaces(max_vertices=300))
@@ -60,6 +63,9 @@ def test_every_energy_is_valid_on_random_genus0_meshes(energy: str, surface: mg.
     assert_certified(sp.embed(mesh, "progressive", energy=energy), mesh)
 
 
+# Hundreds of maps per energy: ~45 s each on two busy cores, more than
+# the suite's 120 s default leaves room for on a slow runner.
+@pytest.mark.timeout(400)
 @pytest.mark.parametrize("energy", ENERGIES)
 @settings(max_examples=50, deadline=None)
 @given(surface=mg.surfaces(min_vertices=300, max_vertices=2000))

@@ -24,7 +24,10 @@ _INT64_MAX = 2**63 - 1
 
 def integer(value: Any, name: str, minimum: int = 0, maximum: int = _INT64_MAX) -> int:
     """``value`` as an int in ``[minimum, maximum]``: a Python or numpy
-    integer, not a bool, a float or a string."""
+    integer (anything with ``__index__``), not a bool, a float or a string.
+    The one check of integer arguments; its MeshError names the argument and
+    says "an integer >= minimum", or "an integer in minimum..maximum" when
+    there is a maximum of the caller's."""
     if isinstance(value, (bool, np.bool_)):
         raise MeshError(f"{name} must be an integer, got {value!r}")
     try:
@@ -32,7 +35,9 @@ def integer(value: Any, name: str, minimum: int = 0, maximum: int = _INT64_MAX) 
     except TypeError:
         raise MeshError(f"{name} must be an integer, got {value!r}") from None
     if not minimum <= number <= maximum:
-        raise MeshError(f"{name} must be an integer in [{minimum}, {maximum}], got {number}")
+        wanted = (f"an integer >= {minimum}" if maximum == _INT64_MAX and number < minimum
+                  else f"an integer in {minimum}..{maximum}")
+        raise MeshError(f"{name} must be {wanted}, got {value!r}")
     return number
 
 

@@ -53,7 +53,7 @@ from pathlib import Path
 from typing import Any, Dict, Iterable, Iterator, List, Optional, Sequence, Union
 
 from ._atomic import is_stale_temporary, is_temporary, write_atomically
-from ._files import file_errors, special_kind
+from ._files import file_errors, file_sha256, special_kind
 from ._batch_pool import LocalPool, executor_rows, usable_cores
 from ._batch_task import COLUMNS, QUALITY, Task, file_matches, run_task
 from ._embed import method_options, methods, pass_method, stray_options
@@ -101,7 +101,7 @@ def expand_inputs(inputs: Iterable[PathLike]) -> List[Path]:
         elif path.is_file():
             found.append(path)
         elif path.exists():
-            what = special_kind(path.stat().st_mode) or "not a regular file"
+            what = special_kind(path) or "not a regular file"
             raise MeshError(f"batch input {path} is {what}, not a mesh file: only regular "
                             "files are read")
         else:
@@ -132,15 +132,6 @@ def _read_list(path: Path) -> List[Path]:
                             "(a relative path is read from the list's folder)")
         listed.append(item)
     return listed
-
-
-def content_hash(path: Path) -> str:
-    """SHA-256 of the file's bytes."""
-    digest = hashlib.sha256()
-    with open(path, "rb") as handle:
-        for block in iter(lambda: handle.read(1 << 20), b""):
-            digest.update(block)
-    return digest.hexdigest()
 
 
 def options_hash(method: str, options: Dict[str, Any], weld: bool = False) -> str:
@@ -450,7 +441,7 @@ def _batch_into(out: Path, inputs: List[Path], executor: Any, method: str,
         key = options_hash(method, options, weld)
         tasks = []
         for path in inputs:
-            digest = content_hash(path)
+            digest = file_sha256(path)
             stem = f"{_safe_name(path)}-{digest[:16]}"
             tasks.append(Task(input=str(path), sha256=digest,
                               sphere=str(out / f"{stem}.sphere.ply"),

@@ -34,7 +34,6 @@ from __future__ import annotations
 import atexit
 import collections
 import concurrent.futures as cf
-import glob
 import multiprocessing
 import multiprocessing.connection
 import os
@@ -47,7 +46,7 @@ import time
 from pathlib import Path
 from typing import Any, Deque, Dict, Iterator, List, Optional, Sequence, Set, Tuple
 
-from ._atomic import TEMP_MARK
+from ._atomic import remove_stale_temporaries
 from ._batch_task import (Mapped, Task, failed_row, finish_task, map_task, peak_memory_mb,
                           reset_peak_memory, run_task)
 from ._errors import SpherifyError
@@ -208,11 +207,10 @@ class Worker:
             self.process.kill()
         self.process.wait()
         self.connection.close()
-        for task, _ in self.tasks:
-            for output in (Path(task.sphere), Path(task.spheremap)):
-                for leftover in output.parent.glob(f".{glob.escape(output.name)}{TEMP_MARK}"
-                                                   f"{self.process.pid}-*"):
-                    leftover.unlink(missing_ok=True)
+        # Reaped, the worker is no longer running: its temporaries are stale.
+        for folder in {Path(output).parent for task, _ in self.tasks
+                       for output in (task.sphere, task.spheremap)}:
+            remove_stale_temporaries(folder)
 
     def stop(self) -> None:
         """Ask an idle worker to exit, then make sure it did."""

@@ -31,6 +31,7 @@ from typing import Any, Dict, List, Optional, Tuple
 import numpy as np
 
 from ._atomic import temporary_path
+from ._files import file_sha256
 
 #: The columns of summary.csv, in order; the journal's rows hold the same keys.
 COLUMNS = ("input", "sha256", "status", "certified", "n_vertices", "n_faces", "method",
@@ -140,8 +141,7 @@ def file_matches(path: str, size: Any, sha256: Any) -> bool:
     try:
         if not isinstance(size, int) or os.path.getsize(path) != size:
             return False
-        with open(path, "rb") as handle:
-            return bool(hashlib.sha256(handle.read()).hexdigest() == sha256)
+        return bool(file_sha256(path) == sha256)
     except OSError:
         return False
 

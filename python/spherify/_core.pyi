@@ -1,5 +1,6 @@
 # Type stubs of the Rust extension spherify._core (checked by mypy.stubtest in CI).
 from os import PathLike
+from pathlib import Path
 from typing import Any, Callable, Dict, List, Optional, Tuple, final
 
 import numpy as np
@@ -7,7 +8,7 @@ import numpy.typing as npt
 
 from ._report import MeshReport, SphereReport
 
-__all__ = ["CoreMesh", "CoreSphereMap", "__version__", "boundary_loop", "check", "check_raw", "check_sphere", "choices", "dijkstra", "embed", "encode", "face_quality", "from_points", "get_num_threads", "harmonics_evaluate", "harmonics_fit", "improve", "load", "method_options", "methods", "orient", "quality", "restore_map", "save", "set_num_threads", "shortest_path", "tutte", "weld", "write_atomic"]
+__all__ = ["AtomicWrite", "CoreMesh", "CoreSphereMap", "__version__", "boundary_loop", "check", "check_raw", "check_sphere", "choices", "dijkstra", "embed", "encode", "face_quality", "from_points", "get_num_threads", "harmonics_evaluate", "harmonics_fit", "improve", "is_stale_temporary", "is_temporary", "load", "method_options", "methods", "orient", "quality", "remove_stale_temporaries", "require_regular_file", "restore_map", "save", "save_textured_obj", "set_num_threads", "shortest_path", "special_kind", "temporary_path", "tutte", "weld", "write_atomic"]
 
 __version__: str
 
@@ -68,7 +69,29 @@ def save(
     ply_encoding: str = "binary_little_endian",
     stl_binary: bool = True,
 ) -> None: ...
+def save_textured_obj(
+    mesh: CoreMesh,
+    path: str | PathLike[str],
+    corners: npt.NDArray[np.float64],
+    label: str,
+    material_library: Optional[str] = None,
+) -> None: ...
 def write_atomic(path: str | PathLike[str], data: bytes) -> None: ...
+
+@final
+class AtomicWrite:
+    def __new__(cls, path: str | PathLike[str]) -> AtomicWrite: ...
+    @property
+    def temporary(self) -> Path: ...
+    def commit(self) -> None: ...
+    def discard(self) -> None: ...
+
+def temporary_path(path: str | PathLike[str]) -> Path: ...
+def is_temporary(name: str) -> bool: ...
+def is_stale_temporary(name: str) -> bool: ...
+def remove_stale_temporaries(folder: str | PathLike[str]) -> None: ...
+def special_kind(path: str | PathLike[str]) -> Optional[str]: ...
+def require_regular_file(path: str | PathLike[str]) -> None: ...
 def encode(
     mesh: CoreMesh,
     path: str | PathLike[str],

@@ -1,5 +1,5 @@
-"""What the Python side does with the paths it is given, as the core does for
-its own formats (``crates/mesh/src/io``):
+"""What the Python side does with the paths it is given, by the core's own
+checks (``crates/mesh/src/io``):
 
 * Only regular files are read. Opening a FIFO for reading waits until some
   process writes to it, and a device such as ``/dev/zero`` never ends; both
@@ -15,45 +15,43 @@ Writing is in :mod:`spherify._atomic`.
 from __future__ import annotations
 
 import functools
+import hashlib
 import os
-import stat
 from pathlib import Path
 from typing import Any, Callable, Optional, TypeVar, cast
 
-from ._errors import FormatError, as_file_error
+from . import _core
+from ._errors import as_file_error
 
 Function = TypeVar("Function", bound=Callable[..., Any])
 
 
-def special_kind(mode: int) -> Optional[str]:
-    """What a file of ``os.stat`` mode ``mode`` is, in words, when it is
-    neither a regular file nor a folder (None for those)."""
-    if stat.S_ISREG(mode) or stat.S_ISDIR(mode):
-        return None
-    if stat.S_ISFIFO(mode):
-        return "a FIFO (named pipe)"
-    if stat.S_ISCHR(mode) or stat.S_ISBLK(mode):
-        return "a device"
-    if stat.S_ISSOCK(mode):
-        return "a socket"
-    return "not a regular file"
+def special_kind(path: Path) -> Optional[str]:
+    """What is at ``path`` (links followed), in words, when it is neither a
+    regular file nor a folder (None for those and for nothing at all): the
+    core's words, which its readers and writers use too."""
+    return _core.special_kind(path)
 
 
 def require_regular_file(path: Path) -> None:
-    """Refuse to read ``path`` unless it is a regular file (links followed).
+    """Refuse to read ``path`` unless it is a regular file (links followed),
+    with the core's check: a :class:`FormatError` saying what it is.
 
     Looked at with ``stat``, which does not open it: a FIFO would block the
     open. A missing file or a folder is left to the open that follows, which
     raises ``FileNotFoundError`` / ``IsADirectoryError``.
     """
-    try:
-        mode = os.stat(path).st_mode
-    except OSError:
-        return
-    what = special_kind(mode)
-    if what is not None:
-        raise FormatError(f"{path}: this is {what}, not a regular file: only regular files "
-                          "are read", str(path))
+    _core.require_regular_file(path)
+
+
+def file_sha256(path: "os.PathLike[str] | str") -> str:
+    """SHA-256 of the bytes of the file at ``path``, as 64 hex digits (read
+    in blocks of 1 MiB, so a large file is never held whole)."""
+    digest = hashlib.sha256()
+    with open(path, "rb") as handle:
+        for block in iter(lambda: handle.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()
 
 
 def file_errors(function: Function) -> Function:

@@ -25,6 +25,7 @@ from typing import Tuple, Union
 
 import numpy as np
 
+from . import _args
 from ._atomic import write_bytes_atomically
 from ._errors import FormatError, MeshError
 from ._files import file_errors, require_regular_file
@@ -38,10 +39,10 @@ PathLike = Union[str, "os.PathLike[str]"]
 
 
 def _size(size: object) -> int:
-    if isinstance(size, bool) or not isinstance(size, (int, np.integer)) or not 3 <= size <= 8193 \
-            or size % 2 == 0:
+    n = _args.integer(size, "size", 3, 8193)
+    if n % 2 == 0:
         raise MeshError(f"size must be an odd integer in 3..8193, got {size!r}")
-    return int(size)
+    return n
 
 
 def octahedral_points(size: int) -> np.ndarray:
@@ -50,14 +51,26 @@ def octahedral_points(size: int) -> np.ndarray:
     n = _size(size)
     t = np.linspace(-1.0, 1.0, n)
     u, v = np.meshgrid(t, t)
-    a = np.abs(u) + np.abs(v)
-    lower = a > 1
-    x = np.where(lower, np.sign(u) * (1 - np.abs(v)), u)
-    y = np.where(lower, np.sign(v) * (1 - np.abs(u)), v)
-    z = 1 - a
-    p = np.stack([x, y, z], axis=-1)
+    p = octahedron_unfolded(u, v)
     unit: np.ndarray = p / np.linalg.norm(p, axis=-1, keepdims=True)
     return unit
+
+
+def octahedron_unfolded(u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """The point of the octahedron |x| + |y| + |z| = 1 at (u, v) of the
+    square [-1, 1]^2 (Praun and Hoppe's octahedral map, inverted): (..., 3)
+    float64, not normalised. The upper half (|u| + |v| <= 1) is the square's
+    diamond; the lower half's four triangles fold over its edges. The one
+    inverse octahedral map, of geometry images and of the texture atlas.
+    ``z`` is taken as ``+-(1 - |x| - |y|)`` of the folded ``x, y``, so that
+    the point lies on the octahedron to the last digit of ``x`` and ``y``."""
+    lower = np.abs(u) + np.abs(v) > 1
+    su, sv = np.where(u >= 0, 1.0, -1.0), np.where(v >= 0, 1.0, -1.0)
+    x = np.where(lower, su * (1 - np.abs(v)), u)
+    y = np.where(lower, sv * (1 - np.abs(u)), v)
+    z = np.where(lower, -1.0, 1.0) * (1 - np.abs(x) - np.abs(y))
+    p: np.ndarray = np.stack([x, y, z], axis=-1)
+    return p
 
 
 def geometry_image(m: SphereMap, size: int) -> np.ndarray:

@@ -13,7 +13,7 @@ from typing import Dict
 
 import numpy as np
 
-from . import datasets
+from . import _args, datasets
 from ._errors import MeshError
 from ._mesh import Mesh
 from ._spheremap import SphereMap
@@ -27,9 +27,7 @@ _CHUNK = 1 << 20
 
 
 def _level(level: object) -> int:
-    if isinstance(level, bool) or not isinstance(level, (int, np.integer)) or not 0 <= level <= 10:
-        raise MeshError(f"level must be an integer in 0..10, got {level!r}")
-    return int(level)
+    return _args.integer(level, "level", 0, 10)
 
 
 def remesh_map(m: SphereMap, kind: str = "icosphere", *, level: int = 4) -> SphereMap:
@@ -100,8 +98,7 @@ def surface_distance(a: SphereMap, b: SphereMap, *, samples: int = 100_000,
     MapError
         Either map is not a certified bijection.
     """
-    if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)) or samples < 0:
-        raise MeshError(f"samples must be an integer >= 0, got {samples!r}")
+    samples = _args.integer(samples, "samples", 0)
     rng = np.random.default_rng(seed)
     diagonal = float(np.linalg.norm(np.ptp(a.mesh.vertices, axis=0)))
     largest, squares = 0.0, 0.0

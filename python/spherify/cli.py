@@ -35,7 +35,6 @@ unreadable input or bad arguments.
 from __future__ import annotations
 
 import argparse
-import hashlib
 import io
 import os
 import sys
@@ -136,14 +135,6 @@ def _load(args: argparse.Namespace) -> Mesh:
     return weld(mesh) if getattr(args, "weld", False) else mesh
 
 
-def _sha256(path: Path) -> str:
-    digest = hashlib.sha256()
-    with open(path, "rb") as handle:
-        for block in iter(lambda: handle.read(1 << 20), b""):
-            digest.update(block)
-    return digest.hexdigest()
-
-
 def pair_is_consistent(out: Union[str, bytes, "os.PathLike[Any]"]) -> bool:
     """Whether ``OUT`` and ``OUT.npz`` written by ``spherify map`` belong
     together: the .npz records the SHA-256 of the mesh file it was written
@@ -158,7 +149,7 @@ def pair_is_consistent(out: Union[str, bytes, "os.PathLike[Any]"]) -> bool:
         if "mesh_sha256" not in data.files:
             return False
         recorded = str(data["mesh_sha256"])
-    return recorded == _sha256(mesh_path)
+    return recorded == _files.file_sha256(mesh_path)
 
 
 def _cmd_check(args: argparse.Namespace) -> int:
@@ -244,7 +235,7 @@ def _cmd_map(args: argparse.Namespace) -> int:
     if out.exists() and not out.is_file():
         # OUT is read back for the hash its .npz records: a pipe would wait
         # for a writer for ever, a device would give a hash of nothing.
-        what = _files.special_kind(out.stat().st_mode) or "not a regular file"
+        what = _files.special_kind(out) or "not a regular file"
         raise UsageError(f"-o {out}: this is {what}; spherify map writes OUT and records its "
                          "hash in OUT's .npz, so OUT must be a regular file")
     start = time.perf_counter()
@@ -303,7 +294,7 @@ def _cmd_map(args: argparse.Namespace) -> int:
     # cut short in between leaves a pair that pair_is_consistent refuses.
     _save_sphere(m.mesh, m.points, out)
     arrays = {"points": m.points, "faces": m.mesh.faces,
-              "mesh_sha256": np.array(_sha256(out))}
+              "mesh_sha256": np.array(_files.file_sha256(out))}
     if isinstance(m, ThetaPhiMap):
         arrays.update(theta_phi=m.theta_phi, poles=np.array(m.poles), cut_path=m.cut_path,
                       cut_faces=m.cut_mesh.faces, cut_original=m.cut_original)

@@ -23,24 +23,17 @@ from the x axis towards y.
 from __future__ import annotations
 
 import math
-import numbers
 from typing import Any, Dict, List, Optional
 
 import numpy as np
 import numpy.typing as npt
 
-from . import _core
+from . import _args, _core
 from ._errors import MeshError
 from ._mesh import Mesh
 from ._spheremap import SphereMap, _float_rows
 
 __all__ = ["Harmonics", "fit"]
-
-
-def _count(name: str, value: Any, least: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < least:
-        raise MeshError(f"{name} must be an integer >= {least}, got {value!r}")
-    return int(value)
 
 
 def _read_only(array: np.ndarray) -> np.ndarray:
@@ -136,7 +129,7 @@ class Harmonics:
     def lowpass(self, l: int) -> Harmonics:
         """The coefficients of degree at most ``l`` (``l >= lmax`` keeps all);
         the result has ``lmax = min(l, self.lmax)``."""
-        l = min(_count("l", l, 0), self._lmax)
+        l = min(_args.integer(l, "l", 0), self._lmax)
         return Harmonics(self._c[: (l + 1) ** 2], self._info)
 
     def gaussian(self, sigma: float) -> Harmonics:
@@ -213,8 +206,8 @@ def fit(m: SphereMap, lmax: int, *, oversample: int = 1) -> Harmonics:
     """
     if not isinstance(m, SphereMap):
         raise MeshError(f"fit needs a SphereMap, got {type(m).__name__}")
-    lmax = _count("lmax", lmax, 0)
-    oversample = _count("oversample", oversample, 1)
+    lmax = _args.integer(lmax, "lmax", 0)
+    oversample = _args.integer(oversample, "oversample", 1)
     coefficients, info = _core.harmonics_fit(m._core, lmax, oversample)
     info["seconds"] = dict(info["seconds"])
     return Harmonics(coefficients, info)

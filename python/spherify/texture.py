@@ -57,10 +57,11 @@ from typing import Any, Callable, Dict, List, Optional, Union
 import numpy as np
 import numpy.typing as npt
 
+from . import _core
 from ._atomic import write_bytes_atomically
 from ._errors import FormatError, MeshError
 from ._files import file_errors
-from ._geometry_image import _chunk
+from ._geometry_image import _chunk, octahedron_unfolded
 from ._mesh import Mesh
 from ._quality import quality
 from ._spheremap import SphereMap
@@ -312,13 +313,7 @@ def _octahedral_inverse(s: np.ndarray, t: np.ndarray) -> np.ndarray:
         right, left = s > 1, s < -1
         t[right | left] = -t[right | left]
         s[right], s[left] = 2 - s[right], -2 - s[left]
-    sx, sy = np.where(s >= 0, 1.0, -1.0), np.where(t >= 0, 1.0, -1.0)
-    lower = np.abs(s) + np.abs(t) > 1
-    x = np.where(lower, sx * (1 - np.abs(t)), s)
-    y = np.where(lower, sy * (1 - np.abs(s)), t)
-    z = np.where(lower, -1.0, 1.0) * (1 - np.abs(x) - np.abs(y))
-    d: np.ndarray = np.stack([x, y, z], axis=-1)
-    return d
+    return octahedron_unfolded(s, t)
 
 
 def _nearest_copies(w: np.ndarray, reference: np.ndarray) -> np.ndarray:
@@ -490,9 +485,10 @@ def save_obj(mesh: Mesh, path: PathLike, layout: UVLayout,
 
 def _write_obj(mesh: Mesh, target: Path, corners: np.ndarray, label: str,
                texture: Any = None) -> None:
-    """OBJ with ``vt`` per corner; ``texture`` an image array (written as
-    ``<stem>.png``) or the path of an image file (referenced, not copied)."""
-    lines = [f"# spherify: {label} texture coordinates, one vt per face corner"]
+    """OBJ with ``vt`` per corner (the core's OBJ writer); ``texture`` an
+    image array (written as ``<stem>.png``) or the path of an image file
+    (referenced, not copied), named by an MTL file written here."""
+    library: Optional[str] = None
     if texture is not None:
         if isinstance(texture, (str, os.PathLike)):
             image_path = Path(texture)
@@ -506,13 +502,9 @@ def _write_obj(mesh: Mesh, target: Path, corners: np.ndarray, label: str,
             name = target.with_suffix(".png").name
         mtl = target.with_suffix(".mtl")
         write_bytes_atomically(mtl, f"newmtl texture\nKa 1 1 1\nKd 1 1 1\nmap_Kd {name}\n".encode())
-        lines += [f"mtllib {mtl.name}", "usemtl texture"]
-    lines += ["v %.17g %.17g %.17g" % tuple(p) for p in mesh.vertices.tolist()]
-    lines += ["vt %.17g %.17g" % tuple(p) for p in corners.reshape(-1, 2).tolist()]
-    f = mesh.faces + 1
-    t = np.arange(1, 3 * mesh.n_faces + 1).reshape(-1, 3)
-    lines += [f"f {a}/{ta} {b}/{tb} {c}/{tc}" for (a, b, c), (ta, tb, tc) in zip(f, t)]
-    write_bytes_atomically(target, ("\n".join(lines) + "\n").encode())
+        library = mtl.name
+    uv = np.ascontiguousarray(np.asarray(corners, dtype=np.float64).reshape(-1, 2))
+    _core.save_textured_obj(mesh._core, os.fspath(target), uv, label, library)
 
 
 def _is_per_corner(uv: Any) -> bool:

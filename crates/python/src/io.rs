@@ -79,6 +79,26 @@ pub fn write_atomic(py: Python<'_>, path: std::path::PathBuf, data: &[u8]) -> Py
     crate::pool::detach(py, || io::write_atomic(&path, data))?.map_err(|e| to_py(py, e))
 }
 
+/// save_textured_obj(mesh, path, corners, label, material_library=None):
+/// an OBJ with one `vt` per face corner (`corners` (3 m, 2), face order),
+/// written atomically; the MTL and the image are the caller's.
+#[pyfunction]
+#[pyo3(signature = (mesh, path, corners, label, material_library=None))]
+pub fn save_textured_obj(
+    py: Python<'_>,
+    mesh: &CoreMesh,
+    path: std::path::PathBuf,
+    corners: PyReadonlyArrayDyn<'_, f64>,
+    label: &str,
+    material_library: Option<&str>,
+) -> PyResult<()> {
+    let corners = rows::<f64, 2>(&corners, "corners")?;
+    crate::pool::detach(py, || {
+        io::write_textured_obj(&path, &mesh.mesh, &corners, label, material_library)
+    })?
+    .map_err(|e| to_py(py, e))
+}
+
 /// The attributes and options of `save` and `encode`, checked.
 fn write_options(
     sphere: Option<PyReadonlyArrayDyn<'_, f64>>,

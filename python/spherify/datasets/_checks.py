@@ -1,24 +1,12 @@
-"""Argument checks shared by the shapes: each raises MeshError naming the argument."""
+"""Argument checks shared by the shapes: each raises MeshError naming the argument.
+Integer arguments go through the package's one checker, ``_args.integer``."""
 
 from __future__ import annotations
 
 import math
-import operator
 from typing import Any
 
 from .._errors import MeshError
-
-
-def as_count(name: str, value: Any, minimum: int) -> int:
-    """``value`` as an int of at least ``minimum``: anything with ``__index__``
-    (floats and strings are refused)."""
-    try:
-        n = operator.index(value)
-    except TypeError:
-        raise MeshError(f"{name} must be an integer, got {value!r}") from None
-    if n < minimum:
-        raise MeshError(f"{name} must be at least {minimum}, got {n}")
-    return n
 
 
 def as_positive(name: str, value: Any, allow_zero: bool = False) -> float:

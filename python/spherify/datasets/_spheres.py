@@ -9,7 +9,8 @@ import numpy as np
 
 from .._errors import MeshError
 from .._mesh import Mesh
-from ._checks import as_count, as_positive
+from .._args import integer
+from ._checks import as_positive
 from ._geodesic import geodesic, nearest_frequency
 from ._guarantees import shape
 from ._vectors import unit
@@ -41,7 +42,7 @@ def icosphere(subdivisions: int = 3) -> Mesh:
     projected onto the sphere (a class-I geodesic sphere); the connectivity is that
     of ``k`` rounds of midpoint subdivision. Cost O(4**k).
     """
-    k = as_count("subdivisions", subdivisions, 0)
+    k = integer(subdivisions, "subdivisions", 0)
     if k > 10:
         raise MeshError(f"subdivisions must be at most 10 (10 * 4**10 + 2 vertices), got {k}")
     return Mesh(*geodesic(2 ** k))
@@ -49,7 +50,7 @@ def icosphere(subdivisions: int = 3) -> Mesh:
 
 def sphere(n_vertices: int) -> Mesh:
     """The geodesic unit sphere nearest ``n_vertices`` vertices (``make("icosphere", n)``)."""
-    return Mesh(*geodesic(nearest_frequency(as_count("n_vertices", n_vertices, 1))))
+    return Mesh(*geodesic(nearest_frequency(integer(n_vertices, "n_vertices", 1))))
 
 
 @shape
@@ -80,7 +81,7 @@ def ellipsoid(n_vertices: int = 2000, axes: Sequence[float] = (1.0, 0.6, 0.4)) -
     -----
     A geodesic unit sphere scaled by ``axes``. Cost O(n).
     """
-    n = as_count("n_vertices", n_vertices, 1)
+    n = integer(n_vertices, "n_vertices", 1)
     if len(axes) != 3:
         raise MeshError(f"axes must hold three semi-axis lengths, got {axes!r}")
     scale = np.array([as_positive("axes", x) for x in axes])
@@ -124,8 +125,8 @@ def bumpy_blob(n_vertices: int = 5000, bumps: int = 12, amplitude: float = 0.25,
     every triangle facing the origin, so the result is embedded and every ray
     from the origin crosses it once. Cost O(n * bumps).
     """
-    n = as_count("n_vertices", n_vertices, 1)
-    n_bumps = as_count("bumps", bumps, 0)
+    n = integer(n_vertices, "n_vertices", 1)
+    n_bumps = integer(bumps, "bumps", 0)
     height = as_positive("amplitude", amplitude, allow_zero=True)
     V, F = geodesic(nearest_frequency(n))
     rng = np.random.default_rng(seed)

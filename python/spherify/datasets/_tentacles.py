@@ -10,7 +10,8 @@ import numpy as np
 from .._errors import MeshError
 from .._mesh import Mesh
 from ._arms import ArmRings, arm_separation, attach_arms, plan_arms
-from ._checks import as_count, as_positive
+from .._args import integer
+from ._checks import as_positive
 from ._guarantees import shape
 from ._tubes import TAPER, check_clearance, ring_positions
 from ._vectors import Floats, unit
@@ -61,8 +62,8 @@ def tentacles(n_vertices: int = 20000, arms: int = 8, arm_length: float = 4.0,
     rotation-minimising frame (the plane normal); the body and joins are built
     as for :func:`urchin`. Cost O(n).
     """
-    n = as_count("n_vertices", n_vertices, 1)
-    arms = as_count("arms", arms, 1)
+    n = integer(n_vertices, "n_vertices", 1)
+    arms = integer(arms, "arms", 1)
     length = as_positive("arm_length", arm_length)
     r = as_positive("arm_radius", arm_radius)
     curl = as_positive("curl", curl, allow_zero=True)

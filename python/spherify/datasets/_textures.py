@@ -9,6 +9,7 @@ from typing import Tuple
 import numpy as np
 import numpy.typing as npt
 
+from .._args import integer
 from .._errors import MeshError
 
 
@@ -42,8 +43,7 @@ def checkerboard(directions: npt.ArrayLike, squares: int = 8) -> np.ndarray:
     (..., 3) float64
         RGB in [0, 1].
     """
-    if isinstance(squares, bool) or not isinstance(squares, (int, np.integer)) or squares < 1:
-        raise MeshError(f"squares must be an integer >= 1, got {squares!r}")
+    squares = integer(squares, "squares", 1)
     d = _directions(directions)
     theta, phi = _theta_phi(d)
     i = np.floor(theta / np.pi * squares).astype(np.int64)

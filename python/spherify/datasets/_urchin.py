@@ -10,7 +10,8 @@ import numpy as np
 from .._errors import MeshError
 from .._mesh import Mesh
 from ._arms import ROOM, ArmRings, arm_separation, attach_arms, plan_arms, spread_directions
-from ._checks import as_count, as_positive
+from .._args import integer
+from ._checks import as_positive
 from ._guarantees import shape
 from ._tubes import TAPER, ring_positions
 from ._vectors import perpendicular
@@ -63,8 +64,8 @@ def urchin(n_vertices: int = 20000, spikes: int = 32, spike_length: float = 2.0,
     the hole's loop is zipped to the first ring of the spike's tube. Cost O(n)
     plus O(spikes**2).
     """
-    n = as_count("n_vertices", n_vertices, 1)
-    spikes = as_count("spikes", spikes, 1)
+    n = integer(n_vertices, "n_vertices", 1)
+    spikes = integer(spikes, "spikes", 1)
     length = as_positive("spike_length", spike_length)
     r = as_positive("spike_radius", spike_radius)
     R = 1.0

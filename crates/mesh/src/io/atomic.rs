@@ -26,6 +26,12 @@
 //!
 //! A hard link to the target is still broken (the name then points at a new
 //! file): keeping it would mean writing in place, which is not atomic.
+//!
+//! Writers that fill a file by its name rather than through a `Write` (the
+//! Python package's numpy, zip and nibabel writers) use [`PendingWrite`]:
+//! it hands out the temporary, and its `commit` does the same sync and rename
+//! (or, for a device or a pipe, copies the bytes in). The naming rule, the
+//! clean-up of dead writers' temporaries and the rename live here only.
 
 use crate::error::{FormatError, Location, MeshError};
 use std::fs::{File, OpenOptions};
@@ -49,24 +55,168 @@ pub(crate) fn write_file(
     if let Some(stream) = stream_target(path)? {
         return write_stream(path, stream, fill);
     }
-    let target = final_target(path).map_err(|e| MeshError::io(path, e))?;
-    remove_stale_temporaries(&target);
-    let temp = temp_path(&target)?;
-    let file = OpenOptions::new()
-        .write(true)
-        .create_new(true)
-        .open(&temp)
-        .map_err(|e| MeshError::io(path, e))?;
-    let result = keep_mode(&target, &file)
-        .and_then(|()| fill_and_sync(file, fill))
-        .and_then(|()| std::fs::rename(&temp, &target));
-    result.map_err(|e| {
-        // Best effort: the original error is what the caller needs to see.
-        let _ = std::fs::remove_file(&temp);
-        MeshError::io(path, e)
-    })?;
-    sync_folder(&target);
-    Ok(())
+    let (replacement, file) = Replacement::create(path)?;
+    let mut out = BufWriter::with_capacity(1 << 16, file);
+    let filled = fill(&mut out)
+        .and_then(|()| out.flush())
+        .and_then(|()| out.into_inner().map_err(|e| e.into_error()));
+    match filled {
+        Ok(file) => replacement.finish(file),
+        Err(e) => {
+            replacement.abandon();
+            Err(MeshError::io(path, e))
+        }
+    }
+}
+
+/// A temporary file beside the final target of `path` (links followed),
+/// renamed over it by [`Replacement::finish`].
+struct Replacement {
+    /// What the caller asked for: errors name it.
+    path: PathBuf,
+    /// Where the chain of links from `path` ends.
+    target: PathBuf,
+    temporary: PathBuf,
+}
+
+impl Replacement {
+    /// Removes the temporaries of dead writers beside the target, then
+    /// creates this write's temporary (empty) and returns it open for writing.
+    fn create(path: &Path) -> Result<(Self, File), MeshError> {
+        let target = final_target(path).map_err(|e| MeshError::io(path, e))?;
+        remove_stale_temporaries(folder_of(&target));
+        let temporary = temp_path(&target)?;
+        let file = OpenOptions::new()
+            .write(true)
+            .create_new(true)
+            .open(&temporary)
+            .map_err(|e| MeshError::io(path, e))?;
+        Ok((Replacement { path: path.to_path_buf(), target, temporary }, file))
+    }
+
+    /// Gives the temporary (open as `file`) the mode of the file it replaces,
+    /// syncs it and renames it over the target. On an error the temporary is
+    /// removed and the error names the caller's path.
+    fn finish(self, file: File) -> Result<(), MeshError> {
+        let result = keep_mode(&self.target, &file)
+            // Without the sync a power loss after the rename could leave an empty file.
+            .and_then(|()| file.sync_all())
+            .and_then(|()| std::fs::rename(&self.temporary, &self.target));
+        drop(file);
+        if let Err(e) = result {
+            let error = MeshError::io(&self.path, e);
+            self.abandon();
+            return Err(error);
+        }
+        sync_folder(&self.target);
+        Ok(())
+    }
+
+    /// Removes the temporary (best effort: the caller's error is what matters).
+    fn abandon(self) {
+        let _ = std::fs::remove_file(&self.temporary);
+    }
+}
+
+/// A write through a file the caller fills by name (see the module comment):
+/// [`PendingWrite::begin`] checks the target and creates the temporary,
+/// the caller writes [`PendingWrite::temporary`], and
+/// [`PendingWrite::commit`] puts the bytes in place. Dropped without a
+/// commit (an error while filling), the temporary is removed and the target
+/// is left as it was.
+pub struct PendingWrite {
+    /// What the caller asked for: errors name it.
+    path: PathBuf,
+    temporary: PathBuf,
+    into: Into,
+    /// Set once the temporary is gone (renamed or removed).
+    done: bool,
+}
+
+/// Where the bytes of a [`PendingWrite`] go.
+enum Into {
+    /// A regular file or nothing yet: the temporary beside the target is
+    /// synced and renamed over it.
+    Replace { target: PathBuf },
+    /// A character device or a pipe, open for writing from `begin` on: the
+    /// temporary is a scratch file in the system's temporary folder (the
+    /// writers seek, which a pipe cannot), copied in by `commit`. `_probe`
+    /// keeps a pipe's reader (see [`write_stream`]).
+    Stream { file: File, _probe: Option<File> },
+}
+
+impl PendingWrite {
+    /// Starts a write of `path`: refuses a folder, a pipe that no process
+    /// reads and anything else that is not a regular file, a character
+    /// device or a pipe, as the mesh writers do; removes the temporaries of
+    /// dead writers beside a regular target; creates the (empty) temporary.
+    pub fn begin(path: &Path) -> Result<Self, MeshError> {
+        let (temporary, into) = match stream_target(path)? {
+            Some(stream) => {
+                let (_probe, file) = open_stream(path, stream)?;
+                let scratch = std::env::temp_dir().join(format!(
+                    "spherify-stream-{}-{}",
+                    std::process::id(),
+                    COUNTER.fetch_add(1, Ordering::Relaxed)
+                ));
+                OpenOptions::new()
+                    .write(true)
+                    .create_new(true)
+                    .open(&scratch)
+                    .map_err(|e| MeshError::io(path, e))?;
+                (scratch, Into::Stream { file, _probe })
+            }
+            None => {
+                let (replacement, _) = Replacement::create(path)?;
+                let Replacement { temporary, target, .. } = replacement;
+                (temporary, Into::Replace { target })
+            }
+        };
+        Ok(PendingWrite { path: path.to_path_buf(), temporary, into, done: false })
+    }
+
+    /// The file to write: beside the target (same file system, hidden, named
+    /// `.name.tmp-PID-N`), or a scratch file for a device or a pipe.
+    pub fn temporary(&self) -> &Path {
+        &self.temporary
+    }
+
+    /// Puts what was written to [`PendingWrite::temporary`] in place: synced
+    /// and renamed over the target with its mode, or copied into the device
+    /// or pipe. On an error the temporary is removed and the error names
+    /// the caller's path; the target is left as it was.
+    pub fn commit(mut self) -> Result<(), MeshError> {
+        let io = |e| MeshError::io(&self.path, e);
+        match &mut self.into {
+            Into::Replace { target } => {
+                // An error here leaves the temporary to `drop`.
+                let file = OpenOptions::new().write(true).open(&self.temporary).map_err(io)?;
+                let replacement = Replacement {
+                    path: self.path.clone(),
+                    target: std::mem::take(target),
+                    temporary: self.temporary.clone(),
+                };
+                // `finish` renames the temporary, or removes it on an error.
+                self.done = true;
+                replacement.finish(file)
+            }
+            Into::Stream { file, .. } => {
+                // The scratch file is removed by `drop`, whatever happens.
+                let mut scratch = File::open(&self.temporary).map_err(io)?;
+                let mut out = BufWriter::with_capacity(1 << 16, &*file);
+                std::io::copy(&mut scratch, &mut out).and_then(|_| out.flush()).map_err(io)
+            }
+        }
+    }
+}
+
+impl Drop for PendingWrite {
+    fn drop(&mut self) {
+        if !self.done {
+            // Best effort: a failed write's error is what the caller sees.
+            let _ = std::fs::remove_file(&self.temporary);
+        }
+    }
 }
 
 /// Writes `bytes` to `path` atomically (see [`write_file`]).
@@ -139,6 +289,14 @@ fn write_stream(
     stream: Stream,
     fill: impl FnOnce(&mut BufWriter<File>) -> std::io::Result<()>,
 ) -> Result<(), MeshError> {
+    let (_probe, file) = open_stream(path, stream)?;
+    let mut out = BufWriter::with_capacity(1 << 16, file);
+    fill(&mut out).and_then(|()| out.flush()).map_err(|e| MeshError::io(path, e))
+}
+
+/// Opens a character device or a pipe for writing; for a pipe, also the
+/// probe that must stay open until the write is done.
+fn open_stream(path: &Path, stream: Stream) -> Result<(Option<File>, File), MeshError> {
     let io = |e| MeshError::io(path, e);
     // Opening a pipe for writing waits until a process opens it for reading;
     // non-blocking, it fails at once (ENXIO) when none has. The probe stays
@@ -148,7 +306,7 @@ fn write_stream(
     // (unless the reader leaves on its own in between: then it waits for
     // the next, as `cat > pipe` would).
     #[cfg(unix)]
-    let _probe = match stream {
+    let probe = match stream {
         Stream::Device => None,
         Stream::Pipe => {
             use std::os::unix::fs::OpenOptionsExt;
@@ -166,7 +324,10 @@ fn write_stream(
         }
     };
     #[cfg(not(unix))]
-    let _ = stream;
+    let probe = {
+        let _ = stream;
+        None
+    };
     let file = OpenOptions::new().write(true).open(path).map_err(io)?;
     // The path may have changed since it was looked at: a regular file now
     // would be overwritten in place, which is what the atomic write avoids.
@@ -175,8 +336,7 @@ fn write_stream(
             "the path became a regular file while it was opened",
         )));
     }
-    let mut out = BufWriter::with_capacity(1 << 16, file);
-    fill(&mut out).and_then(|()| out.flush()).map_err(io)
+    Ok((probe, file))
 }
 
 /// `path`, or where the chain of symbolic links starting at it ends (the end
@@ -206,18 +366,6 @@ fn keep_mode(target: &Path, file: &File) -> std::io::Result<()> {
     }
 }
 
-fn fill_and_sync(
-    file: File,
-    fill: impl FnOnce(&mut BufWriter<File>) -> std::io::Result<()>,
-) -> std::io::Result<()> {
-    let mut out = BufWriter::with_capacity(1 << 16, file);
-    fill(&mut out)?;
-    out.flush()?;
-    let file = out.into_inner().map_err(|e| e.into_error())?;
-    // Without the sync a power loss after the rename could leave an empty file.
-    file.sync_all()
-}
-
 /// Makes the rename itself durable (best effort: not every file system lets
 /// a folder be opened and synced).
 fn sync_folder(target: &Path) {
@@ -239,8 +387,8 @@ fn sync_folder(target: &Path) {
 const TEMP_NAME_KEPT: usize = 200;
 
 /// `dir/.name.tmp-PID-N` beside the target, so the final rename stays within one
-/// file system; `name` cut to [`TEMP_NAME_KEPT`] bytes (PID-N keeps it unique).
-fn temp_path(path: &Path) -> Result<PathBuf, MeshError> {
+/// file system; `name` cut to `TEMP_NAME_KEPT` (200) bytes (PID-N keeps it unique).
+pub fn temp_path(path: &Path) -> Result<PathBuf, MeshError> {
     let name = path.file_name().ok_or_else(|| {
         MeshError::io(
             path,
@@ -257,8 +405,9 @@ fn temp_path(path: &Path) -> Result<PathBuf, MeshError> {
     Ok(path.with_file_name(temp_name))
 }
 
-/// The writer's process id of a temporary file name `.name.tmp-PID-N`.
-fn temporary_owner(file_name: &str) -> Option<u32> {
+/// The writer's process id of a temporary file name `.name.tmp-PID-N`;
+/// `None` for a name that is not one.
+pub fn temporary_owner(file_name: &str) -> Option<u32> {
     let rest = file_name.strip_prefix('.')?;
     let (_, tail) = rest.rsplit_once(".tmp-")?;
     let (pid, n) = tail.split_once('-')?;
@@ -281,23 +430,35 @@ fn process_is_running(pid: u32) -> bool {
     !matches!(state, Some('Z' | 'X'))
 }
 
-/// Removes, from the folder of `target`, the temporaries of writers that no
-/// longer run. Only where `/proc` shows the running processes (Linux); best
-/// effort, errors are ignored (another writer may be removing the same file).
-fn remove_stale_temporaries(target: &Path) {
+/// Whether `file_name` is a temporary of a writer that no longer runs (a
+/// killed run's leftover, safe to remove). Only where `/proc` shows the
+/// running processes (Linux); elsewhere no temporary is taken for stale.
+pub fn is_stale_temporary(file_name: &str) -> bool {
+    Path::new("/proc/self").exists()
+        && temporary_owner(file_name).is_some_and(|pid| !process_is_running(pid))
+}
+
+/// The folder a file at `target` is in (`.` for a bare name).
+fn folder_of(target: &Path) -> &Path {
+    match target.parent() {
+        Some(f) if !f.as_os_str().is_empty() => f,
+        _ => Path::new("."),
+    }
+}
+
+/// Removes from `folder` the temporaries of writers that no longer run (see
+/// [`is_stale_temporary`]). Best effort, errors are ignored (another writer
+/// may be removing the same file).
+pub fn remove_stale_temporaries(folder: &Path) {
     if !Path::new("/proc/self").exists() {
         return;
     }
-    let folder = match target.parent() {
-        Some(f) if !f.as_os_str().is_empty() => f,
-        _ => Path::new("."),
-    };
     let Ok(entries) = std::fs::read_dir(folder) else { return };
     for entry in entries.flatten() {
         let name = entry.file_name();
-        let Some(pid) = name.to_str().and_then(temporary_owner) else { continue };
+        let Some(name) = name.to_str() else { continue };
         let is_file = entry.file_type().map(|t| t.is_file()).unwrap_or(false);
-        if is_file && !process_is_running(pid) {
+        if is_file && is_stale_temporary(name) {
             let _ = std::fs::remove_file(entry.path());
         }
     }
@@ -325,6 +486,62 @@ mod tests {
         write_file(&target, |w| w.write_all(b"new")).unwrap();
         assert_eq!(std::fs::read(&target).unwrap(), b"new");
         assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 1);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn a_pending_write_commits_or_leaves_the_target_alone() {
+        let dir = scratch_dir("pending");
+        let target = dir.join("out.npz");
+        std::fs::write(&target, b"old").unwrap();
+        // Dropped without a commit (the writer failed): nothing changes.
+        let pending = PendingWrite::begin(&target).unwrap();
+        let temporary = pending.temporary().to_path_buf();
+        assert_eq!(temporary.parent(), Some(dir.as_path()));
+        assert!(temporary_owner(temporary.file_name().unwrap().to_str().unwrap()).is_some());
+        std::fs::write(&temporary, b"half").unwrap();
+        drop(pending);
+        assert!(!temporary.exists());
+        assert_eq!(std::fs::read(&target).unwrap(), b"old");
+        // Committed: the new bytes, and only the target left.
+        let pending = PendingWrite::begin(&target).unwrap();
+        std::fs::write(pending.temporary(), b"new").unwrap();
+        pending.commit().unwrap();
+        assert_eq!(std::fs::read(&target).unwrap(), b"new");
+        assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 1);
+        // A folder that does not exist: an I/O error naming the target.
+        let missing = dir.join("no").join("out.npz");
+        let err = PendingWrite::begin(&missing).err().unwrap();
+        assert!(
+            matches!(&err, MeshError::Io { path, .. } if path == &missing.display().to_string())
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn a_pending_write_keeps_links_and_modes_and_writes_devices_in_place() {
+        use std::os::unix::fs::PermissionsExt;
+        let dir = scratch_dir("pending-link");
+        let real = dir.join("real.npz");
+        std::fs::write(&real, b"old").unwrap();
+        std::fs::set_permissions(&real, std::fs::Permissions::from_mode(0o640)).unwrap();
+        let link = dir.join("link.npz");
+        std::os::unix::fs::symlink("real.npz", &link).unwrap();
+        let pending = PendingWrite::begin(&link).unwrap();
+        std::fs::write(pending.temporary(), b"new").unwrap();
+        pending.commit().unwrap();
+        assert!(std::fs::symlink_metadata(&link).unwrap().file_type().is_symlink());
+        assert_eq!(std::fs::read(&real).unwrap(), b"new");
+        assert_eq!(std::fs::metadata(&real).unwrap().permissions().mode() & 0o777, 0o640);
+        // /dev/null is written into through a scratch file, which goes.
+        let pending = PendingWrite::begin(Path::new("/dev/null")).unwrap();
+        let scratch = pending.temporary().to_path_buf();
+        assert!(!scratch.starts_with("/dev"));
+        std::fs::write(&scratch, b"discarded").unwrap();
+        pending.commit().unwrap();
+        assert!(!scratch.exists());
+        assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 2);
         std::fs::remove_dir_all(&dir).unwrap();
     }
 

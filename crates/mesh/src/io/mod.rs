@@ -17,6 +17,9 @@ mod ply;
 mod stl;
 mod text;
 
+pub use atomic::{
+    is_stale_temporary, remove_stale_temporaries, temp_path, temporary_owner, PendingWrite,
+};
 pub use ply::PlyEncoding;
 
 use crate::error::{FormatError, Location, MeshError};
@@ -107,49 +110,77 @@ pub fn read(path: &Path) -> Result<LoadedMesh, MeshError> {
     read_bytes(&bytes, format, &path.display().to_string())
 }
 
+/// What is at `path` (symbolic links followed), in words, when it is neither
+/// a regular file nor a folder: "a FIFO (named pipe)", "a device", "a socket"
+/// or "not a regular file". `None` for a regular file, a folder or nothing
+/// at all, which the open that follows reads or refuses with the system's
+/// reason. Looked at with `stat`, which does not open it: opening a FIFO for
+/// reading waits for a writer.
+pub fn special_kind(path: &Path) -> Option<&'static str> {
+    let meta = std::fs::metadata(path).ok()?;
+    if meta.is_dir() {
+        return None;
+    }
+    file_kind(&meta)
+}
+
+/// Refuses to read `path` when it is a special file ([`special_kind`]): a
+/// [`MeshError::Format`] saying what it is. A regular file, a folder or a
+/// missing path passes: the open that follows says why it cannot be read.
+pub fn require_regular_file(path: &Path) -> Result<(), MeshError> {
+    match special_kind(path) {
+        Some(what) => Err(not_regular(path, what)),
+        None => Ok(()),
+    }
+}
+
+/// The refusal of a special file at `path` for reading.
+fn not_regular(path: &Path, what: &str) -> MeshError {
+    file_error(
+        &path.display().to_string(),
+        format!("this is {what}, not a regular file: only regular files are read"),
+    )
+}
+
+/// What a file of this metadata is, in words, unless it is a regular file.
+fn file_kind(meta: &std::fs::Metadata) -> Option<&'static str> {
+    let t = meta.file_type();
+    if t.is_file() {
+        return None;
+    }
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        if t.is_fifo() {
+            return Some("a FIFO (named pipe)");
+        }
+        if t.is_char_device() || t.is_block_device() {
+            return Some("a device");
+        }
+        if t.is_socket() {
+            return Some("a socket");
+        }
+    }
+    Some("not a regular file")
+}
+
 /// The bytes of the regular file at `path` (see [`read`]).
 fn read_regular_file(path: &Path) -> Result<Vec<u8>, MeshError> {
     use std::io::Read;
     let io = |e| MeshError::io(path, e);
-    let refuse = |kind: &str| {
-        file_error(
-            &path.display().to_string(),
-            format!("this is {kind}, not a regular file: only regular files are read"),
-        )
-    };
-    let kind = |meta: &std::fs::Metadata| -> Option<&'static str> {
-        let t = meta.file_type();
-        if t.is_file() {
-            return None;
-        }
-        #[cfg(unix)]
-        {
-            use std::os::unix::fs::FileTypeExt;
-            if t.is_fifo() {
-                return Some("a FIFO (named pipe)");
-            }
-            if t.is_char_device() || t.is_block_device() {
-                return Some("a device");
-            }
-            if t.is_socket() {
-                return Some("a socket");
-            }
-        }
-        Some("not a regular file")
-    };
     // Checked before opening: opening a FIFO for reading blocks.
     let meta = std::fs::metadata(path).map_err(io)?;
     if meta.is_dir() {
         return Err(io(std::io::Error::from(std::io::ErrorKind::IsADirectory)));
     }
-    if let Some(what) = kind(&meta) {
-        return Err(refuse(what));
+    if let Some(what) = file_kind(&meta) {
+        return Err(not_regular(path, what));
     }
     let file = std::fs::File::open(path).map_err(io)?;
     // Checked again on the open file, in case the path changed in between.
     let meta = file.metadata().map_err(io)?;
-    if let Some(what) = kind(&meta) {
-        return Err(refuse(what));
+    if let Some(what) = file_kind(&meta) {
+        return Err(not_regular(path, what));
     }
     let size = meta.len();
     // Reserved fallibly: a file larger than the memory the process can get
@@ -196,6 +227,33 @@ pub fn write(
     check_attributes(mesh, attributes, format, &path.display().to_string())?;
     check_representable(mesh, format, &path.display().to_string())?;
     atomic::write_file(path, |out| encode(out, mesh, attributes, format, options))
+}
+
+/// Writes a textured OBJ atomically: texture coordinates per face corner
+/// (`corners`, three per face in face order; an atlas cuts the sphere into
+/// pieces, which one uv per vertex cannot hold), a comment naming the layout
+/// (`label`) and, with `material_library`, the `mtllib` / `usemtl texture`
+/// lines of its MTL file (which the caller writes).
+pub fn write_textured_obj(
+    path: &Path,
+    mesh: &Mesh,
+    corners: &[[f64; 2]],
+    label: &str,
+    material_library: Option<&str>,
+) -> Result<(), MeshError> {
+    if corners.len() != 3 * mesh.n_faces() {
+        return Err(file_error(
+            &path.display().to_string(),
+            format!(
+                "{} texture corners for {} triangles: one per face corner is needed",
+                corners.len(),
+                mesh.n_faces()
+            ),
+        ));
+    }
+    atomic::write_file(path, |out| {
+        obj::write_per_corner(out, mesh, corners, label, material_library)
+    })
 }
 
 /// Writes `bytes` to `path` with the same atomic writer as [`write()`]

@@ -5,6 +5,8 @@
 //! OBJ keeps texture coordinates per face corner; spherify keeps one uv per vertex.
 //! The `vt` data becomes [`VertexAttributes::uv`] only when that loses nothing
 //! (every corner names a `vt` and each vertex always names the same one).
+//! A texture atlas is written with one `vt` per face corner
+//! ([`write_per_corner`], for `sp.texture`).
 
 use super::text::{self, next_token, skip_space, take_f64, trim_end, Lines};
 use super::{finish, line_error, LoadedMesh, Triangles, VertexAttributes};
@@ -425,6 +427,45 @@ pub(crate) fn write<W: Write>(
     Ok(())
 }
 
+/// Writes a textured OBJ: a comment naming the layout (`label`), with
+/// `material_library` its `mtllib` line and `usemtl texture`, the `v` lines,
+/// one `vt` line per face corner (`corners`: three per face, in face order)
+/// and `f a/t b/t c/t` lines, numbers as C's `%.17g`. A texture atlas cuts
+/// the sphere into pieces, so one uv per vertex ([`write`]) cannot hold it.
+pub(crate) fn write_per_corner<W: Write>(
+    out: &mut W,
+    mesh: &Mesh,
+    corners: &[[f64; 2]],
+    label: &str,
+    material_library: Option<&str>,
+) -> std::io::Result<()> {
+    writeln!(out, "# spherify: {label} texture coordinates, one vt per face corner")?;
+    if let Some(library) = material_library {
+        writeln!(out, "mtllib {library}\nusemtl texture")?;
+    }
+    for p in mesh.positions() {
+        out.write_all(b"v")?;
+        for &x in p {
+            out.write_all(b" ")?;
+            text::write_f64_g17(out, x)?;
+        }
+        out.write_all(b"\n")?;
+    }
+    for t in corners {
+        out.write_all(b"vt ")?;
+        text::write_f64_g17(out, t[0])?;
+        out.write_all(b" ")?;
+        text::write_f64_g17(out, t[1])?;
+        out.write_all(b"\n")?;
+    }
+    for (k, &[a, b, c]) in mesh.faces().iter().enumerate() {
+        let (a, b, c) = (u64::from(a) + 1, u64::from(b) + 1, u64::from(c) + 1);
+        let t = 3 * k as u64;
+        writeln!(out, "f {a}/{} {b}/{} {c}/{}", t + 1, t + 2, t + 3)?;
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::super::tests::{awkward_tetra, bits, location};
@@ -434,6 +475,34 @@ mod tests {
 
     fn parse(text: &str) -> Result<LoadedMesh, MeshError> {
         read_bytes(text.as_bytes(), FileFormat::Obj, "test.obj")
+    }
+
+    #[test]
+    fn per_corner_texture_coordinates_are_written_and_read_back() {
+        let mesh = awkward_tetra();
+        // Corner k of face f at (f + k / 4, -0.5): no vertex keeps one uv.
+        let corners: Vec<[f64; 2]> = (0..3 * mesh.n_faces())
+            .map(|i| [(i / 3) as f64 + (i % 3) as f64 / 4.0, -0.5])
+            .collect();
+        let mut out = Vec::new();
+        write_per_corner(&mut out, &mesh, &corners, "cube", Some("t.mtl")).unwrap();
+        let text = String::from_utf8(out).unwrap();
+        let lines: Vec<&str> = text.lines().collect();
+        assert_eq!(
+            lines[..3],
+            [
+                "# spherify: cube texture coordinates, one vt per face corner",
+                "mtllib t.mtl",
+                "usemtl texture"
+            ]
+        );
+        assert_eq!(lines[3], "v 0.10000000000000001 0.33333333333333331 -0");
+        assert_eq!(lines[3 + mesh.n_vertices() + 1], "vt 0.25 -0.5");
+        assert_eq!(*lines.last().unwrap(), "f 1/10 4/11 3/12");
+        let loaded = parse(&text).unwrap();
+        assert_eq!(bits(loaded.mesh.positions()), bits(mesh.positions()));
+        assert_eq!(loaded.mesh.faces(), mesh.faces());
+        assert!(loaded.attributes.uv.is_none());
     }
 
     #[test]

@@ -191,6 +191,44 @@ pub(crate) fn write_f64<W: std::io::Write>(out: &mut W, x: f64) -> std::io::Resu
     }
 }
 
+/// Writes a float as C's `%.17g` does (17 significant digits, trailing zeros
+/// dropped, exponent form below 1e-4 and from 1e17 on): the number text of
+/// the textured OBJ files, which Python wrote so before the writer moved
+/// here. Parsing it back gives the same bits, like [`write_f64`].
+pub(crate) fn write_f64_g17<W: std::io::Write>(out: &mut W, x: f64) -> std::io::Result<()> {
+    if !x.is_finite() {
+        let text = if x.is_nan() {
+            "nan"
+        } else if x > 0.0 {
+            "inf"
+        } else {
+            "-inf"
+        };
+        return out.write_all(text.as_bytes());
+    }
+    if x == 0.0 {
+        return out.write_all(if x.is_sign_negative() { b"-0" } else { b"0" });
+    }
+    // The exponent after rounding to 17 digits decides the form, as in C.
+    let scientific = format!("{x:.16e}");
+    let (mantissa, exponent) = scientific.split_once('e').unwrap_or((&scientific, "0"));
+    let exponent: i32 = exponent.parse().unwrap_or(0);
+    let strip = |digits: &str| -> String {
+        if digits.contains('.') {
+            digits.trim_end_matches('0').trim_end_matches('.').to_string()
+        } else {
+            digits.to_string()
+        }
+    };
+    if !(-4..17).contains(&exponent) {
+        let sign = if exponent < 0 { '-' } else { '+' };
+        write!(out, "{}e{sign}{:02}", strip(mantissa), exponent.unsigned_abs())
+    } else {
+        let decimals = usize::try_from(16 - exponent).unwrap_or(0);
+        out.write_all(strip(&format!("{x:.decimals$}")).as_bytes())
+    }
+}
+
 /// The `f32` counterpart of [`write_f64`], for STL.
 #[inline]
 pub(crate) fn write_f32<W: std::io::Write>(out: &mut W, x: f32) -> std::io::Result<()> {
@@ -205,6 +243,40 @@ pub(crate) fn write_f32<W: std::io::Write>(out: &mut W, x: f32) -> std::io::Resu
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn g17_is_c_printf() {
+        let g17 = |x: f64| {
+            let mut out = Vec::new();
+            write_f64_g17(&mut out, x).unwrap();
+            String::from_utf8(out).unwrap()
+        };
+        // What Python's "%.17g" % x gives.
+        let cases: &[(f64, &str)] = &[
+            (0.0, "0"),
+            (-0.0, "-0"),
+            (1.0, "1"),
+            (-2.5, "-2.5"),
+            (0.1, "0.10000000000000001"),
+            (1e-300, "1e-300"),
+            (1e20, "1e+20"),
+            (123456789.125, "123456789.125"),
+            (1e16, "10000000000000000"),
+            (1e17, "1e+17"),
+            (0.0001, "0.0001"),
+            (0.00001, "1.0000000000000001e-05"),
+            (99999999999999999.0, "1e+17"),
+            (f64::MAX, "1.7976931348623157e+308"),
+            (5e-324, "4.9406564584124654e-324"),
+            (1.0 / 3.0, "0.33333333333333331"),
+        ];
+        for &(x, want) in cases {
+            assert_eq!(g17(x), want, "{x:e}");
+            if x.is_finite() {
+                assert_eq!(want.parse::<f64>().unwrap().to_bits(), x.to_bits());
+            }
+        }
+    }
 
     #[test]
     fn lines_strip_crlf_and_number_from_one() {
