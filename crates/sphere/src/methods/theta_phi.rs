@@ -421,13 +421,17 @@ fn folded(uv: &[[f64; 2]], poles: &Poles) -> Vec<[f64; 3]> {
 /// hold the embedding.
 fn message(details: &ThetaPhi) -> String {
     let ThetaPhi { refinements, min_area_ratio, inverted, fans_monotone, .. } = details;
+    let refinements = match refinements {
+        1 => "1 refinement step".to_string(),
+        n => format!("{n} refinement steps"),
+    };
     if details.tp_valid {
         format!(
-            "theta-phi embedding certified flip-free in double precision ({refinements} refinement steps, thinnest triangle {min_area_ratio:.3e} of the rectangle)"
+            "theta-phi embedding certified flip-free in double precision ({refinements}, thinnest triangle {min_area_ratio:.3e} of the rectangle)"
         )
     } else {
         format!(
-            "double precision cannot hold this embedding: {} flipped and {} collapsed triangles in the theta-phi rectangle after {refinements} refinement steps; pole fans monotone: north {}, south {}",
+            "double precision cannot hold this embedding: {} flipped and {} collapsed triangles in the theta-phi rectangle after {refinements}; pole fans monotone: north {}, south {}",
             inverted.flipped.len(),
             inverted.degenerate.len(),
             fans_monotone[0],
