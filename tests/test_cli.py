@@ -4,6 +4,7 @@ repair, 2 for unreadable input or bad arguments."""
 
 from __future__ import annotations
 
+import hashlib
 import os
 import subprocess
 import sys
@@ -162,10 +163,35 @@ def test_map_defaults_to_the_progressive_isometric_map(tmp_path: Path,
     mesh = sp.datasets.make("helix_tube", 500)
     want = sp.embed(mesh, "progressive", energy="isometric")
     data = np.load(tmp_path / "sphere.npz")
-    assert sorted(data.files) == ["faces", "mesh_sha256", "points"]
+    assert {"faces", "points", "sphere_sha256"} <= set(data.files)
+    assert "mesh_sha256" not in data.files  # a generated shape has no file to hash
     np.testing.assert_array_equal(data["points"], want.points)
     np.testing.assert_array_equal(sp.load(out).vertices, want.points)
     assert cli.pair_is_consistent(out)
+
+
+@pytest.mark.parametrize("method", ["progressive", "theta_phi"])
+def test_what_map_writes_reads_back_as_a_certified_map(
+        method: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    # Issue 24, item 3: nothing could read back the .npz spherify map wrote,
+    # and its mesh_sha256 was the hash of the output, not of the input.
+    source = tmp_path / "blob.ply"
+    sp.save(sp.datasets.make("bumpy_blob", 600), source)
+    out = tmp_path / "sphere.ply"
+    assert cli.main(["map", str(source), "--method", method, "-o", str(out)]) == 0
+    capsys.readouterr()
+    m = sp.load_map(tmp_path / "sphere.npz")
+    direct = sp.embed(sp.load(source), method)
+    assert m.method == method and m.valid == direct.valid
+    np.testing.assert_array_equal(m.points, direct.points)
+    if method == "theta_phi":
+        assert isinstance(m, sp.ThetaPhiMap) and m.tp_valid and m.poles == direct.poles
+    with np.load(tmp_path / "sphere.npz") as data:
+        assert str(data["mesh_sha256"]) == hashlib.sha256(source.read_bytes()).hexdigest()
+        assert str(data["sphere_sha256"]) == hashlib.sha256(out.read_bytes()).hexdigest()
+    assert cli.pair_is_consistent(out)
+    out.write_bytes(out.read_bytes() + b"\n")  # the sphere changed after the .npz was written
+    assert not cli.pair_is_consistent(out)
 
 
 @pytest.mark.parametrize("flags, message", [

@@ -51,6 +51,7 @@ from ._cli_options import (UsageError, add_input_flags, add_method_flags, add_pr
 from ._embed import embed, methods
 from ._errors import MeshError, SpherifyError, SpherifyWarning, TopologyError
 from ._mesh import Mesh, check, check_sphere, load, orient, save, weld
+from ._persist import record
 from ._quality import quality
 from ._spheremap import SphereMap, ThetaPhiMap
 from ._threads import set_num_threads
@@ -137,19 +138,21 @@ def _load(args: argparse.Namespace) -> Mesh:
 
 def pair_is_consistent(out: Union[str, bytes, "os.PathLike[Any]"]) -> bool:
     """Whether ``OUT`` and ``OUT.npz`` written by ``spherify map`` belong
-    together: the .npz records the SHA-256 of the mesh file it was written
-    with (``mesh_sha256``). The mesh is written first and the .npz second,
-    each atomically, so a run cut short between them leaves a pair this
-    function tells apart."""
-    mesh_path = Path(_args.path(out))
-    npz = mesh_path.with_suffix(".npz")
-    if not (mesh_path.is_file() and npz.is_file()):
+    together: the .npz records the SHA-256 of the sphere file it was written
+    with (``sphere_sha256``; files written before it was named so call it
+    ``mesh_sha256``). The sphere is written first and the .npz second, each
+    atomically, so a run cut short between them leaves a pair this function
+    tells apart."""
+    sphere_path = Path(_args.path(out))
+    npz = sphere_path.with_suffix(".npz")
+    if not (sphere_path.is_file() and npz.is_file()):
         return False
     with np.load(npz) as data:
-        if "mesh_sha256" not in data.files:
+        key = "sphere_sha256" if "sphere_sha256" in data.files else "mesh_sha256"
+        if key not in data.files or (key == "mesh_sha256" and "spherify_map_format" in data.files):
             return False
-        recorded = str(data["mesh_sha256"])
-    return recorded == _files.file_sha256(mesh_path)
+        recorded = str(data[key])
+    return recorded == _files.file_sha256(sphere_path)
 
 
 def _cmd_check(args: argparse.Namespace) -> int:
@@ -290,14 +293,18 @@ def _cmd_map(args: argparse.Namespace) -> int:
           f"(Linf {q['stretch_linf']:.3g}), edge-length CV {q['edge_length_cv']:.3g}")
     stages = ", ".join(f"{k} {v:.3f}" for k, v in m.seconds.items())
     print(f"seconds: load {loaded - start:.3f}; {stages}; total {mapped - start:.3f}")
-    # The mesh first, then the .npz recording the mesh file's hash: a run
-    # cut short in between leaves a pair that pair_is_consistent refuses.
+    # The sphere first, then the .npz recording its hash: a run cut short in
+    # between leaves a pair that pair_is_consistent refuses. The .npz is the
+    # map itself (SphereMap.save's record: sp.load_map reads it back and
+    # certifies it again), with the hashes of the sphere file and of the
+    # input mesh file beside it.
     _save_sphere(m.mesh, m.points, out)
-    arrays = {"points": m.points, "faces": m.mesh.faces,
-              "mesh_sha256": np.array(_files.file_sha256(out))}
+    arrays = dict(record(m))
+    arrays["sphere_sha256"] = np.array(_files.file_sha256(out))
+    if args.mesh:
+        arrays["mesh_sha256"] = np.array(_files.file_sha256(Path(args.mesh)))
     if isinstance(m, ThetaPhiMap):
-        arrays.update(theta_phi=m.theta_phi, poles=np.array(m.poles), cut_path=m.cut_path,
-                      cut_faces=m.cut_mesh.faces, cut_original=m.cut_original)
+        arrays.update(cut_faces=m.cut_mesh.faces, cut_original=m.cut_original)
     npz = out.with_suffix(".npz")
     _save_npz(npz, **arrays)
     print(f"wrote {out} (the sphere as a mesh) and {npz}")
