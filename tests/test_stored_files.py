@@ -110,6 +110,18 @@ def test_a_header_declaring_1e11_rows_is_refused_before_anything_is_allocated(
     refused_in_small_memory(getattr(sp, reader), path, r"declares 300,000,000,000 elements")
 
 
+def test_an_npy_pair_declaring_1e11_rows_is_refused_before_anything_is_allocated(
+        tmp_path: Path) -> None:
+    # Before: numpy's MemoryError (2.18 TiB) from a 1 kB V.npy.
+    vertices, faces = tmp_path / "V.npy", tmp_path / "F.npy"
+    vertices.write_bytes(npy_header((10**11, 3)) + bytes(1000))
+    np.save(faces, small_map().mesh.faces)
+    refused_in_small_memory(lambda p: sp.load((p, faces)), vertices,
+                            r"declares 300,000,000,000 elements")
+    vertices.write_bytes(npy_header((100, 3)) + bytes(1000))  # 2,400 bytes declared
+    refused_in_small_memory(lambda p: sp.load((p, faces)), vertices, "more than its 1,000 bytes")
+
+
 @pytest.mark.parametrize("reader", ["load", "load_map"])
 @pytest.mark.parametrize("lie", ["honest sizes", "inflated size overstated"])
 def test_a_one_megabyte_file_declaring_50M_points_is_refused_in_small_memory(

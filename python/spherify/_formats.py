@@ -29,7 +29,7 @@ import numpy as np
 from ._atomic import write_atomically
 from ._errors import FormatError, MeshError
 from ._files import require_regular_file
-from ._npz_check import check_npz
+from ._npz_check import check_npy, check_npz
 
 #: What a reader returns: vertices, faces, notes, per-vertex attributes.
 Loaded = Tuple[np.ndarray, np.ndarray, List[str], Dict[str, np.ndarray]]
@@ -186,11 +186,17 @@ def read_npy_pair(vertices_path: Path, faces_path: Path) -> Loaded:
     for path in (vertices_path, faces_path):
         require_regular_file(path)
         try:
-            arrays.append(np.load(path, allow_pickle=False))
+            with open(path, "rb") as handle:
+                check_npy(handle, str(path))  # before numpy allocates what it declares
+                loaded = np.load(handle, allow_pickle=False)
+                if not isinstance(loaded, np.ndarray):
+                    loaded.close()
+                    raise FormatError(f"{path}: an .npz archive, not an .npy array", str(path))
+                arrays.append(loaded)
+        except FormatError:
+            raise
         except (ValueError, EOFError) as err:
             raise FormatError(f"{path}: not a readable .npy array: {err}", str(path)) from None
-        if not isinstance(arrays[-1], np.ndarray):
-            raise FormatError(f"{path}: an .npz archive, not an .npy array", str(path))
     return arrays[0], arrays[1], [], {}
 
 
