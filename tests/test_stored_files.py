@@ -193,6 +193,9 @@ EDITS: Dict[str, Callable[[Dict[str, Any]], None]] = {
     "iterations 2^64": edit_meta(iterations=2**64),
     "meta nested 100,000 deep": deep_meta,
     "meta a list": lambda a: a.__setitem__("meta", np.array("[1, 2]")),
+    # a JSON escape of a lone surrogate, which no Rust string holds
+    # (UnicodeEncodeError; found by the fuzzer)
+    "message a lone surrogate": edit_meta(message="\udf63"),
     "points as text": lambda a: a.__setitem__("points", np.array([["a", "b", "c"]])),
 }
 

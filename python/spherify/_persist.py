@@ -225,8 +225,10 @@ def rebuild(arrays: Any, source: str) -> "SphereMap":
         mesh = Mesh(arrays["vertices"], arrays["faces"])
         core = _core.restore_map(mesh._core, method, points, iterations, status, message,
                                  **theta_phi)
-    except (MeshError, TypeError, OverflowError) as err:
-        # TopologyError included: the stored mesh is not genus 0.
+    except (ValueError, TypeError, OverflowError) as err:
+        # MeshError and TopologyError (the stored mesh is not genus 0)
+        # included, and UnicodeEncodeError: a JSON "\udf63" escape gives a
+        # lone surrogate, which no Rust string holds (found by the fuzzer).
         raise fail(str(err)) from None
     mesh.notes = mesh_notes
     mesh.attributes = dict(attributes)
