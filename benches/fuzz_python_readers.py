@@ -253,7 +253,9 @@ def main() -> int:
                     pass
                 except PickleMachineError:
                     pickle_refused += 1
-                except Exception as err:  # the finding itself
+                except (KeyboardInterrupt, SystemExit):
+                    raise
+                except BaseException as err:  # the finding itself (a Rust panic included)
                     problem = f"{type(err).__name__}: {err}"
                 gc.collect(0)  # an unclosed file held in a cycle warns when collected
             if before is not None:

@@ -184,6 +184,16 @@ def deep_meta(arrays: Dict[str, Any]) -> None:
     arrays["meta"] = np.array(text[:-1] + ', "deep": ' + "[" * 100_000 + "]" * 100_000 + "}")
 
 
+def beyond_unicode(meta: np.ndarray) -> np.ndarray:
+    """``meta`` with the 's' of "progressive" made the code unit 0x53000073."""
+    units = np.frombuffer(np.ascontiguousarray(meta, dtype=meta.dtype.newbyteorder("<"))
+                          .tobytes(), dtype="<u4").copy()
+    text = str(meta)
+    at = text.index('"progressive"') + 6
+    units[at] = 0x53000073
+    return np.frombuffer(units.tobytes(), dtype=meta.dtype.newbyteorder("<")).reshape(())
+
+
 EDITS: Dict[str, Callable[[Dict[str, Any]], None]] = {
     "version as 2 elements": lambda a: a.__setitem__(_persist.VERSION_KEY, np.array([1, 1])),
     "version complex": lambda a: a.__setitem__(_persist.VERSION_KEY, np.array(1 + 2j)),
@@ -196,6 +206,10 @@ EDITS: Dict[str, Callable[[Dict[str, Any]], None]] = {
     # a JSON escape of a lone surrogate, which no Rust string holds
     # (UnicodeEncodeError; found by the fuzzer)
     "message a lone surrogate": edit_meta(message="\udf63"),
+    # a code unit beyond U+10FFFF in the numpy string: reached the core as
+    # a Rust string that is not UTF-8 and made it panic (found by the fuzzer)
+    "method beyond Unicode": lambda a: a.__setitem__("meta", beyond_unicode(a["meta"])),
+    "meta not a string": lambda a: a.__setitem__("meta", np.array([1.0, 2.0])),
     "points as text": lambda a: a.__setitem__("points", np.array([["a", "b", "c"]])),
 }
 

@@ -150,6 +150,19 @@ def _unit_points(points: np.ndarray, fail: Callable[[str], FormatError]
                   "sphere on load and certified as projected")
 
 
+def _meta_text(meta: np.ndarray) -> str:
+    """The record's ``meta``: one numpy string, decoded from its UTF-32 code
+    units by Python's codec, which refuses what is not a character (a code
+    unit beyond U+10FFFF, a surrogate). ``str()`` of the array let such a
+    unit through into a Python string, which reached the core as a Rust
+    string that is not UTF-8 and made it panic (found by the fuzzer)."""
+    if meta.shape != () or meta.dtype.kind != "U":
+        raise TypeError(f"meta must be one string, got an array of {meta.dtype} and shape "
+                        f"{meta.shape}")
+    units = np.ascontiguousarray(meta, dtype=meta.dtype.newbyteorder("<")).tobytes()
+    return units.decode("utf-32-le").rstrip("\x00")  # numpy pads with NUL
+
+
 def _count(value: Any, what: str) -> int:
     """A stored count the core takes as an unsigned 64-bit integer."""
     count = int(value)
@@ -184,7 +197,7 @@ def rebuild(arrays: Any, source: str) -> "SphereMap":
     if missing:
         raise fail(f"missing {', '.join(sorted(missing))}")
     try:
-        text = str(np.asarray(arrays["meta"]))
+        text = _meta_text(np.asarray(arrays["meta"]))
         if too_deep(text, MAX_META_DEPTH):
             raise ValueError(f"meta nests lists and objects more than {MAX_META_DEPTH} deep")
         meta = json.loads(text)
