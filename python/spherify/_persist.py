@@ -29,8 +29,8 @@ from . import _core
 from ._atomic import write_atomically
 from ._errors import FormatError, MeshError
 from ._files import file_errors, require_regular_file
-from ._json_depth import too_deep
 from ._formats import damaged_archive, is_zip_archive
+from ._json_depth import too_deep
 from ._npz_check import check_npz
 
 if TYPE_CHECKING:
@@ -270,6 +270,10 @@ def load_map(path: PathLike) -> "SphereMap":
     The certificate (``valid``, ``report``; for theta-phi ``tp_valid``) is
     computed in the core from the stored points and rectangle, never read
     from the file; the cut of a theta-phi map is made again from its path.
+    The points are unit vectors: a stored row off unit length is projected
+    onto the sphere (a note says how many were), as ``from_points`` does.
+    Declared array sizes are checked before anything is inflated
+    (``_npz_check``). Cost: O(file size) and the certification, O(n + m).
 
     Raises
     ------
@@ -279,7 +283,9 @@ def load_map(path: PathLike) -> "SphereMap":
     FormatError
         Not a sphere map, a newer format, or parts that do not fit the mesh or
         each other (points off the fold of the rectangle, a rectangle boundary
-        not where eq. 6.31 puts it, a path that is not a cut); names the file.
+        not where eq. 6.31 puts it, a path that is not a cut), a point that is
+        not finite or is zero, an array larger than the file can hold, a
+        damaged zip or record; names the file.
     """
     file = Path(os.fspath(path))
     require_regular_file(file)
