@@ -36,6 +36,7 @@ import gc
 import io
 import pickle
 import random
+import signal
 import re
 import sys
 import tempfile
@@ -240,8 +241,9 @@ def main() -> int:
     findings: List[str] = []
     start = time.perf_counter()
     counts: Dict[str, int] = {}
-    pickle_refused = 0
-    worst_extra, worst_input = 0.0, ""
+    stats: Dict[str, Any] = {"pickle_refused": 0, "worst_extra": 0.0, "worst_input": "",
+                             "stop": False}
+    stopped = False
     measure = reset_peak_memory()
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
@@ -254,62 +256,81 @@ def main() -> int:
                              f"{', '.join(sorted(seeds))}")
             seeds = {name: seeds[name] for name in wanted}
         names = sorted(seeds)
-        for k in range(args.inputs):
-            name = rng.choice(names)
-            data, read = seeds[name]
-            path = folder / f"input-{name}"
-            path.write_bytes(mutate(data, rng))
-            counts[name] = counts.get(name, 0) + 1
-            began = time.perf_counter()
-            problem = None
-            before = peak_memory_mb(reset_peak_memory()) if measure else None
-            REBUILD_START["mb"] = None
-            is_pickle = name.endswith(".pickle")
-            with warnings.catch_warnings(record=True) as caught:
-                warnings.simplefilter("always")
-                try:
-                    read(path)
-                except sp.SpherifyError:
-                    pass
-                except PickleMachineError:
-                    pickle_refused += 1
-                except (KeyboardInterrupt, SystemExit):
-                    raise
-                except BaseException as err:  # the finding itself (a Rust panic included)
-                    problem = f"{type(err).__name__}: {err}"
-                gc.collect(0)  # an unclosed file held in a cycle warns when collected
-            if is_pickle and before is not None:
-                before = REBUILD_START["mb"]  # None: the pickle machine refused it
-            if before is not None:
-                after = peak_memory_mb(True)
-                extra = (after or 0.0) - before
-                if extra > worst_extra:
-                    worst_extra, worst_input = extra, f"input {k} ({name}, {len(data)} bytes seed)"
-                if problem is None and extra > args.extra_mb:
-                    problem = f"peak memory {extra:.0f} MB above the start"
-            leaks = [w for w in caught if issubclass(w.category, ResourceWarning)]
-            if problem is None and leaks:
-                problem = f"ResourceWarning: {leaks[0].message}"
-            seconds = time.perf_counter() - began
-            if problem is None and seconds > args.slow:
-                problem = f"slow: {seconds:.1f} s"
-            if args.report_every and (k + 1) % args.report_every == 0:
-                print(f"{k + 1} inputs, {len(findings)} findings, "
-                      f"{time.perf_counter() - start:.0f} s, largest peak above an input's "
-                      f"start {worst_extra:.1f} MB", flush=True)
-            if problem is not None:
-                args.out.mkdir(parents=True, exist_ok=True)
-                kept = args.out / f"{len(findings):04d}-{name}"
-                kept.write_bytes(path.read_bytes())
-                findings.append(f"{kept}: input {k} of seed {args.seed}: {problem[:200]}")
-                print(f"FINDING {findings[-1]}", flush=True)
+        # SIGTERM stops a long run after the input at hand, and it reports
+        # what it did.
+        signal.signal(signal.SIGTERM, lambda *_: stats.__setitem__("stop", True))
+        fuzz(args, rng, folder, seeds, names, findings, counts, stats, measure)
+        stopped = bool(stats["stop"])
+    done = sum(counts.values())
     per_seed = ", ".join(f"{name} {counts.get(name, 0)}" for name in names)
+    worst_extra, worst_input = stats["worst_extra"], stats["worst_input"]
     memory = (f"; largest peak above an input's start {worst_extra:.1f} MB ({worst_input}), "
               f"process peak {peak_memory_mb(False)} MB" if measure else "")
-    print(f"fuzz_python_readers: {args.inputs} inputs ({per_seed}) from seed {args.seed} "
-          f"in {time.perf_counter() - start:.1f} s: {len(findings)} findings; "
-          f"{pickle_refused} pickles refused by the pickle machine{memory}")
+    print(f"fuzz_python_readers: {done} inputs ({per_seed}) from seed {args.seed} "
+          f"in {time.perf_counter() - start:.1f} s{' (stopped early)' if stopped else ''}: "
+          f"{len(findings)} findings; {stats['pickle_refused']} pickles refused by the pickle "
+          f"machine{memory}")
     return 1 if findings else 0
+
+
+def fuzz(args: argparse.Namespace, rng: random.Random, folder: Path,
+         seeds: Dict[str, Tuple[bytes, Callable[[Path], object]]], names: List[str],
+         findings: List[str], counts: Dict[str, int], stats: Dict[str, Any],
+         measure: bool) -> None:
+    """The loop of :func:`main`: ``args.inputs`` mutated inputs."""
+    start = time.perf_counter()
+    for k in range(args.inputs):
+        if stats["stop"]:
+            break
+        name = rng.choice(names)
+        data, read = seeds[name]
+        path = folder / f"input-{name}"
+        path.write_bytes(mutate(data, rng))
+        counts[name] = counts.get(name, 0) + 1
+        began = time.perf_counter()
+        problem = None
+        before = peak_memory_mb(reset_peak_memory()) if measure else None
+        REBUILD_START["mb"] = None
+        is_pickle = name.endswith(".pickle")
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            try:
+                read(path)
+            except sp.SpherifyError:
+                pass
+            except PickleMachineError:
+                stats["pickle_refused"] += 1
+            except (KeyboardInterrupt, SystemExit):
+                raise
+            except BaseException as err:  # the finding itself (a Rust panic included)
+                problem = f"{type(err).__name__}: {err}"
+            gc.collect(0)  # an unclosed file held in a cycle warns when collected
+        if is_pickle and before is not None:
+            before = REBUILD_START["mb"]  # None: the pickle machine refused it
+        if before is not None:
+            after = peak_memory_mb(True)
+            extra = (after or 0.0) - before
+            if extra > stats["worst_extra"]:
+                stats["worst_extra"] = extra
+                stats["worst_input"] = f"input {k} ({name}, {len(data)} bytes seed)"
+            if problem is None and extra > args.extra_mb:
+                problem = f"peak memory {extra:.0f} MB above the start"
+        leaks = [w for w in caught if issubclass(w.category, ResourceWarning)]
+        if problem is None and leaks:
+            problem = f"ResourceWarning: {leaks[0].message}"
+        seconds = time.perf_counter() - began
+        if problem is None and seconds > args.slow:
+            problem = f"slow: {seconds:.1f} s"
+        if args.report_every and (k + 1) % args.report_every == 0:
+            print(f"{k + 1} inputs, {len(findings)} findings, "
+                  f"{time.perf_counter() - start:.0f} s, largest peak above an input's "
+                  f"start {stats['worst_extra']:.1f} MB", flush=True)
+        if problem is not None:
+            args.out.mkdir(parents=True, exist_ok=True)
+            kept = args.out / f"{len(findings):04d}-{name}"
+            kept.write_bytes(path.read_bytes())
+            findings.append(f"{kept}: input {k} of seed {args.seed}: {problem[:200]}")
+            print(f"FINDING {findings[-1]}", flush=True)
 
 
 if __name__ == "__main__":
