@@ -145,6 +145,23 @@ def test_a_one_megabyte_file_declaring_50M_points_is_refused_in_small_memory(
     assert seconds < 2.0
 
 
+def test_a_map_whose_points_honestly_hold_50M_zeros_is_refused_before_inflating(
+        tmp_path: Path) -> None:
+    # 1.2 GB of zeros deflate into 1.2 MB, within deflate's ratio: the file
+    # can hold them, but a map of 42 vertices has 42 points. Before: 2.4 GB
+    # and 14 s, then a refusal.
+    path = tmp_path / "m.spheremap.npz"
+    small_map().save(path)
+    members = [stored(k, v) for k, v in stored_members(path).items() if k != "points.npy"]
+    header = npy_header((50_000_000, 3))
+    data, crc, inflated = deflated(header, 1145)  # 1.2e9 bytes of zeros
+    members.append(("points.npy", data, zipfile.ZIP_DEFLATED, crc, inflated))
+    write_zip(path, members)
+    assert path.stat().st_size < 1_300_000
+    seconds = refused_in_small_memory(sp.load_map, path, r"50,000,000 points stored for \d+ vertices")
+    assert seconds < 2.0
+
+
 def test_members_that_could_not_inflate_to_their_stated_size_are_refused(tmp_path: Path) -> None:
     path = tmp_path / "m.npz"
     sp.save(small_map().mesh, path)

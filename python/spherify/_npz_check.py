@@ -31,7 +31,7 @@ import math
 import os
 import warnings
 import zipfile
-from typing import IO, Callable, Tuple
+from typing import IO, Callable, Dict, Tuple
 
 import numpy as np
 
@@ -80,13 +80,20 @@ def _header(member: IO[bytes]) -> Tuple[Tuple[int, ...], np.dtype, int]:
     return shape, dtype, 8 + width + length
 
 
-def check_npz(handle: IO[bytes], source: str) -> None:
+#: What :func:`check_npz` found: each ``.npy`` member's declared shape, by
+#: the name ``np.load`` gives it (``V`` for ``V.npy``).
+Shapes = Dict[str, Tuple[int, ...]]
+
+
+def check_npz(handle: IO[bytes], source: str) -> Shapes:
     """Refuse (``FormatError`` naming ``source``) an ``.npz`` open as
     ``handle`` whose members declare arrays larger than they can hold or
     than :data:`MAX_ELEMENTS` (module docstring). Reads the central
     directory and the ``.npy`` headers only; leaves ``handle`` at its start.
     Zip damage (``BadZipFile``, ...) propagates for the caller's
-    ``_formats.damaged_archive``."""
+    ``_formats.damaged_archive``. Returns the declared shapes, for a reader
+    that knows how they must agree (``load_map``: one point per vertex)."""
+    shapes: Shapes = {}
     def fail(why: str) -> FormatError:
         return FormatError(f"{source}: {why}", source)
 
@@ -125,7 +132,9 @@ def check_npz(handle: IO[bytes], source: str) -> None:
                     raise fail(f"member {name!r} has a malformed .npy header "
                                f"({type(err).__name__}: {err})") from None
             _check_array(f"member {name!r}", shape, dtype, info.file_size - offset, fail)
+            shapes[name[:-len(".npy")]] = tuple(shape)
     handle.seek(0)
+    return shapes
 
 
 def _check_array(what: str, shape: Tuple[int, ...], dtype: np.dtype, available: int,

@@ -295,7 +295,14 @@ def load_map(path: PathLike) -> "SphereMap":
         # (An open file, not the path: see _formats.read_npz.)
         # (The declared sizes are checked before numpy allocates them.)
         with open(file, "rb") as handle:
-            check_npz(handle, str(file))
+            shapes = check_npz(handle, str(file))
+            vertices, points = shapes.get("vertices", ()), shapes.get("points", ())
+            if vertices[:1] and points[:1] and vertices[0] != points[0]:
+                # Refused before either is inflated (a map of 60 vertices
+                # whose points member declared 50M rows of deflated zeros).
+                raise FormatError(f"{file}: {points[0]:,} points stored for {vertices[0]:,} "
+                                  "vertices (declared; a map has one point per vertex)",
+                                  str(file))
             with np.load(handle, allow_pickle=False) as arrays:
                 return rebuild(arrays, str(file))
     except Exception as err:
