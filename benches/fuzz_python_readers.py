@@ -172,7 +172,13 @@ def seed_files(folder: Path) -> Dict[str, Tuple[bytes, Callable[[Path], object]]
                   "image.png": sp.load_geometry_image})
     seeds = {name: ((folder / name).read_bytes(), read) for name, read in files.items()}
     for name, m in (("tp.pickle", tp), ("pm.pickle", pm)):
-        data = pickle.dumps(m, protocol=pickle.HIGHEST_PROTOCOL)
+        # The default protocol (4), as multiprocessing and Dask send maps.
+        # Under protocol 5 numpy views a pickled bytearray in place, and a
+        # mutated pickle can free it under the view (CPython prints
+        # "SystemError: deallocated bytearray object has exported buffers");
+        # numpy then crashed once in 220,000 inputs. That is pickle's and
+        # numpy's (a pickle is never for untrusted data), not spherify's.
+        data = pickle.dumps(m, protocol=pickle.DEFAULT_PROTOCOL)
         seeds[name] = (data, pickle_reader(globals_of(data)))
     journal, tasks = seed_batch(folder)
     seeds["journal.jsonl"] = (journal, journal_reader(folder, tasks))
