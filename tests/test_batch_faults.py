@@ -143,6 +143,20 @@ def test_a_list_of_inputs_that_names_itself_is_a_format_error(tmp_path: Path,
     assert sp.batch(first, tmp_path / "out").counts["meshes"] == 1
 
 
+@pytest.mark.skipif(sys.platform == "darwin", reason="macOS file names are UTF-8")
+def test_a_mesh_whose_file_name_is_not_utf8_is_mapped_and_summarised(tmp_path: Path) -> None:
+    # Found while fuzzing the journal: the summary's strict UTF-8 raised
+    # UnicodeEncodeError at the end of the batch.
+    (tmp_path / "in").mkdir()
+    name = os.fsencode(tmp_path / "in") + b"/\xff.ply"
+    sp.save(sp.datasets.make("bumpy_blob", 80), tmp_path / "in" / "ok.ply")
+    os.rename(os.fsencode(tmp_path / "in" / "ok.ply"), name)
+    result = sp.batch(tmp_path / "in", tmp_path / "out", workers=1)
+    assert result.all_certified and result.counts["certified"] == 1
+    assert b"\xff.ply" in (tmp_path / "out" / "summary.csv").read_bytes()
+    assert sp.batch(tmp_path / "in", tmp_path / "out", workers=1).skipped == 1
+
+
 # --- exit codes across the commands --------------------------------------------------
 
 def non_manifold(path: Path) -> Path:

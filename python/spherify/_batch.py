@@ -230,8 +230,11 @@ def _reusable(row: Dict[str, Any], task: Task) -> bool:
 
 
 def _write_text(path: Path, text: str) -> None:
+    """``text`` as UTF-8; a file name that is not UTF-8 (Python holds its
+    bytes as lone surrogates) is written back as its own bytes, where strict
+    UTF-8 raised UnicodeEncodeError at the end of the batch."""
     def fill(temporary: Path) -> None:
-        temporary.write_text(text, encoding="utf-8")
+        temporary.write_text(text, encoding="utf-8", errors="surrogateescape")
     write_atomically(path, fill)
 
 
