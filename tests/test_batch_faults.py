@@ -167,24 +167,32 @@ def non_manifold(path: Path) -> Path:
     return path
 
 
-@pytest.mark.parametrize("command", ["check", "orient", "map", "harmonics", "remesh"])
+COMMANDS = ["check", "orient", "map", "harmonics", "remesh", "texture", "morph"]
+
+
+def rest(command: str, folder: Path) -> List[str]:
+    """The arguments after MESH that ``command`` needs."""
+    if command == "check":
+        return []
+    out = ["-o", str(folder / ("out.obj" if command == "texture" else "out.ply"))]
+    return out + (["--target-dataset", "icosphere"] if command == "morph" else [])
+
+
+@pytest.mark.parametrize("command", COMMANDS)
 def test_a_mesh_that_cannot_be_done_exits_1_in_every_command(tmp_path: Path,
                                                             command: str) -> None:
     # Before: orient (and the applications) exited 2, the code for bad
     # arguments, on a non-manifold mesh.
     mesh = str(non_manifold(tmp_path / "bad.ply"))
-    argv = [command, mesh]
-    if command != "check":
-        argv += ["-o", str(tmp_path / "out.ply")]
-    assert cli.main(argv) == 1
+    assert cli.main([command, mesh, *rest(command, tmp_path)]) == 1
 
 
-@pytest.mark.parametrize("command", ["check", "orient", "map", "harmonics", "remesh"])
+@pytest.mark.parametrize("command", COMMANDS)
 def test_an_unreadable_mesh_or_a_bad_argument_exits_2_in_every_command(tmp_path: Path,
                                                                        command: str) -> None:
     garbage = tmp_path / "garbage.obj"
     garbage.write_text("v 0 0 0\nf 1 2 3 4 5\n")
-    out = [] if command == "check" else ["-o", str(tmp_path / "out.ply")]
+    out = rest(command, tmp_path)
     assert cli.main([command, str(garbage), *out]) == 2
     assert cli.main([command, str(tmp_path / "missing.ply"), *out]) == 2
     with pytest.raises(SystemExit) as info:
