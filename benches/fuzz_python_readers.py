@@ -175,11 +175,13 @@ def seed_files(folder: Path) -> Dict[str, Tuple[bytes, Callable[[Path], object]]
     seeds = {name: ((folder / name).read_bytes(), read) for name, read in files.items()}
     for name, m in (("tp.pickle", tp), ("pm.pickle", pm)):
         # The default protocol (4), as multiprocessing and Dask send maps.
-        # Under protocol 5 numpy views a pickled bytearray in place, and a
-        # mutated pickle can free it under the view (CPython prints
-        # "SystemError: deallocated bytearray object has exported buffers");
-        # numpy then crashed once in 220,000 inputs. That is pickle's and
-        # numpy's (a pickle is never for untrusted data), not spherify's.
+        # A mutated pickle can still free a bytearray numpy views in place
+        # (the unpickler takes protocol-5 opcodes whatever the header says;
+        # CPython prints "SystemError: deallocated bytearray object has
+        # exported buffers") or give numpy a damaged dtype, and numpy then
+        # crashed the process about once in 100,000-220,000 pickle inputs.
+        # That is pickle's and numpy's (a pickle is code, never for
+        # untrusted data), not spherify's: docs/reliability.md.
         data = pickle.dumps(m, protocol=pickle.DEFAULT_PROTOCOL)
         seeds[name] = (data, pickle_reader(globals_of(data)))
     journal, tasks = seed_batch(folder)
