@@ -50,10 +50,11 @@ import warnings
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Dict, Iterable, Iterator, List, Optional, Sequence, Union
+from typing import Any, Dict, Iterable, Iterator, List, Optional, Sequence, Tuple, Union
 
 from ._atomic import is_stale_temporary, is_temporary, write_atomically
-from ._files import file_errors, file_sha256, special_kind
+from ._files import file_errors, file_sha256, require_regular_file, special_kind
+from ._json_depth import too_deep
 from ._batch_pool import LocalPool, executor_rows, usable_cores
 from ._batch_task import COLUMNS, QUALITY, Task, file_matches, run_task
 from ._embed import method_options, methods, pass_method, stray_options
@@ -84,20 +85,39 @@ def expand_inputs(inputs: Iterable[PathLike]) -> List[Path]:
     ``.txt`` / ``.lst`` files read as one path per line (relative to the list's
     folder; blank lines and ``#`` comments skipped). Sorted within a folder,
     duplicates dropped, order otherwise kept. MeshError for a path that does
-    not exist; a SpherifyWarning for a folder without a mesh file (a wrong
+    not exist; FormatError for a list that names itself, directly or through
+    other lists; a SpherifyWarning for a folder without a mesh file (a wrong
     folder would otherwise give an empty batch that reports success)."""
+    unique: Dict[Path, None] = {}
+    for p in _expand(inputs, ()):
+        unique.setdefault(p.resolve(), None)
+    return list(unique)
+
+
+def _expand(inputs: Iterable[PathLike], lists: Tuple[Path, ...]) -> List[Path]:
+    """:func:`expand_inputs` inside the lists ``lists`` (resolved, outermost
+    first), which a list must not name again (it recursed until
+    ``RecursionError``; issue 26, finding 6)."""
     found: List[Path] = []
     for item in inputs:
         path = Path(os.fspath(item))
         if path.is_dir():
             meshes = sorted(p for p in path.rglob("*") if p.is_file() and _is_mesh_file(p))
             if not meshes:
+                # Points at the caller of sp.batch (batch, its file_errors
+                # wrapper, expand_inputs, and one _expand per list).
                 warnings.warn(f"batch input folder {path} holds no mesh file (searched with its "
                               f"subfolders for {', '.join(MESH_SUFFIXES)} and FreeSurfer "
-                              "surfaces such as lh.pial)", SpherifyWarning, stacklevel=4)
+                              "surfaces such as lh.pial)", SpherifyWarning,
+                              stacklevel=5 + len(lists))
             found.extend(meshes)
         elif path.suffix.lower() in LIST_SUFFIXES and path.is_file():
-            found.extend(expand_inputs(_read_list(path)))
+            resolved = path.resolve()
+            if resolved in lists:
+                chain = " -> ".join(str(p) for p in lists[lists.index(resolved):] + (resolved,))
+                raise FormatError(f"{path}: a list of inputs that names itself ({chain})",
+                                  str(path))
+            found.extend(_expand(_read_list(path), lists + (resolved,)))
         elif path.is_file():
             found.append(path)
         elif path.exists():
@@ -106,10 +126,7 @@ def expand_inputs(inputs: Iterable[PathLike]) -> List[Path]:
                             "files are read")
         else:
             raise MeshError(f"batch input {path} does not exist")
-    unique: Dict[Path, None] = {}
-    for p in found:
-        unique.setdefault(p.resolve(), None)
-    return list(unique)
+    return found
 
 
 def _read_list(path: Path) -> List[Path]:
@@ -146,18 +163,49 @@ def options_hash(method: str, options: Dict[str, Any], weld: bool = False) -> st
 
 # --- the journal --------------------------------------------------------------
 
+#: The deepest nesting of lists and objects read from a journal line
+#: (spherify writes 1; ``json`` recursed into 100,000 and failed).
+MAX_JOURNAL_DEPTH = 16
+
+
 def read_journal(path: Path) -> List[Dict[str, Any]]:
-    """The rows of a journal; a last line cut short by a killed run is ignored."""
+    """The rows of a journal. A line that is not a row (not UTF-8, not JSON,
+    nested deeper than :data:`MAX_JOURNAL_DEPTH`, not an object whose
+    ``input`` is a string) is skipped with a :class:`SpherifyWarning` naming
+    its line, and its mesh is mapped again; a last line without its newline
+    (cut short by a killed run) is skipped quietly. A FIFO, device or socket
+    named ``journal.jsonl`` is a :class:`FormatError` at once (reading a FIFO
+    would wait for a writer). Issue 26, findings 6 and 7."""
+    require_regular_file(path)
     if not path.exists():
         return []
+    data = path.read_bytes()
+    lines = data.split(b"\n")
     rows = []
-    for line in path.read_text(encoding="utf-8").splitlines():
-        try:
-            row = json.loads(line)
-        except json.JSONDecodeError:
+    for number, raw in enumerate(lines, 1):
+        if not raw.strip():
             continue
-        if isinstance(row, dict) and "input" in row:
+        cut_short = number == len(lines)  # after the last newline
+        why = None
+        try:
+            line = raw.decode("utf-8")
+            if too_deep(line, MAX_JOURNAL_DEPTH):
+                why = f"nested more than {MAX_JOURNAL_DEPTH} deep"
+            else:
+                row = json.loads(line)
+                if not isinstance(row, dict):
+                    why = f"a JSON {type(row).__name__}, not an object"
+                elif not isinstance(row.get("input"), str):
+                    why = "no input path (a string) in it"
+        except UnicodeDecodeError as err:
+            why = f"not UTF-8 (byte {err.start})"
+        except ValueError as err:  # json.JSONDecodeError, a number beyond int's digit limit
+            why = f"not JSON ({err})"
+        if why is None:
             rows.append(row)
+        elif not cut_short:
+            warnings.warn(f"{path} line {number}: {why}; skipped (its mesh, if any, is mapped "
+                          "again)", SpherifyWarning, stacklevel=2)
     return rows
 
 
@@ -173,8 +221,11 @@ def _reusable(row: Dict[str, Any], task: Task) -> bool:
 
 
 def _write_text(path: Path, text: str) -> None:
+    """``text`` as UTF-8; a file name that is not UTF-8 (Python holds its
+    bytes as lone surrogates) is written back as its own bytes, where strict
+    UTF-8 raised UnicodeEncodeError at the end of the batch."""
     def fill(temporary: Path) -> None:
-        temporary.write_text(text, encoding="utf-8")
+        temporary.write_text(text, encoding="utf-8", errors="surrogateescape")
     write_atomically(path, fill)
 
 
@@ -232,7 +283,14 @@ class BatchResult:
 
     @property
     def all_certified(self) -> bool:
-        return all(row.get("certified") for row in self.rows)
+        """Every mesh certified and its outputs written (a row whose outputs
+        could not be written, a full disk, has ``status="failed"``)."""
+        return all(_delivered(row) for row in self.rows)
+
+
+def _delivered(row: Dict[str, Any]) -> bool:
+    """A mesh whose map is certified and whose outputs were written."""
+    return row.get("status") == "done" and bool(row.get("certified"))
 
 
 def _safe_name(path: Path) -> str:
@@ -491,7 +549,7 @@ def _batch_into(out: Path, inputs: List[Path], executor: Any, method: str,
         raise KeyboardInterrupt
     write_summary(summary, ordered)
     counts = {"meshes": len(tasks), "skipped": len(tasks) - len(todo),
-              "certified": sum(bool(r.get("certified")) for r in ordered),
+              "certified": sum(_delivered(r) for r in ordered),
               "failed": sum(r.get("status") != "done" for r in ordered)}
     return BatchResult(rows=ordered, skipped=len(tasks) - len(todo), journal=journal,
                        summary=summary, counts=counts)

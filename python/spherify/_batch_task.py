@@ -279,6 +279,9 @@ def finish_task(mapped: Mapped) -> Dict[str, Any]:
             row["spheremap_bytes"], row["spheremap_sha256"] = outputs[1].size, outputs[1].sha256
             row.update(status="done", sphere=task.sphere, spheremap=task.spheremap)
         except BaseException as err:
+            # Not written (a full disk, a folder in the way): not delivered,
+            # so not counted certified (issue 26, finding 2).
+            row["certified"] = False
             _fault(row, err)
     row["seconds_total"] = round(mapped.seconds + time.perf_counter() - start, 6)
     return row

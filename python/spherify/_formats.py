@@ -15,6 +15,7 @@ Every malformed file raises :class:`FormatError` naming the file.
 
 from __future__ import annotations
 
+import errno
 import importlib
 import lzma
 import os
@@ -28,6 +29,7 @@ import numpy as np
 from ._atomic import write_atomically
 from ._errors import FormatError, MeshError
 from ._files import require_regular_file
+from ._npz_check import check_npy, check_npz
 
 #: What a reader returns: vertices, faces, notes, per-vertex attributes.
 Loaded = Tuple[np.ndarray, np.ndarray, List[str], Dict[str, np.ndarray]]
@@ -142,13 +144,16 @@ def damaged_archive(err: BaseException) -> bool:
     ``RuntimeError`` for an encrypted member, and the decompressors their
     own errors: ``zlib.error``, ``lzma.LZMAError``, and for bzip2 an
     ``OSError`` without an errno (one with an errno is the disk's, a
-    ``FileError``). Found by mutating ``.npz`` files (2026-12-02)."""
+    ``FileError``). Found by mutating ``.npz`` files (2026-12-02). Also
+    ``EINVAL``: a central directory that points past its end record makes
+    ``zipfile`` seek before the file's start (a regular file's read or seek
+    gives EINVAL for nothing else; issue 26, finding 4)."""
     if isinstance(err, (ValueError, EOFError, KeyError, zipfile.BadZipFile,
                         NotImplementedError, zlib.error, lzma.LZMAError)):
         return True
     if isinstance(err, RuntimeError):
         return "encrypted" in str(err)
-    return isinstance(err, OSError) and err.errno is None
+    return isinstance(err, OSError) and err.errno in (None, errno.EINVAL)
 
 
 def read_npz(path: Path) -> Loaded:
@@ -160,11 +165,14 @@ def read_npz(path: Path) -> Loaded:
     try:
         # np.load gets an open file: given a path, it leaks its handle when
         # the zip's central directory is refused (an unknown zip version).
-        with open(path, "rb") as handle, np.load(handle, allow_pickle=False) as arrays:
-            vertices = _pick(arrays, path, ("V", "vertices"))
-            faces = _pick(arrays, path, ("F", "faces"))
-            attributes = {name: np.asarray(arrays[name], dtype=np.float64)
-                          for name in ("sphere", "uv") if name in arrays.files}
+        # The declared sizes are checked before numpy allocates them.
+        with open(path, "rb") as handle:
+            check_npz(handle, str(path))
+            with np.load(handle, allow_pickle=False) as arrays:
+                vertices = _pick(arrays, path, ("V", "vertices"))
+                faces = _pick(arrays, path, ("F", "faces"))
+                attributes = {name: np.asarray(arrays[name], dtype=np.float64)
+                              for name in ("sphere", "uv") if name in arrays.files}
     except Exception as err:
         if isinstance(err, FormatError) or not damaged_archive(err):
             raise
@@ -178,11 +186,17 @@ def read_npy_pair(vertices_path: Path, faces_path: Path) -> Loaded:
     for path in (vertices_path, faces_path):
         require_regular_file(path)
         try:
-            arrays.append(np.load(path, allow_pickle=False))
+            with open(path, "rb") as handle:
+                check_npy(handle, str(path))  # before numpy allocates what it declares
+                loaded = np.load(handle, allow_pickle=False)
+                if not isinstance(loaded, np.ndarray):
+                    loaded.close()
+                    raise FormatError(f"{path}: an .npz archive, not an .npy array", str(path))
+                arrays.append(loaded)
+        except FormatError:
+            raise
         except (ValueError, EOFError) as err:
             raise FormatError(f"{path}: not a readable .npy array: {err}", str(path)) from None
-        if not isinstance(arrays[-1], np.ndarray):
-            raise FormatError(f"{path}: an .npz archive, not an .npy array", str(path))
     return arrays[0], arrays[1], [], {}
 
 

@@ -21,7 +21,7 @@ from __future__ import annotations
 import json
 import os
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Dict, List, Tuple, Union
+from typing import TYPE_CHECKING, Any, Callable, Dict, List, Optional, Tuple, Union
 
 import numpy as np
 
@@ -30,6 +30,8 @@ from ._atomic import write_atomically
 from ._errors import FormatError, MeshError
 from ._files import file_errors, require_regular_file
 from ._formats import damaged_archive, is_zip_archive
+from ._json_depth import too_deep
+from ._npz_check import check_npz
 
 if TYPE_CHECKING:
     from ._spheremap import SphereMap
@@ -41,6 +43,13 @@ FORMAT_VERSION = 1
 VERSION_KEY = "spherify_map_format"
 
 Record = Dict[str, np.ndarray]
+
+#: The deepest nesting of lists and objects read from a record's ``meta``
+#: (spherify writes 4 or 5; ``json`` recursed into 100,000 and failed).
+MAX_META_DEPTH = 64
+#: Stored points whose norm is within this of 1 are kept as they are; the
+#: others are projected onto the unit sphere on load (:func:`_unit_points`).
+UNIT_TOLERANCE = 4 * float(np.finfo(np.float64).eps)
 
 
 def _encode(value: Any, arrays: Record) -> Any:
@@ -108,9 +117,66 @@ def record(m: "SphereMap") -> Record:
     return arrays
 
 
+def _unit_points(points: np.ndarray, fail: Callable[[str], FormatError]
+                 ) -> Tuple[np.ndarray, Optional[str]]:
+    """Stored points as unit vectors, as :meth:`SphereMap.from_points` makes
+    them (issue 26, finding 8): a row that is not finite or is zero is
+    refused; a row whose norm is off 1 by more than :data:`UNIT_TOLERANCE`
+    is divided by its norm (taken of the row scaled by its largest
+    component, so that 1e300 does not overflow), and a note says how many
+    were. Rows within the tolerance keep their bits, so a saved map loads
+    exactly as it was. Not (n, 3): left to the core to refuse."""
+    if points.ndim != 2 or points.shape[1] != 3 or len(points) == 0:
+        return points, None
+    finite = np.isfinite(points).all(axis=1)
+    if not finite.all():
+        row = int(np.argmin(finite))
+        raise fail(f"point {row} {points[row].tolist()} is not finite")
+    largest = np.abs(points).max(axis=1)
+    if not largest.all():
+        row = int(np.argmin(largest))
+        raise fail(f"point {row} is zero: it has no direction on the sphere")
+    scaled = points / largest[:, None]
+    lengths = np.linalg.norm(scaled, axis=1)
+    with np.errstate(over="ignore"):
+        error = np.abs(lengths * largest - 1.0)
+    off = error > UNIT_TOLERANCE
+    if not off.any():
+        return points, None
+    unit = points.copy()
+    unit[off] = scaled[off] / lengths[off, None]
+    return unit, (f"{int(off.sum())} of {len(points)} stored points were not unit vectors "
+                  f"(largest | |p| - 1 | {float(error.max()):.3e}): projected onto the unit "
+                  "sphere on load and certified as projected")
+
+
+def _meta_text(meta: np.ndarray) -> str:
+    """The record's ``meta``: one numpy string, decoded from its UTF-32 code
+    units by Python's codec, which refuses what is not a character (a code
+    unit beyond U+10FFFF, a surrogate). ``str()`` of the array let such a
+    unit through into a Python string, which reached the core as a Rust
+    string that is not UTF-8 and made it panic (found by the fuzzer)."""
+    if meta.shape != () or meta.dtype.kind != "U":
+        raise TypeError(f"meta must be one string, got an array of {meta.dtype} and shape "
+                        f"{meta.shape}")
+    units = np.ascontiguousarray(meta, dtype=meta.dtype.newbyteorder("<")).tobytes()
+    return units.decode("utf-32-le").rstrip("\x00")  # numpy pads with NUL
+
+
+def _count(value: Any, what: str) -> int:
+    """A stored count the core takes as an unsigned 64-bit integer."""
+    count = int(value)
+    if not 0 <= count < 2**64:
+        raise ValueError(f"{what} {count} is not a count (0 to 2^64 - 1)")
+    return count
+
+
 def rebuild(arrays: Any, source: str) -> "SphereMap":
     """A map from its record (a dict or an open ``.npz``), certified again
-    in the core. ``source`` names where the record came from, for errors."""
+    in the core. ``source`` names where the record came from, for errors:
+    whatever a damaged record holds, the error is a :class:`FormatError`
+    naming it (issue 26, finding 4: wrong types, counts out of range, a
+    ``meta`` nested 100,000 deep)."""
     from ._mesh import Mesh
     from ._spheremap import SphereMap, ThetaPhiMap
 
@@ -120,15 +186,24 @@ def rebuild(arrays: Any, source: str) -> "SphereMap":
     names = set(arrays.keys()) if isinstance(arrays, dict) else set(arrays.files)
     if VERSION_KEY not in names:
         raise fail(f"not a sphere map (no {VERSION_KEY!r} entry; save one with SphereMap.save)")
-    version = int(np.asarray(arrays[VERSION_KEY]))
+    stored_version = np.asarray(arrays[VERSION_KEY])
+    if stored_version.shape != () or stored_version.dtype.kind not in "iu":
+        raise fail(f"the format version must be one integer, got an array of "
+                   f"{stored_version.dtype} and shape {stored_version.shape}")
+    version = int(stored_version)
     if version > FORMAT_VERSION or version < 1:
         raise fail(f"sphere map format {version}; this spherify reads format 1 to {FORMAT_VERSION}")
     missing = {"vertices", "faces", "points", "meta"} - names
     if missing:
         raise fail(f"missing {', '.join(sorted(missing))}")
     try:
-        meta = json.loads(str(np.asarray(arrays["meta"])))
-        method, iterations = str(meta["method"]), int(meta["iterations"])
+        text = _meta_text(np.asarray(arrays["meta"]))
+        if too_deep(text, MAX_META_DEPTH):
+            raise ValueError(f"meta nests lists and objects more than {MAX_META_DEPTH} deep")
+        meta = json.loads(text)
+        if not isinstance(meta, dict):
+            raise TypeError(f"meta is a JSON {type(meta).__name__}, not an object")
+        method, iterations = str(meta["method"]), _count(meta["iterations"], "iterations")
         status, message = str(meta["status"]), str(meta["message"])
         seconds: List[Tuple[str, float]] = [(str(k), float(v)) for k, v in meta["seconds"]]
         notes = [str(n) for n in meta["notes"]]
@@ -136,26 +211,42 @@ def rebuild(arrays: Any, source: str) -> "SphereMap":
         details = _decode(meta["details"], arrays)
         mesh_notes = [str(n) for n in meta["mesh_notes"]]
         attributes = _decode(meta["mesh_attributes"], arrays)
+        if not isinstance(attributes, dict) or not isinstance(options, dict) \
+                or not isinstance(details, dict):
+            raise TypeError("mesh_attributes, options and details must be JSON objects")
         theta_phi: Dict[str, Any] = {}
         if "poles" in names:
             north, south = (int(p) for p in np.asarray(arrays["poles"]))
+            re_embedded = tuple(bool(x) for x in meta["re_embedded"])
+            if len(re_embedded) != 2:
+                raise ValueError(f"re_embedded holds {len(re_embedded)} values, not 2")
             theta_phi = dict(poles=(north, south),
                              cut_path=np.ascontiguousarray(arrays["cut_path"], dtype=np.int64),
                              theta_phi=np.ascontiguousarray(arrays["theta_phi"], dtype=np.float64),
-                             refinements=int(meta["refinements"]),
-                             re_embedded=tuple(bool(x) for x in meta["re_embedded"]))
-    except (KeyError, ValueError, TypeError) as err:
+                             refinements=_count(meta["refinements"], "refinements"),
+                             re_embedded=re_embedded)
+        stored_points = np.asarray(arrays["points"])
+        if stored_points.dtype.kind not in "iuf":
+            raise TypeError(f"points are {stored_points.dtype}, not numbers")
+        points, projected = _unit_points(np.ascontiguousarray(stored_points, dtype=np.float64),
+                                         fail)
+    except (KeyError, ValueError, TypeError, OverflowError) as err:
+        if isinstance(err, FormatError):
+            raise
         raise fail(f"malformed record ({type(err).__name__}: {err})") from None
     try:
         mesh = Mesh(arrays["vertices"], arrays["faces"])
-        points = np.ascontiguousarray(arrays["points"], dtype=np.float64)
         core = _core.restore_map(mesh._core, method, points, iterations, status, message,
                                  **theta_phi)
-    except MeshError as err:
-        # TopologyError included: the stored mesh is not genus 0.
+    except (ValueError, TypeError, OverflowError) as err:
+        # MeshError and TopologyError (the stored mesh is not genus 0)
+        # included, and UnicodeEncodeError: a JSON "\udf63" escape gives a
+        # lone surrogate, which no Rust string holds (found by the fuzzer).
         raise fail(str(err)) from None
     mesh.notes = mesh_notes
     mesh.attributes = dict(attributes)
+    if projected is not None:
+        notes = notes + [projected]
     cls = SphereMap if core.tp_valid is None else ThetaPhiMap
     return cls._restored(core, mesh, seconds=seconds, notes=notes, options=options,
                          details=details)
@@ -179,6 +270,10 @@ def load_map(path: PathLike) -> "SphereMap":
     The certificate (``valid``, ``report``; for theta-phi ``tp_valid``) is
     computed in the core from the stored points and rectangle, never read
     from the file; the cut of a theta-phi map is made again from its path.
+    The points are unit vectors: a stored row off unit length is projected
+    onto the sphere (a note says how many were), as ``from_points`` does.
+    Declared array sizes are checked before anything is inflated
+    (``_npz_check``). Cost: O(file size) and the certification, O(n + m).
 
     Raises
     ------
@@ -188,7 +283,9 @@ def load_map(path: PathLike) -> "SphereMap":
     FormatError
         Not a sphere map, a newer format, or parts that do not fit the mesh or
         each other (points off the fold of the rectangle, a rectangle boundary
-        not where eq. 6.31 puts it, a path that is not a cut); names the file.
+        not where eq. 6.31 puts it, a path that is not a cut), a point that is
+        not finite or is zero, an array larger than the file can hold, a
+        damaged zip or record; names the file.
     """
     file = Path(os.fspath(path))
     require_regular_file(file)
@@ -196,8 +293,18 @@ def load_map(path: PathLike) -> "SphereMap":
         raise FormatError(f"{file}: not a sphere map (.spheremap.npz is a zip archive)", str(file))
     try:
         # (An open file, not the path: see _formats.read_npz.)
-        with open(file, "rb") as handle, np.load(handle, allow_pickle=False) as arrays:
-            return rebuild(arrays, str(file))
+        # (The declared sizes are checked before numpy allocates them.)
+        with open(file, "rb") as handle:
+            shapes = check_npz(handle, str(file))
+            vertices, points = shapes.get("vertices", ()), shapes.get("points", ())
+            if vertices[:1] and points[:1] and vertices[0] != points[0]:
+                # Refused before either is inflated (a map of 60 vertices
+                # whose points member declared 50M rows of deflated zeros).
+                raise FormatError(f"{file}: {points[0]:,} points stored for {vertices[0]:,} "
+                                  "vertices (declared; a map has one point per vertex)",
+                                  str(file))
+            with np.load(handle, allow_pickle=False) as arrays:
+                return rebuild(arrays, str(file))
     except Exception as err:
         if isinstance(err, FormatError) or not damaged_archive(err):
             raise

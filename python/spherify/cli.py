@@ -405,6 +405,11 @@ def main(argv: Optional[List[str]] = None) -> int:
         if threads is not None:
             set_num_threads(threads)
         return int(args.func(args))
+    except TopologyError as err:
+        # A mesh that cannot be done (not manifold, not genus 0): 1, as map
+        # and check say it; 2 is for bad arguments and unreadable inputs.
+        print(f"spherify: error: {err}", file=sys.stderr)
+        return 1
     except (SpherifyError, OSError) as err:
         print(f"spherify: error: {err}", file=sys.stderr)
         return 2
