@@ -724,3 +724,12 @@ def test_weld_lets_a_batch_map_meshes_whose_seams_the_files_split(
     assert by_name(welded.rows)["seam.obj"]["n_vertices"] == mesh.n_vertices
     assert cli.main(["batch", str(tmp_path / "in"), "-o", str(out), "--weld"]) == 0
     assert "2 already done" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("workers", [0, True, 2.5, "2"])
+def test_workers_is_checked_by_the_one_integer_checker(workers: Any, tmp_path: Path) -> None:
+    # Issue 25: the batch had its own check, which took True and 2.5.
+    make_inputs(tmp_path / "in", 1)
+    with pytest.raises(sp.MeshError, match="workers must be an integer"):
+        sp.batch(tmp_path / "in", tmp_path / "out", workers=workers)
+    assert not (tmp_path / "out").exists()

@@ -52,6 +52,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Dict, Iterable, Iterator, List, Optional, Sequence, Tuple, Union
 
+from . import _args
 from ._atomic import is_stale_temporary, is_temporary, write_atomically
 from ._files import file_errors, file_sha256, require_regular_file, special_kind
 from ._json_depth import too_deep
@@ -412,8 +413,8 @@ def batch(paths: Union[PathLike, Iterable[PathLike]], out_dir: PathLike, executo
     if isinstance(paths, (str, os.PathLike)):
         paths = [paths]
     inputs = expand_inputs(paths)
-    if workers is not None and workers < 1:
-        raise MeshError(f"workers must be at least 1, got {workers}")
+    if workers is not None:
+        workers = _args.integer(workers, "workers", minimum=1)
     if timeout is not None and not timeout > 0:
         raise MeshError(f"timeout must be positive seconds, got {timeout}")
     if executor is not None and scheduler is not None:
