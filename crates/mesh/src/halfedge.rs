@@ -31,6 +31,10 @@ pub struct HalfEdgeMesh {
 impl HalfEdgeMesh {
     /// Builds the connectivity, or says which requirement the mesh breaks (with the
     /// full validation report attached).
+    ///
+    /// One function on purpose, its steps commented: they fill the arrays of
+    /// one structure in order (twins, outgoing half-edges, then the manifold
+    /// check over both); split, they would hand those arrays from one to the next.
     pub fn new(mesh: &Mesh) -> Result<HalfEdgeMesh, TopologyError> {
         let faces = mesh.faces();
         let n = mesh.n_vertices();

@@ -30,6 +30,9 @@ pub struct OrientInfo {
 /// to have at most two faces and no face to repeat a vertex; a non-orientable
 /// surface is reported with the face where propagation contradicted itself.
 /// O(F log d).
+///
+/// The steps of Alg. 2.9 stay in one function, each commented: they share
+/// the per-face flip flags and the partner table that propagation fills.
 pub fn orient(mesh: &Mesh) -> Result<(Mesh, OrientInfo), TopologyError> {
     let faces = mesh.faces();
     let fail = |problem| TopologyError { problem, report: Box::new(validate::check(mesh)) };

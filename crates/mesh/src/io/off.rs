@@ -20,10 +20,35 @@ use std::io::Write;
 const MIN_VERTEX_BYTES: u128 = 6;
 const MIN_FACE_BYTES: u128 = 8;
 
-/// Parses an OFF file held in memory.
+/// Parses an OFF file held in memory: the header and its counts, then the
+/// vertices, then the faces.
 pub(crate) fn read(bytes: &[u8], name: &str) -> Result<LoadedMesh, MeshError> {
     let mut lines = Lines::new(bytes);
-    let Some((number, mut rest)) = next_content(&mut lines) else {
+    let (nv, nf) = header(&mut lines, name)?;
+    let positions = vertices(&mut lines, name, nv)?;
+    let mut triangles = Triangles::with_capacity(nf as usize);
+    let mut corners = Vec::with_capacity(8);
+    for k in 0..nf {
+        let (number, mut rest) = next_content(&mut lines).ok_or_else(|| {
+            line_error(name, lines.line(), format!("the file ends after {k} of {nf} faces"))
+        })?;
+        read_face(&mut rest, nv, &mut corners).map_err(|msg| line_error(name, number, msg))?;
+        triangles.push(&corners);
+    }
+    let mut notes: Vec<String> = triangles.note().into_iter().collect();
+    if let Some((number, _)) = next_content(&mut lines) {
+        notes.push(format!(
+            "data after the {nv} vertices and {nf} faces the header declares (from line \
+             {number}) was ignored"
+        ));
+    }
+    finish(name, positions, triangles.faces, VertexAttributes::default(), notes)
+}
+
+/// The keyword line and the vertex and face counts, checked against the bytes
+/// that follow before anything is allocated.
+fn header(lines: &mut Lines<'_>, name: &str) -> Result<(u64, u64), MeshError> {
+    let Some((number, mut rest)) = next_content(lines) else {
         return Err(line_error(name, 1, "empty file: expected the OFF header"));
     };
     let line = rest;
@@ -52,7 +77,7 @@ pub(crate) fn read(bytes: &[u8], name: &str) -> Result<LoadedMesh, MeshError> {
     // The counts may follow the keyword on the same line.
     let after = text::skip_space(rest);
     let (number, mut counts) = if after.is_empty() || after.starts_with(b"#") {
-        next_content(&mut lines).ok_or_else(|| {
+        next_content(lines).ok_or_else(|| {
             line_error(name, number, "the file ends before the vertex and face counts")
         })?
     } else {
@@ -83,10 +108,15 @@ pub(crate) fn read(bytes: &[u8], name: &str) -> Result<LoadedMesh, MeshError> {
             max: MAX_VERTICES,
         });
     }
+    Ok((nv, nf))
+}
+
+/// `nv` vertex lines of three finite coordinates.
+fn vertices(lines: &mut Lines<'_>, name: &str, nv: u64) -> Result<Vec<[f64; 3]>, MeshError> {
     // Safe now: both counts are bounded by the file size.
     let mut positions = Vec::with_capacity(nv as usize);
     for k in 0..nv {
-        let (number, mut rest) = next_content(&mut lines).ok_or_else(|| {
+        let (number, mut rest) = next_content(lines).ok_or_else(|| {
             line_error(name, lines.line(), format!("the file ends after {k} of {nv} vertices"))
         })?;
         let mut p = [0.0; 3];
@@ -110,23 +140,7 @@ pub(crate) fn read(bytes: &[u8], name: &str) -> Result<LoadedMesh, MeshError> {
         }
         positions.push(p);
     }
-    let mut triangles = Triangles::with_capacity(nf as usize);
-    let mut corners = Vec::with_capacity(8);
-    for k in 0..nf {
-        let (number, mut rest) = next_content(&mut lines).ok_or_else(|| {
-            line_error(name, lines.line(), format!("the file ends after {k} of {nf} faces"))
-        })?;
-        read_face(&mut rest, nv, &mut corners).map_err(|msg| line_error(name, number, msg))?;
-        triangles.push(&corners);
-    }
-    let mut notes: Vec<String> = triangles.note().into_iter().collect();
-    if let Some((number, _)) = next_content(&mut lines) {
-        notes.push(format!(
-            "data after the {nv} vertices and {nf} faces the header declares (from line \
-             {number}) was ignored"
-        ));
-    }
-    finish(name, positions, triangles.faces, VertexAttributes::default(), notes)
+    Ok(positions)
 }
 
 /// Accepts `OFF` with any of the prefixes `ST`, `C`, `N` (in that order).

@@ -105,6 +105,10 @@ impl MeshReport {
     /// faces that repeat a vertex (the rest of the degenerate ones have zero
     /// area), `seam_copies` the number of boundary vertices at exactly the
     /// position of another boundary vertex (a seam split by an exporter).
+    ///
+    /// Longer than most functions on purpose: it is one flat list of
+    /// independent sentences, in the order the report shows them; split, the
+    /// one list would be spread over several functions.
     pub(super) fn describe_problems(&mut self, repeated_index: usize, seam_copies: usize) {
         let mut p = Vec::new();
         if !self.non_finite_vertices.is_empty() {

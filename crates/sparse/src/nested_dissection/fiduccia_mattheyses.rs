@@ -85,6 +85,9 @@ impl Dissection<'_> {
     }
 
     /// One pass; whether it shrank the separator.
+    ///
+    /// One function on purpose: the moves, their gains and the roll-back to
+    /// the best prefix of the pass share the pass's log of moves.
     fn pass(&self, split: &mut Split, least: usize, patience: usize, queue: &mut Buckets) -> bool {
         let labels = split.labels;
         let sep = split.sep;
