@@ -131,6 +131,11 @@ impl State {
         // Held across the call, so that calls happen one at a time and in
         // increasing order of `done`: workers finish sources out of order.
         let mut last = lock(&self.last);
+        // A worker that waited for the lock while the callable raised must
+        // not call it again: the stop is set before the lock is let go.
+        if self.stop.load(Ordering::SeqCst) {
+            return false;
+        }
         if done <= *last || (done < total && done / step == *last / step) {
             return true;
         }
@@ -138,12 +143,15 @@ impl State {
         let called = crate::pool::as_callback(|| {
             Python::attach(|py| callback.call1(py, (done, total)).map(drop))
         });
+        let going_on = match called {
+            Ok(()) => true,
+            Err(err) => {
+                self.fail(err);
+                false
+            }
+        };
         drop(last);
-        if let Err(err) = called {
-            self.fail(err);
-            return false;
-        }
-        true
+        going_on
     }
 }
 
