@@ -18,6 +18,7 @@ import numpy as np
 import pytest
 
 import spherify as sp
+from spherify._files import file_sha256
 from spherify import _batch as batch_module
 
 cli = pytest.importorskip("spherify.cli")
@@ -34,7 +35,7 @@ def inputs(folder: Path, n: int) -> List[Path]:
 
 
 def output_stem(path: Path) -> str:
-    return f"{batch_module._safe_name(path)}-{batch_module.content_hash(path)[:16]}"
+    return f"{batch_module._safe_name(path)}-{file_sha256(path)[:16]}"
 
 
 # --- finding 2: an output not written is a failed mesh -------------------------------

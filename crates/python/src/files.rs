@@ -4,6 +4,7 @@
 //! writers' temporaries, sync and rename) and the refusal of special files.
 //! `spherify/_atomic.py` and `spherify/_files.py` only wrap these.
 
+use std::ffi::OsString;
 use std::path::PathBuf;
 
 use pyo3::exceptions::PyRuntimeError;
@@ -60,17 +61,20 @@ pub fn temporary_path(py: Python<'_>, path: PathBuf) -> PyResult<PathBuf> {
     io::temp_path(&path).map_err(|e| to_py(py, e))
 }
 
-/// is_temporary(name) -> whether a file name is one of a temporary.
+/// is_temporary(name) -> whether a file name is one of a temporary. A name
+/// need not be UTF-8 (Python hands such a name over with surrogate escapes):
+/// the marks of a temporary (`.`, `.tmp-PID-N`) are ASCII, and a lossy
+/// reading keeps them.
 #[pyfunction]
-pub fn is_temporary(name: &str) -> bool {
-    io::temporary_owner(name).is_some()
+pub fn is_temporary(name: OsString) -> bool {
+    io::temporary_owner(&name.to_string_lossy()).is_some()
 }
 
 /// is_stale_temporary(name) -> whether a file name is that of a temporary
 /// whose writer no longer runs (Linux, where /proc tells).
 #[pyfunction]
-pub fn is_stale_temporary(name: &str) -> bool {
-    io::is_stale_temporary(name)
+pub fn is_stale_temporary(name: OsString) -> bool {
+    io::is_stale_temporary(&name.to_string_lossy())
 }
 
 /// remove_stale_temporaries(folder): removes the temporaries of dead writers.
