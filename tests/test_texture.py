@@ -228,3 +228,28 @@ def test_bad_arguments(blob: sp.SphereMap) -> None:
                              [3, 1, 5], [0, 3, 5]]))
     with pytest.raises(sp.MeshError, match="too large for the cube projection"):
         sp.texture.uv(sp.SphereMap.from_points(octa, octa.vertices), "cube")
+
+
+@pytest.mark.parametrize("name", ["evil\nmap_Kd stolen.png.obj", "two words.obj", "tab\there.obj"])
+def test_a_name_an_obj_cannot_reference_is_refused_before_anything_is_written(
+        name: str, tmp_path: Path) -> None:
+    # Issue 26, finding 9: a newline in the name wrote lines of its own
+    # (mtllib, map_Kd) into the .obj and the .mtl.
+    m = sp.embed(sp.datasets.make("icosphere", 200))
+    layout = sp.texture.uv(m, "cube")
+    with pytest.raises(sp.MeshError, match="cannot carry"):
+        sp.texture.save_obj(m.mesh, tmp_path / name, layout, layout.bake(sp.datasets.checkerboard, 16))
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_texture_that_is_not_finite_is_refused(tmp_path: Path) -> None:
+    # Issue 26, finding 9: an all-NaN image was written (as black) without a word.
+    m = sp.embed(sp.datasets.make("icosphere", 200))
+    layout = sp.texture.uv(m, "cube")
+    image = layout.bake(sp.datasets.checkerboard, 16)
+    image[0, 0, 0] = np.nan
+    with pytest.raises(sp.MeshError, match=r"1 of the image's \d+ values are not finite"):
+        sp.texture.save_obj(m.mesh, tmp_path / "x.obj", layout, image)
+    with pytest.raises(sp.MeshError, match="not finite"):
+        sp.texture.write_png(np.full((4, 4, 3), np.nan), tmp_path / "x.png")
+    assert list(tmp_path.iterdir()) == []

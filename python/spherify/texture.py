@@ -458,11 +458,16 @@ def uv(m: SphereMap, projection: str = "cube") -> UVLayout:
 
 @file_errors
 def write_png(image: npt.ArrayLike, path: PathLike) -> None:
-    """An (h, w, 3) RGB image with values in [0, 1] (NaN as black) as an
-    8-bit PNG, written atomically."""
-    a = np.nan_to_num(np.asarray(image, dtype=np.float64))
+    """An (h, w, 3) RGB image with values in [0, 1] as an 8-bit PNG, written
+    atomically. A value that is not finite is refused (``MeshError``, with
+    how many): written as black, it would hide whatever made it."""
+    a = np.asarray(image, dtype=np.float64)
     if a.ndim != 3 or a.shape[2] != 3:
         raise MeshError(f"an image must have shape (h, w, 3), got {a.shape}")
+    finite = np.isfinite(a)
+    if not finite.all():
+        raise MeshError(f"{int(a.size - finite.sum())} of the image's {a.size} values are not "
+                        "finite; a texture must be numbers in [0, 1]")
     q = np.rint(np.clip(a, 0, 1) * 255).astype(np.uint8)
     rows = b"".join(b"\x00" + q[i].tobytes() for i in range(q.shape[0]))
     data = (b"\x89PNG\r\n\x1a\n"
@@ -490,6 +495,14 @@ def _write_obj(mesh: Mesh, target: Path, corners: np.ndarray, label: str,
     (referenced, not copied), named by an MTL file written here."""
     library: Optional[str] = None
     if texture is not None:
+        # mtllib and map_Kd name these files on a line of their own, and
+        # readers split those lines at white space: a line break in the name
+        # would write lines of its own into the files (issue 26, finding 9).
+        for name in (target.with_suffix(".mtl").name, target.with_suffix(".png").name):
+            if any(c.isspace() or not c.isprintable() for c in name):
+                raise MeshError(f"the output name {name!r} holds white space or a control "
+                                "character, which an OBJ's mtllib and an MTL's map_Kd cannot "
+                                "carry; name the .obj without them")
         if isinstance(texture, (str, os.PathLike)):
             image_path = Path(texture)
             name = (image_path.as_posix() if image_path.is_absolute()
