@@ -48,7 +48,7 @@ from typing import Any, Callable, Dict, List, Optional, Set, Tuple
 import numpy as np
 
 import spherify as sp
-from spherify import _batch, _persist
+from spherify import _batch, _files, _persist
 from spherify._batch_task import Task, peak_memory_mb, reset_peak_memory
 
 #: Field values that break size and count checks.
@@ -146,7 +146,7 @@ def seed_batch(folder: Path) -> Tuple[bytes, List[Task]]:
     key = _batch.options_hash("progressive", {})
     tasks = []
     for path in sorted(inputs.iterdir()):
-        digest = _batch.content_hash(path)
+        digest = _files.file_sha256(path)
         stem = f"{_batch._safe_name(path)}-{digest[:16]}"
         tasks.append(Task(input=str(path.resolve()), sha256=digest,
                           sphere=str(out / f"{stem}.sphere.ply"),
