@@ -399,22 +399,9 @@ pub(crate) fn write<W: Write>(
         mesh.n_vertices(),
         mesh.n_faces()
     )?;
-    for p in mesh.positions() {
-        out.write_all(b"v")?;
-        for &x in p {
-            out.write_all(b" ")?;
-            text::write_f64(out, x)?;
-        }
-        out.write_all(b"\n")?;
-    }
+    write_rows(out, b"v", mesh.positions(), text::write_f64)?;
     if let Some(uv) = uv {
-        for t in uv {
-            out.write_all(b"vt ")?;
-            text::write_f64(out, t[0])?;
-            out.write_all(b" ")?;
-            text::write_f64(out, t[1])?;
-            out.write_all(b"\n")?;
-        }
+        write_rows(out, b"vt", uv, text::write_f64)?;
     }
     for &[a, b, c] in mesh.faces() {
         let (a, b, c) = (u64::from(a) + 1, u64::from(b) + 1, u64::from(c) + 1);
@@ -423,6 +410,24 @@ pub(crate) fn write<W: Write>(
         } else {
             writeln!(out, "f {a} {b} {c}")?;
         }
+    }
+    Ok(())
+}
+
+/// One `tag x y ...` line per row (`v`, `vt`), each number written by `number`.
+fn write_rows<W: Write, const K: usize>(
+    out: &mut W,
+    tag: &[u8],
+    rows: &[[f64; K]],
+    number: fn(&mut W, f64) -> std::io::Result<()>,
+) -> std::io::Result<()> {
+    for row in rows {
+        out.write_all(tag)?;
+        for &x in row {
+            out.write_all(b" ")?;
+            number(out, x)?;
+        }
+        out.write_all(b"\n")?;
     }
     Ok(())
 }
@@ -443,21 +448,8 @@ pub(crate) fn write_per_corner<W: Write>(
     if let Some(library) = material_library {
         writeln!(out, "mtllib {library}\nusemtl texture")?;
     }
-    for p in mesh.positions() {
-        out.write_all(b"v")?;
-        for &x in p {
-            out.write_all(b" ")?;
-            text::write_f64_g17(out, x)?;
-        }
-        out.write_all(b"\n")?;
-    }
-    for t in corners {
-        out.write_all(b"vt ")?;
-        text::write_f64_g17(out, t[0])?;
-        out.write_all(b" ")?;
-        text::write_f64_g17(out, t[1])?;
-        out.write_all(b"\n")?;
-    }
+    write_rows(out, b"v", mesh.positions(), text::write_f64_g17)?;
+    write_rows(out, b"vt", corners, text::write_f64_g17)?;
     for (k, &[a, b, c]) in mesh.faces().iter().enumerate() {
         let (a, b, c) = (u64::from(a) + 1, u64::from(b) + 1, u64::from(c) + 1);
         let t = 3 * k as u64;
