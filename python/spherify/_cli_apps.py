@@ -24,7 +24,6 @@ refuses, with exit status 1, a map that is not a certified bijection.
 from __future__ import annotations
 
 import argparse
-import sys
 import time
 import warnings
 from pathlib import Path
@@ -38,7 +37,8 @@ from ._morph import morph
 from ._geometry_image import (from_geometry_image, geometry_image, octahedral_points,
                               save_geometry_image)
 from ._remesh import remesh_map, surface_distance
-from ._cli_options import add_input_flags, add_method_flags, add_progress_flag, method_options_of
+from ._cli_options import (add_input_flags, add_method_flags, add_progress_flag,
+                           method_options_of, shows_progress)
 from ._embed import embed
 from ._errors import SpherifyError, SpherifyWarning
 from ._mesh import Mesh, save
@@ -54,7 +54,7 @@ def mapped(mesh: Mesh, args: argparse.Namespace) -> SphereMap:
     """The map the application works through, with the method and options given."""
     options = method_options_of(args)
     method = args.method or "progressive"
-    progress = True if args.progress or sys.stderr.isatty() else None
+    progress = True if shows_progress(args) else None
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", SpherifyWarning)  # the verdict is printed instead
         m = embed(mesh, method, progress=progress, **options)

@@ -7,10 +7,11 @@ commands (harmonics, remesh, texture, morph) all take them from here."""
 from __future__ import annotations
 
 import argparse
+import sys
 from typing import Any, Dict, List, Tuple
 
 from . import datasets
-from ._embed import either, method_options, methods
+from ._embed import listed, method_options, methods, methods_taking
 from ._errors import SpherifyError
 
 #: Sizes of generated shapes the command line accepts (a 10^7-vertex shape
@@ -43,6 +44,11 @@ def add_input_flags(p: argparse.ArgumentParser, what: str = "mesh file") -> None
     p.add_argument("--weld", action="store_true",
                    help="first merge vertices at exactly the same position (a seam the "
                         "exporter split; the report of such an open mesh suggests it)")
+
+
+def shows_progress(args: argparse.Namespace) -> bool:
+    """Whether to draw the progress bar: asked for, or stderr is a terminal."""
+    return bool(args.progress) or sys.stderr.isatty()
 
 
 def add_progress_flag(p: argparse.ArgumentParser, threads: bool = True) -> None:
@@ -88,7 +94,7 @@ def method_options_of(args: argparse.Namespace) -> Dict[str, Any]:
              if getattr(args, name) is not None}
     stray = [name for name in given if name not in takes]
     if stray:
-        owners = [m for m in methods() if all(name in method_options(m) for name in stray)]
+        owners = methods_taking(stray)
         flags = [flag(name) for name in stray]
         what = f"{flags[0]} is an option" if len(flags) == 1 else f"{', '.join(flags)} are options"
         them = "it" if len(flags) == 1 else "them"
@@ -96,10 +102,10 @@ def method_options_of(args: argparse.Namespace) -> Dict[str, Any]:
             raise UsageError(f"{', '.join(flags)} are not options of one method together: "
                              "spherify map --help says which method takes each")
         if args.method is None:
-            raise UsageError(f"{what} of --method {either(owners)}, and the default method is "
-                             f"{method}: add --method {either(owners)} to use {them}")
-        raise UsageError(f"{what} of --method {either(owners)}, not of --method {method}: use "
-                         f"--method {either(owners)}, or leave {them} out")
+            raise UsageError(f"{what} of --method {listed(owners, 'or')}, and the default method is "
+                             f"{method}: add --method {listed(owners, 'or')} to use {them}")
+        raise UsageError(f"{what} of --method {listed(owners, 'or')}, not of --method {method}: use "
+                         f"--method {listed(owners, 'or')}, or leave {them} out")
     for name, value in given.items():
         row = takes[name]
         if row["choices"] and isinstance(value, str) and value not in row["choices"]:

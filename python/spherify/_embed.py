@@ -53,10 +53,14 @@ def method_options(method: str) -> Dict[str, Dict[str, Any]]:
     return {row["name"]: dict(row) for row in table[method]}
 
 
-def _listed(names: Sequence[str], quote: bool = True) -> str:
-    """'a', 'a' and 'b', 'a', 'b' and 'c'."""
-    words = [repr(n) if quote else n for n in names]
-    return words[0] if len(words) == 1 else f"{', '.join(words[:-1])} and {words[-1]}"
+def listed(words: Sequence[str], last: str = "and") -> str:
+    """'a', 'a and b', 'a, b and c'; with ``last="or"``: 'a, b or c'."""
+    return words[0] if len(words) == 1 else f"{', '.join(words[:-1])} {last} {words[-1]}"
+
+
+def methods_taking(names: Sequence[str]) -> List[str]:
+    """The methods whose options include every one of ``names``."""
+    return [m for m in methods() if all(name in method_options(m) for name in names)]
 
 
 def stray_options(options: Dict[str, Any], method: str) -> Optional[Tuple[str, List[str], str]]:
@@ -71,22 +75,18 @@ def stray_options(options: Dict[str, Any], method: str) -> Optional[Tuple[str, L
              if name not in taken and any(name in method_options(m) for m in methods())]
     if not stray:
         return None
-    owners = [m for m in methods() if all(name in method_options(m) for name in stray)]
-    where = (f"method{'s' if len(owners) > 1 else ''} {_listed(owners)}" if owners
-             else "other methods (sp.method_options lists each method's)")
-    what = (f"{_listed(stray)} is an option of {where}" if len(stray) == 1
-            else f"{_listed(stray)} are options of {where}")
+    owners = methods_taking(stray)
+    quoted = [repr(name) for name in stray]
+    where = (f"method{'s' if len(owners) > 1 else ''} {listed([repr(m) for m in owners])}"
+             if owners else "other methods (sp.method_options lists each method's)")
+    what = (f"{listed(quoted)} is an option of {where}" if len(stray) == 1
+            else f"{listed(quoted)} are options of {where}")
     return what, owners, ("it" if len(stray) == 1 else "them")
-
-
-def either(names: Sequence[str]) -> str:
-    """'a', 'a or b', 'a, b or c'."""
-    return names[0] if len(names) == 1 else f"{', '.join(names[:-1])} or {names[-1]}"
 
 
 def pass_method(owners: List[str], quote: str = '"') -> str:
     """The hint: pass method="theta_phi" (or "relaxation", "gotsman" or "theta_phi")."""
-    return f"pass method={either([f'{quote}{m}{quote}' for m in owners])}"
+    return f"pass method={listed([f'{quote}{m}{quote}' for m in owners], 'or')}"
 
 
 def embed(mesh: MeshLike, method: str = "progressive", *, progress: Any = None,

@@ -47,7 +47,7 @@ import numpy as np
 
 from . import _args, _cli_apps, _core, _files, _formats, datasets
 from ._cli_options import (UsageError, add_input_flags, add_method_flags, add_progress_flag,
-                           method_options_of)
+                           method_options_of, shows_progress)
 from ._embed import embed, methods
 from ._errors import MeshError, SpherifyError, SpherifyWarning, TopologyError
 from ._mesh import Mesh, check, check_sphere, load, orient, save, weld
@@ -251,9 +251,8 @@ def _cmd_map(args: argparse.Namespace) -> int:
         print(report)
         print("refusing to map: the mesh is not a closed, connected, manifold genus-0 surface")
         return 1
-    if method == "progressive" or options.get("poles") == "graph":
-        if args.progress or sys.stderr.isatty():
-            options["progress"] = True
+    if (method == "progressive" or options.get("poles") == "graph") and shows_progress(args):
+        options["progress"] = True
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", SpherifyWarning)  # reported below instead
         try:
@@ -325,7 +324,7 @@ def _cmd_batch(args: argparse.Namespace) -> int:
             result = batch(args.inputs, args.output, method=args.method or "progressive",
                            workers=args.workers, timeout=args.timeout,
                            scheduler=args.scheduler, weld=args.weld,
-                           progress=args.progress or sys.stderr.isatty(), **options)
+                           progress=shows_progress(args), **options)
     except KeyboardInterrupt:
         print(f"interrupted: {args.output}/journal.jsonl holds every mesh that finished; "
               "run the same command again to resume", file=sys.stderr)
