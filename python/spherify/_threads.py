@@ -18,7 +18,7 @@ def set_num_threads(n: Optional[Any]) -> None:
     Raises
     ------
     MeshError
-        ``n`` is not an integer >= 1 (or None).
+        ``n`` is not an integer from 1 to 4096 (or None).
     SpherifyError
         Called from inside a progress callable.
     """

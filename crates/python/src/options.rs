@@ -10,7 +10,7 @@ use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyString};
 use spherify_sparse::weights::Weights;
-use spherify_sphere::method_options::{MethodOption, OptionKind};
+use spherify_sphere::method_options::{MethodOption, OptionDefault, OptionKind, OptionValue};
 use spherify_sphere::MethodName;
 
 use crate::errors::mesh_error;
@@ -73,9 +73,7 @@ impl<'py> Options<'py> {
             Some(value) => Ok(value.cast::<PyString>().ok().map(|s| s.to_string())),
             None => {
                 Ok(self.table.iter().find(|o| o.name == option).and_then(|o| match &o.default {
-                    spherify_sphere::method_options::OptionDefault::Value(
-                        spherify_sphere::method_options::OptionValue::Name(name),
-                    ) => Some(name.to_string()),
+                    OptionDefault::Value(OptionValue::Name(name)) => Some(name.to_string()),
                     _ => None,
                 }))
             }
