@@ -84,11 +84,15 @@ def test_morph_writes_the_frames_from_a_to_b(
     frames = sorted(tmp_path.glob("frame_*.ply"))
     assert [f.name for f in frames] == ["frame_000.ply", "frame_001.ply", "frame_002.ply"]
     a = sp.datasets.make("bumpy_blob", 600)
-    np.testing.assert_allclose(sp.load(frames[0]).vertices, a.vertices, atol=1e-12)
     m_a = sp.embed(a, "progressive")  # the applications' --method default
     m_b = sp.embed(sp.datasets.make("ellipsoid", 600), "progressive")
-    np.testing.assert_allclose(sp.load(frames[2]).vertices, sp.morph(m_a, m_b).at(1).vertices,
-                               atol=1e-12)
+    mo = sp.morph(m_a, m_b)
+    first = sp.load(frames[0]).vertices
+    # Normalised by default: A centred at unit rms radius.
+    np.testing.assert_allclose(first.mean(axis=0), 0.0, atol=1e-12)
+    assert np.sqrt((first ** 2).sum(axis=1).mean()) == pytest.approx(1.0, abs=1e-12)
+    np.testing.assert_allclose(first, mo.at(0).vertices, atol=1e-12)
+    np.testing.assert_allclose(sp.load(frames[2]).vertices, mo.at(1).vertices, atol=1e-12)
 
 
 def test_morph_with_landmarks_and_bad_landmarks(

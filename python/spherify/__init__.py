@@ -17,7 +17,9 @@ from ._spheremap import SphereMap, ThetaPhiMap
 from ._tutte import TutteInfo, boundary_loop, tutte
 from ._embed import embed, improve, method_options, methods
 from ._quality import face_quality, quality
+from ._register import Correspondence, SurfacePoints, register
 from ._morph import Morph, morph
+from ._population import Population, correspond
 from ._remesh import remesh, remesh_map, surface_distance
 from ._geometry_image import (from_geometry_image, geometry_image, load_geometry_image,
                              save_geometry_image)
@@ -27,6 +29,7 @@ from ._threads import get_num_threads, set_num_threads
 
 __all__ = [
     "BatchResult",
+    "Correspondence",
     "ConvergenceError",
     "FileError",
     "FormatError",
@@ -35,8 +38,10 @@ __all__ = [
     "MeshError",
     "MeshReport",
     "Morph",
+    "Population",
     "SphereMap",
     "SphereReport",
+    "SurfacePoints",
     "SpherifyError",
     "SpherifyWarning",
     "ThetaPhiMap",
@@ -47,6 +52,7 @@ __all__ = [
     "boundary_loop",
     "check",
     "check_sphere",
+    "correspond",
     "datasets",
     "dijkstra",
     "embed",
@@ -65,6 +71,7 @@ __all__ = [
     "orient",
     "plot",
     "quality",
+    "register",
     "remesh",
     "remesh_map",
     "save_geometry_image",

@@ -165,7 +165,8 @@ def _cmd_morph(args: argparse.Namespace, load: Callable[[argparse.Namespace], Me
             raise SpherifyError(f"landmarks must be I:J vertex pairs, got {args.landmarks}") \
                 from None
     start = time.perf_counter()
-    mo = morph(m_a, m_b, align=args.align, landmarks=landmarks)
+    mo = morph(m_a, m_b, align=args.align, landmarks=landmarks,
+               normalize=not args.no_normalize, progress=shows_progress(args))
     aligned = time.perf_counter()
     al = mo.alignment
     extra = (f", landmark rms angle {al['landmark_residual']:.3g} rad"
@@ -254,10 +255,15 @@ def add_commands(sub: Any, load: Callable[[argparse.Namespace], Mesh],
                    help="use a generated shape as the target")
     p.add_argument("--frames", type=int, default=5,
                    help="frames from A (first) to B (last) (default: 5)")
-    p.add_argument("--align", default="rotation", choices=["rotation", "landmarks", "none"],
-                   help="how B's sphere is turned onto A's before the morph: the rotation "
-                        "that best matches them, the one that best matches --landmarks, or "
-                        "none (default: rotation)")
+    p.add_argument("--align", default="rotation",
+                   choices=["rotation", "moebius", "warp", "landmarks", "none"],
+                   help="how A's sphere map is brought onto B's before the morph: the rotation "
+                        "or Moebius transformation that best matches the shapes, a flip-free "
+                        "warp that also makes --landmarks meet exactly, the rotation that best "
+                        "matches --landmarks, or none (default: rotation)")
+    p.add_argument("--no-normalize", action="store_true",
+                   help="morph between the shapes as given; by default both are centred, "
+                        "scaled to unit rms radius and B is turned into A's pose")
     p.add_argument("--landmarks", nargs="*", metavar="I:J",
                    help="vertex I of A corresponds to vertex J of B")
     p.set_defaults(func=lambda args: _cmd_morph(args, load))

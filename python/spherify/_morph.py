@@ -1,135 +1,38 @@
 """Morphing through two sphere maps (thesis 8.4).
 
-Each vertex of A goes to the sphere by A's map, is turned by a rotation R of
-the sphere, and comes back on B's surface by B's inverse map; the morph
+Each vertex of A goes to the sphere by A's map, is moved into B's sphere
+frame, and comes back on B's surface by B's inverse map; the morph
 interpolates linearly between A's vertex and that point of B (the thesis's
 scheme, with A's connectivity throughout).
 
-The rotation aligns the two maps, which are independent: each method puts
-its own features wherever it likes on the sphere. It minimises
+How A's map is moved into B's frame is the registration of
+:func:`spherify.register`: a rotation, a Möbius transformation, or a
+flip-free warp that also makes landmark pairs coincide ("Alexa gives a
+method for aligning certain features of the two models", 8.4). ``"landmarks"``
+is the rotation that sends A's landmarks onto B's on the sphere in least
+squares, ``"none"`` the identity.
 
-    E(R) = min over S of  sum_i | S a_i - b(R p_i) |^2
-
-over A's vertices (``p_i`` on the sphere, ``a_i`` on A; ``b(q)`` B's surface
-at ``q``), both shapes centred and scaled to unit rms radius, and ``S`` the
-spatial rotation that best superimposes them (Kabsch 1976, solved exactly at
-every step): so the alignment compares shapes, not their placement in space.
-Starting points: the identity; the four rotations that carry the principal
-frame of A's degree-1 spherical harmonics (the best-fitting ellipsoid, 8.3)
-onto B's; and, given landmark pairs, the rotation that sends A's landmarks
-onto B's on the sphere in least squares (Kabsch on the sphere). The best
-start is refined by Gauss-Newton on the rotation (finite differences through
-``to_surface``), on at most 2000 of A's vertices.
+By default both shapes are centred and scaled to unit rms radius and B is
+turned into A's pose by the spatial rotation the alignment found, so a morph
+between a cow and a head sixteen times smaller is a change of shape, not of
+size or place.
 """
 
 from __future__ import annotations
 
-from typing import Any, Dict, List, Optional, Sequence, Tuple
+from typing import Any, Dict, Optional, Sequence, Tuple
 
 import numpy as np
-import numpy.typing as npt
 
-from . import harmonics
+from . import _align
 from ._errors import MeshError
 from ._mesh import Mesh
+from ._register import Correspondence, landmark_pairs, register
 from ._spheremap import SphereMap
 
 __all__ = ["Morph", "morph"]
 
-ALIGNS = ("rotation", "landmarks", "none")
-SUBSAMPLE = 2000
-
-
-def _kabsch(p: np.ndarray, q: np.ndarray) -> np.ndarray:
-    """The proper rotation R minimising sum |R p_i - q_i|^2 (rows p_i, q_i)."""
-    u, _, vt = np.linalg.svd(q.T @ p)
-    d = np.sign(np.linalg.det(u @ vt)) or 1.0
-    rotation: np.ndarray = u @ np.diag([1.0, 1.0, d]) @ vt
-    return rotation
-
-
-def _rodrigues(w: np.ndarray) -> np.ndarray:
-    """exp of the skew matrix of w: the rotation by |w| about w."""
-    angle = float(np.linalg.norm(w))
-    k = np.array([[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]], [-w[1], w[0], 0.0]])
-    if angle < 1e-300:
-        return np.eye(3)
-    k /= angle
-    rotation: np.ndarray = np.eye(3) + np.sin(angle) * k + (1 - np.cos(angle)) * (k @ k)
-    return rotation
-
-
-def _normalised(x: np.ndarray) -> np.ndarray:
-    c = x - x.mean(axis=0)
-    scale = np.sqrt((c * c).sum(axis=1).mean())
-    result: np.ndarray = c / (scale if scale > 0 else 1.0)
-    return result
-
-
-class _Cost:
-    """E(R) on a fixed set of A's vertices."""
-
-    def __init__(self, a: np.ndarray, p: np.ndarray, m_b: SphereMap) -> None:
-        self.a = _normalised(a)
-        self.p = p
-        self.m_b = m_b
-
-    def residual(self, rotation: np.ndarray) -> np.ndarray:
-        _, _, xyz = self.m_b.to_surface(self.p @ rotation.T)
-        b = _normalised(xyz)
-        s = _kabsch(self.a, b)
-        r: np.ndarray = (self.a @ s.T - b).ravel()
-        return r
-
-    def __call__(self, rotation: np.ndarray) -> float:
-        r = self.residual(rotation)
-        return float(r @ r)
-
-
-def _frame_candidates(m_a: SphereMap, m_b: SphereMap) -> List[np.ndarray]:
-    """Rotations carrying the principal axes of A's degree-1 harmonics onto B's."""
-    def linear_part(m: SphereMap) -> np.ndarray:
-        c = harmonics.fit(m, 1, oversample=8).coefficients
-        # f1(p) = sqrt(3 / 4 pi) (c(1,1) x + c(1,-1) y + c(1,0) z): columns per axis.
-        return np.stack([c[3], c[1], c[2]], axis=1)
-
-    _, _, va = np.linalg.svd(linear_part(m_a))
-    _, _, vb = np.linalg.svd(linear_part(m_b))
-    out = []
-    for signs in ((1, 1, 1), (1, -1, -1), (-1, 1, -1), (-1, -1, 1),
-                  (-1, -1, -1), (-1, 1, 1), (1, -1, 1), (1, 1, -1)):
-        r = vb.T @ np.diag(signs) @ va
-        if np.linalg.det(r) > 0:
-            out.append(r)
-    return out
-
-
-def _refine(cost: _Cost, rotation: np.ndarray, max_iter: int = 50) -> Tuple[np.ndarray, int]:
-    """Gauss-Newton on the rotation, w in R^3 with R <- exp(w) R, central
-    differences, step halving when the cost does not fall."""
-    current = cost(rotation)
-    h = 1e-6
-    for iteration in range(1, max_iter + 1):
-        r = cost.residual(rotation)
-        jac = np.empty((len(r), 3))
-        for k in range(3):
-            e = np.zeros(3)
-            e[k] = h
-            jac[:, k] = (cost.residual(_rodrigues(e) @ rotation)
-                         - cost.residual(_rodrigues(-e) @ rotation)) / (2 * h)
-        step = -np.linalg.lstsq(jac, r, rcond=None)[0]
-        for _ in range(30):
-            trial = _rodrigues(step) @ rotation
-            value = cost(trial)
-            if value <= current:
-                break
-            step /= 2
-        else:
-            return rotation, iteration
-        rotation, previous, current = trial, current, value
-        if np.linalg.norm(step) < 1e-12 or previous - current <= 1e-15 * max(previous, 1e-300):
-            return rotation, iteration
-    return rotation, max_iter
+ALIGNS = ("rotation", "moebius", "warp", "landmarks", "none")
 
 
 class Morph:
@@ -139,31 +42,37 @@ class Morph:
     ----------------------
     rotation : (3, 3) float64
         The rotation of the sphere applied to A's sphere points before B's
-        inverse map (identity for ``align="none"``).
+        inverse map (identity for ``align="none"``; the Möbius
+        transformation's rotation part for ``"moebius"`` and ``"warp"``).
     start : (n, 3) float64
-        A's vertices.
+        A's vertices (centred and at unit rms radius with ``normalize``).
     end : (n, 3) float64
-        Where A's vertices land on B's surface.
+        Where A's vertices land on B's surface (with ``normalize``: on B
+        centred, at unit rms radius and turned into A's pose).
     faces : (m, 3) int64
         A's faces.
+    correspondence : Correspondence or None
+        The registration behind ``"rotation"``, ``"moebius"`` and ``"warp"``.
     alignment : dict
         ``residual`` (rms of the aligned shapes' difference per vertex, both at
         unit rms radius, over all of A's vertices), ``start`` (which starting
-        rotation won), ``iterations`` (Gauss-Newton steps), ``spatial_rotation``
-        (S in the module doc), and with landmarks ``landmark_residual`` (rms
-        angle in radians between R p_a and p_b after the Kabsch step).
+        rotation won), ``iterations`` (Gauss-Newton steps of the rotation),
+        ``spatial_rotation`` (the rotation S that superimposes A on B in
+        space), and with landmarks ``landmark_residual`` (rms angle in radians
+        between A's landmarks and B's on the sphere after the alignment).
     """
 
-    def __init__(self, m_a: SphereMap, m_b: SphereMap, rotation: np.ndarray,
-                 alignment: Dict[str, Any]) -> None:
+    def __init__(self, start: np.ndarray, end: np.ndarray, faces: np.ndarray,
+                 rotation: np.ndarray, alignment: Dict[str, Any],
+                 correspondence: Optional[Correspondence] = None) -> None:
+        for array in (start, end, rotation):
+            array.flags.writeable = False
         self._rotation = rotation
-        self._rotation.flags.writeable = False
-        self._start = m_a.mesh.vertices
-        _, _, end = m_b.to_surface(m_a.points @ rotation.T)
-        end.flags.writeable = False
+        self._start = start
         self._end = end
-        self._faces = m_a.mesh.faces
+        self._faces = faces
         self._alignment = alignment
+        self._correspondence = correspondence
 
     @property
     def rotation(self) -> np.ndarray:
@@ -182,12 +91,16 @@ class Morph:
         return self._faces
 
     @property
+    def correspondence(self) -> Optional[Correspondence]:
+        return self._correspondence
+
+    @property
     def alignment(self) -> Dict[str, Any]:
         return dict(self._alignment)
 
     def at(self, t: float) -> Mesh:
         """The mesh at time ``t`` in [0, 1]: ``(1 - t) start + t end`` with A's
-        faces. ``at(0)`` is A and ``at(1)`` lies on B's surface, exactly."""
+        faces. ``at(0)`` is ``start`` and ``at(1)`` lies on B's surface, exactly."""
         t = float(t)
         if not 0.0 <= t <= 1.0:
             raise MeshError(f"t must be in [0, 1], got {t!r}")
@@ -198,72 +111,96 @@ class Morph:
                 f"residual={self._alignment.get('residual', float('nan')):.3g})")
 
 
+def _unit_frame(x: np.ndarray) -> Tuple[np.ndarray, float]:
+    centre = x.mean(axis=0)
+    c = x - centre
+    scale = float(np.sqrt((c * c).sum(axis=1).mean()))
+    return centre, scale if scale > 0 else 1.0
+
+
 def morph(m_a: SphereMap, m_b: SphereMap, *, align: str = "rotation",
-          landmarks: Optional[Sequence[Tuple[int, int]]] = None) -> Morph:
+          landmarks: Optional[Sequence[Tuple[int, int]]] = None, normalize: bool = True,
+          progress: Any = None) -> Morph:
     """Morph A's surface into B's through their sphere maps (thesis 8.4).
 
     Parameters
     ----------
     m_a, m_b : SphereMap
-        Maps of A and B; B's must be certified (``to_surface`` is used).
+        Maps of A and B; B's must be certified (``to_surface`` is used), and
+        for ``"rotation"``, ``"moebius"`` and ``"warp"`` A's too.
     align : str
-        ``"rotation"`` (default): the rotation of the sphere that best matches
-        the shapes (module doc), from the identity, the degree-1 harmonic
-        frames and the landmarks if given. ``"landmarks"``: only the Kabsch
-        rotation of the landmarks, not refined. ``"none"``: the identity.
+        How A's map is brought into B's sphere frame: ``"rotation"``
+        (default), ``"moebius"`` or ``"warp"``, as in
+        :func:`spherify.register` (``"warp"`` makes landmark pairs meet
+        exactly: a feature-aligned morph); ``"landmarks"``: only the Kabsch
+        rotation of the landmarks, not refined; ``"none"``: the identity.
     landmarks : sequence of (i_a, j_b), optional
         Vertex pairs that should correspond (at least 2 for ``"landmarks"``).
+    normalize : bool, default True
+        Centre both shapes, scale them to unit rms radius and turn B into A's
+        pose (the spatial rotation found by the alignment), so that the morph
+        changes shape, not size, place or pose. False morphs between the
+        shapes as given.
+    progress : bool or callable, optional
+        Passed to :func:`spherify.register`.
 
     Returns
     -------
     Morph
-        Cost: a few dozen ``to_surface`` calls on at most 2000 points, two
-        harmonic fits of degree 1, and one ``to_surface`` of A's vertices.
+        Cost: that of :func:`spherify.register` for ``align``, plus one
+        ``to_surface`` of A's vertices.
 
     Raises
     ------
     MapError
-        B's map (or, for the harmonic frames, A's) is not a certified bijection.
+        B's map (or, for the alignments that compare shapes, A's) is not a
+        certified bijection.
     MeshError
-        Unknown ``align``, landmark ids out of range, or too few landmarks.
+        Unknown ``align``, landmark ids out of range or repeated, or too few
+        landmarks.
     """
     if align not in ALIGNS:
         raise MeshError(f"unknown align {align!r}; available: {', '.join(ALIGNS)}")
+    if not isinstance(normalize, bool):
+        raise MeshError(f"normalize must be True or False, got {normalize!r}")
+    pairs = landmark_pairs(landmarks, len(m_a.points), len(m_b.points))
     alignment: Dict[str, Any] = {}
-    starts: List[Tuple[str, np.ndarray]] = []
-    if landmarks is not None:
-        pairs = np.asarray(landmarks)
-        if pairs.ndim != 2 or pairs.shape[1] != 2 or pairs.dtype.kind not in "iu":
-            raise MeshError(f"landmarks must be (i_a, j_b) integer pairs, got shape {pairs.shape}")
-        na, nb = len(m_a.points), len(m_b.points)
-        if len(pairs) and (pairs.min() < 0 or pairs[:, 0].max() >= na or pairs[:, 1].max() >= nb):
-            raise MeshError(f"landmark ids must be in 0..{na - 1} (A) and 0..{nb - 1} (B)")
-        if len(pairs) < 2:
-            raise MeshError(f"landmarks need at least 2 pairs to fix a rotation, got {len(pairs)}")
-        pa, pb = m_a.points[pairs[:, 0]], m_b.points[pairs[:, 1]]
-        r = _kabsch(pa, pb)
-        angles = np.arccos(np.clip(((pa @ r.T) * pb).sum(axis=1), -1.0, 1.0))
-        alignment["landmark_residual"] = float(np.sqrt(np.mean(angles ** 2)))
-        starts.append(("landmarks", r))
-    elif align == "landmarks":
-        raise MeshError("align='landmarks' needs landmarks")
-    if align == "none":
-        rotation = np.eye(3)
-        alignment.update(start="none", iterations=0)
-    elif align == "landmarks":
-        rotation = starts[0][1]
-        alignment.update(start="landmarks", iterations=0)
+    correspondence = None
+    if align == "landmarks" and not len(pairs):
+        raise MeshError("align='landmarks' needs landmarks (at least 2 pairs)")
+    if align in ("rotation", "landmarks") and 0 < len(pairs) < 2:
+        raise MeshError(f"landmarks need at least 2 pairs to fix a rotation, got {len(pairs)}")
+    if align in ("none", "landmarks"):
+        if align == "none":
+            rotation = np.eye(3)
+        else:
+            rotation = _align.kabsch(m_a.points[pairs[:, 0]], m_b.points[pairs[:, 1]])
+        alignment.update(start=align, iterations=0)
+        _, _, end = m_b.to_surface(m_a.points @ rotation.T)
+        points_a = m_a.points @ rotation.T
     else:
-        starts.append(("identity", np.eye(3)))
-        starts += [(f"harmonic frame {k}", r) for k, r in enumerate(_frame_candidates(m_a, m_b))]
-        pick = np.unique(np.linspace(0, len(m_a.points) - 1, SUBSAMPLE).astype(np.int64))
-        cost = _Cost(m_a.mesh.vertices[pick], m_a.points[pick], m_b)
-        name, best = min(starts, key=lambda s: cost(s[1]))
-        rotation, iterations = _refine(cost, best)
-        alignment.update(start=name, iterations=iterations)
-    full = _Cost(m_a.mesh.vertices, m_a.points, m_b)
-    r = full.residual(rotation).reshape(-1, 3)
+        correspondence = register(m_a, m_b, landmarks=pairs if len(pairs) else None,
+                                  transform=align, progress=progress)
+        rotation = np.array(correspondence.rotation)
+        details = correspondence.details
+        alignment.update(start=details["start"], iterations=details["rotation_steps"])
+        end = np.array(correspondence.a_on_b.positions)
+        points_a = correspondence.map_a.points
+    if len(pairs):
+        pa, pb = points_a[pairs[:, 0]], m_b.points[pairs[:, 1]]
+        angles = np.arccos(np.clip((pa * pb).sum(axis=1), -1.0, 1.0))
+        alignment["landmark_residual"] = float(np.sqrt(np.mean(angles ** 2)))
+    a = _align.normalised(m_a.mesh.vertices)
+    b = _align.normalised(end)
+    spatial = _align.kabsch(a, b)
+    r = a @ spatial.T - b
     alignment["residual"] = float(np.sqrt((r * r).sum(axis=1).mean()))
-    b = _normalised(m_b.to_surface(m_a.points @ rotation.T)[2])
-    alignment["spatial_rotation"] = _kabsch(full.a, b)
-    return Morph(m_a, m_b, np.array(rotation, dtype=np.float64), alignment)
+    alignment["spatial_rotation"] = spatial
+    start = np.array(m_a.mesh.vertices)
+    if normalize:
+        a_centre, a_scale = _unit_frame(start)
+        b_centre, b_scale = _unit_frame(m_b.mesh.vertices)
+        start = (start - a_centre) / a_scale
+        end = ((end - b_centre) / b_scale) @ spatial
+    return Morph(start, np.ascontiguousarray(end), m_a.mesh.faces,
+                 np.array(rotation, dtype=np.float64), alignment, correspondence)

@@ -21,6 +21,11 @@
     spherify harmonics|remesh|texture|morph ...
                                    the applications of thesis ch. 8 (_cli_apps.py);
                                    they take map's input, method and progress flags
+    spherify register A B -o OUT.npz [--transform warp] [--landmarks I:J ...]
+    spherify correspond MESH MESH ... -o FOLDER [--level 6]
+                                   correspondence between shapes (_cli_correspondence.py):
+                                   where A's vertices land on B; a population on one
+                                   connectivity with its mean and modes
     spherify batch INPUT... -o OUTDIR [--method M] [the method's options as for map]
                    [--workers N] [--timeout S] [--scheduler tcp://...]
                                    map many meshes (files, folders, lists of paths),
@@ -45,7 +50,7 @@ from typing import Any, Dict, List, Optional, Tuple, Union
 
 import numpy as np
 
-from . import _args, _cli_apps, _core, _files, _formats, datasets
+from . import _args, _cli_apps, _cli_correspondence, _core, _files, _formats, datasets
 from ._cli_options import (UsageError, add_input_flags, add_method_flags, add_progress_flag,
                            method_options_of, shows_progress)
 from ._embed import embed, methods
@@ -397,6 +402,7 @@ def main(argv: Optional[List[str]] = None) -> int:
     add_progress_flag(p, threads=False)
     p.set_defaults(func=_cmd_batch)
     _cli_apps.add_commands(sub, _load, _save_npz)
+    _cli_correspondence.add_commands(sub, _load, _save_npz)
     args = parser.parse_args(argv)
     stdout, sys.stdout = sys.stdout, _ReaderMayLeave(sys.stdout)
     threads = getattr(args, "threads", None)

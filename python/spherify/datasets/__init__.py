@@ -9,7 +9,9 @@ all the work is vectorised; 2,000,000 vertices take a second or two.
 The modules hold, in order of dependence: ``_geodesic`` (the geodesic unit
 sphere), ``_spheres`` (icosphere, ellipsoid, bumpy blob), ``_tubes`` (rings,
 bands, caps and tube sizing), ``_helix`` (helix tube), ``_arms`` (a body with
-holes and the arms joined to them), ``_urchin`` and ``_tentacles``.
+holes and the arms joined to them), ``_urchin`` and ``_tentacles``;
+``_pairs`` makes a deformed copy of a mapped shape with the true
+correspondence, to measure registration.
 """
 
 from __future__ import annotations
@@ -19,13 +21,14 @@ from typing import Any, Callable, Dict, List
 from .._errors import MeshError
 from .._mesh import Mesh
 from ._helix import helix_tube
+from ._pairs import DeformedCopy, deformed_copy
 from ._spheres import bumpy_blob, ellipsoid, icosphere
 from ._spheres import sphere as _sphere
 from ._tentacles import tentacles
 from ._textures import checkerboard, lat_long_grid
 from ._urchin import urchin
 
-__all__ = ["bumpy_blob", "checkerboard", "ellipsoid", "helix_tube", "icosphere", "lat_long_grid",
+__all__ = ["DeformedCopy", "bumpy_blob", "checkerboard", "deformed_copy", "ellipsoid", "helix_tube", "icosphere", "lat_long_grid",
            "make", "names", "tentacles", "urchin"]
 
 # make's shapes, simplest first; "icosphere" takes a vertex count here

@@ -1,0 +1,212 @@
+"""Rigid and conformal alignment of two sphere maps: a rotation or a Möbius
+transformation of the sphere carrying A's map onto B's.
+
+Each method puts the features of a shape wherever it likes on the sphere, so
+two maps are compared only after one is moved onto the other. The best
+transformation T minimises
+
+    E(T) = min over S of  sum_i | S a_i - b(T p_i) |^2
+
+over A's vertices (``p_i`` on the sphere, ``a_i`` on A; ``b(q)`` is B's surface
+at ``q``), both shapes centred and scaled to unit rms radius, and ``S`` the
+spatial rotation that best superimposes them (Kabsch 1976, solved exactly at
+every step): so the alignment compares shapes, not their placement in space.
+
+Rotations: starts from the identity, the rotations that carry the principal
+frame of A's degree-1 spherical harmonics (the best-fitting ellipsoid, thesis
+8.3) onto B's and, given landmark pairs, the rotation that sends A's
+landmarks onto B's on the sphere in least squares (Kabsch on the sphere); the
+best start is refined by Gauss-Newton on the rotation (central differences
+through ``to_surface``), on at most 2000 of A's vertices.
+
+Möbius transformations (the conformal automorphisms of the sphere; Baden,
+Crane and Kazhdan 2018 register shapes with them): T = R o B_b, a rotation
+after a boost. The boost by ``b`` (|b| < 1) is the sphere's view of a Lorentz
+boost, the aberration of light with velocity ``b``:
+
+    B_b(x) = (sqrt(1 - |b|^2) x + (b.x) b / (1 + sqrt(1 - |b|^2)) + b) / (1 + b.x),
+
+a unit vector for every unit ``x``, the identity at ``b = 0``, and it draws
+points towards ``b / |b|``. The six parameters start from the best rotation
+with ``b = 0`` and are refined by the same Gauss-Newton.
+"""
+
+from __future__ import annotations
+
+from typing import Callable, List, Optional, Tuple
+
+import numpy as np
+
+from . import harmonics
+from ._spheremap import SphereMap
+
+__all__ = ["boost", "kabsch", "normalised", "best_rotation", "best_moebius"]
+
+SUBSAMPLE = 1000
+# The largest |b| a Möbius fit may reach: beyond it the boost squeezes half
+# the sphere into a cap too small for the map's triangles.
+MAX_BOOST = 0.9
+
+
+def kabsch(p: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """The proper rotation R minimising sum |R p_i - q_i|^2 (rows p_i, q_i)."""
+    u, _, vt = np.linalg.svd(q.T @ p)
+    d = np.sign(np.linalg.det(u @ vt)) or 1.0
+    rotation: np.ndarray = u @ np.diag([1.0, 1.0, d]) @ vt
+    return rotation
+
+
+def rodrigues(w: np.ndarray) -> np.ndarray:
+    """exp of the skew matrix of w: the rotation by |w| about w."""
+    angle = float(np.linalg.norm(w))
+    if angle < 1e-300:
+        return np.eye(3)
+    k = np.array([[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]], [-w[1], w[0], 0.0]]) / angle
+    rotation: np.ndarray = np.eye(3) + np.sin(angle) * k + (1 - np.cos(angle)) * (k @ k)
+    return rotation
+
+
+def normalised(x: np.ndarray) -> np.ndarray:
+    """``x`` centred on its mean and scaled to unit rms radius."""
+    c = x - x.mean(axis=0)
+    scale = np.sqrt((c * c).sum(axis=1).mean())
+    result: np.ndarray = c / (scale if scale > 0 else 1.0)
+    return result
+
+
+def boost(b: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """B_b applied to the unit rows of ``x`` (module doc)."""
+    b = np.asarray(b, dtype=np.float64)
+    root = np.sqrt(max(0.0, 1.0 - float(b @ b)))
+    bx = x @ b
+    out: np.ndarray = (root * x + np.outer(bx / (1.0 + root), b) + b) / (1.0 + bx)[:, None]
+    # The formula is a unit vector in exact arithmetic; one division removes
+    # the rounding so the result is as good a sphere point as the input.
+    out /= np.linalg.norm(out, axis=1)[:, None]
+    return out
+
+
+class Cost:
+    """E(T) on a fixed set of A's vertices, T given as a function of sphere points."""
+
+    def __init__(self, a: np.ndarray, p: np.ndarray, m_b: SphereMap) -> None:
+        self.a = normalised(a)
+        self.p = p
+        self.m_b = m_b
+
+    def residual(self, transform: Callable[[np.ndarray], np.ndarray]) -> np.ndarray:
+        _, _, xyz = self.m_b.to_surface(transform(self.p))
+        b = normalised(xyz)
+        s = kabsch(self.a, b)
+        r: np.ndarray = (self.a @ s.T - b).ravel()
+        return r
+
+    def __call__(self, transform: Callable[[np.ndarray], np.ndarray]) -> float:
+        r = self.residual(transform)
+        return float(r @ r)
+
+
+def subsample_cost(m_a: SphereMap, m_b: SphereMap) -> Cost:
+    """The cost on at most :data:`SUBSAMPLE` of A's vertices, evenly spread in index."""
+    pick = np.unique(np.linspace(0, len(m_a.points) - 1, SUBSAMPLE).astype(np.int64))
+    return Cost(m_a.mesh.vertices[pick], m_a.points[pick], m_b)
+
+
+def _turn(rotation: np.ndarray) -> Callable[[np.ndarray], np.ndarray]:
+    return lambda p: p @ rotation.T
+
+
+def moebius_transform(rotation: np.ndarray, b: np.ndarray) -> Callable[[np.ndarray], np.ndarray]:
+    """The function p -> R B_b(p)."""
+    return lambda p: boost(b, p) @ rotation.T
+
+
+def frame_candidates(m_a: SphereMap, m_b: SphereMap) -> List[np.ndarray]:
+    """Rotations carrying the principal axes of A's degree-1 harmonics onto B's."""
+    def linear_part(m: SphereMap) -> np.ndarray:
+        c = harmonics.fit(m, 1, oversample=8).coefficients
+        # f1(p) = sqrt(3 / 4 pi) (c(1,1) x + c(1,-1) y + c(1,0) z): columns per axis.
+        return np.stack([c[3], c[1], c[2]], axis=1)
+
+    _, _, va = np.linalg.svd(linear_part(m_a))
+    _, _, vb = np.linalg.svd(linear_part(m_b))
+    out = []
+    for signs in ((1, 1, 1), (1, -1, -1), (-1, 1, -1), (-1, -1, 1),
+                  (-1, -1, -1), (-1, 1, 1), (1, -1, 1), (1, 1, -1)):
+        r = vb.T @ np.diag(signs) @ va
+        if np.linalg.det(r) > 0:
+            out.append(r)
+    return out
+
+
+def _gauss_newton(cost: Cost, params: np.ndarray,
+                  transform: Callable[[np.ndarray], Callable[[np.ndarray], np.ndarray]],
+                  max_iter: int) -> Tuple[np.ndarray, int]:
+    """Gauss-Newton on ``params`` (central differences, step halving when the
+    cost does not fall); ``transform(params)`` is the sphere map they stand for."""
+    current = cost(transform(params))
+    h = 1e-6
+    for iteration in range(1, max_iter + 1):
+        r = cost.residual(transform(params))
+        jac = np.empty((len(r), len(params)))
+        for k in range(len(params)):
+            e = np.zeros(len(params))
+            e[k] = h
+            jac[:, k] = (cost.residual(transform(params + e))
+                         - cost.residual(transform(params - e))) / (2 * h)
+        step = -np.linalg.lstsq(jac, r, rcond=None)[0]
+        for _ in range(30):
+            trial = params + step
+            value = cost(transform(trial))
+            if value <= current:
+                break
+            step /= 2
+        else:
+            return params, iteration
+        params, previous, current = trial, current, value
+        if np.linalg.norm(step) < 1e-9 or previous - current <= 1e-6 * max(previous, 1e-300):
+            return params, iteration
+    return params, max_iter
+
+
+def refine_rotation(cost: Cost, rotation: np.ndarray, max_iter: int = 50) -> Tuple[np.ndarray, int]:
+    """Gauss-Newton on the rotation, w in R^3 with R <- exp(w) R."""
+    w, iterations = _gauss_newton(cost, np.zeros(3),
+                                  lambda w: _turn(rodrigues(w) @ rotation), max_iter)
+    return rodrigues(w) @ rotation, iterations
+
+
+def best_rotation(m_a: SphereMap, m_b: SphereMap,
+                  landmark_rotation: Optional[np.ndarray] = None) -> Tuple[np.ndarray, str, int]:
+    """The rotation of the sphere that best matches the shapes (module doc):
+    the rotation, the name of the start that won, and the Gauss-Newton steps."""
+    starts: List[Tuple[str, np.ndarray]] = []
+    if landmark_rotation is not None:
+        starts.append(("landmarks", landmark_rotation))
+    starts.append(("identity", np.eye(3)))
+    starts += [(f"harmonic frame {k}", r) for k, r in enumerate(frame_candidates(m_a, m_b))]
+    cost = subsample_cost(m_a, m_b)
+    name, best = min(starts, key=lambda s: cost(_turn(s[1])))
+    rotation, iterations = refine_rotation(cost, best)
+    return rotation, name, iterations
+
+
+def best_moebius(m_a: SphereMap, m_b: SphereMap, rotation: np.ndarray,
+                 max_iter: int = 20) -> Tuple[np.ndarray, np.ndarray, int]:
+    """The Möbius transformation R B_b refined from ``rotation`` (and b = 0):
+    returns (R, b, Gauss-Newton steps). |b| is kept below :data:`MAX_BOOST`."""
+    cost = subsample_cost(m_a, m_b)
+
+    def transform(params: np.ndarray) -> Callable[[np.ndarray], np.ndarray]:
+        return moebius_transform(rodrigues(params[:3]) @ rotation, _capped(params[3:]))
+
+    params, iterations = _gauss_newton(cost, np.zeros(6), transform, max_iter)
+    return rodrigues(params[:3]) @ rotation, _capped(params[3:]), iterations
+
+
+def _capped(b: np.ndarray) -> np.ndarray:
+    norm = float(np.linalg.norm(b))
+    if norm <= MAX_BOOST:
+        return b
+    capped: np.ndarray = b * (MAX_BOOST / norm)
+    return capped

@@ -1,0 +1,364 @@
+"""Registration of two shapes through their sphere maps (thesis 8.4 and beyond).
+
+``register(m_a, m_b)`` brings A's certified map into B's frame and reads,
+for every vertex of A, the point of B's surface at the same place on the
+sphere. Three transforms, each building on the one before:
+
+- ``"rotation"``: the rotation of the sphere that best superimposes the
+  shapes (:mod:`spherify._align`);
+- ``"moebius"``: then the best Möbius transformation (six degrees of
+  freedom), kept only where it lowers the alignment cost;
+- ``"warp"`` (default): then landmark pairs pinned exactly and the flip-free
+  non-rigid warp of :mod:`spherify._warp`.
+
+A's map stays a certified bijection at every step (the exact orientation
+test and the area test), so the correspondence is one-to-one by construction:
+every point of A has exactly one image on B and every point of B one
+preimage on A.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from typing import Any, Dict, Optional, Sequence, Tuple
+
+import numpy as np
+import numpy.typing as npt
+
+from . import _align, _landmarks, _warp
+from ._errors import MapError, MeshError
+from ._progress import as_callback
+from ._spheremap import SphereMap
+
+__all__ = ["Correspondence", "SurfacePoints", "TRANSFORMS", "landmark_pairs", "register"]
+
+TRANSFORMS = ("rotation", "moebius", "warp")
+
+
+@dataclass(frozen=True)
+class SurfacePoints:
+    """Points on a mesh's surface: ``faces`` (k,) int64, barycentric ``bary``
+    (k, 3) on those faces' corners, and the ``positions`` (k, 3) themselves."""
+
+    faces: np.ndarray
+    bary: np.ndarray
+    positions: np.ndarray
+
+
+def _read_only(x: np.ndarray) -> np.ndarray:
+    x = np.array(x)
+    x.flags.writeable = False
+    return x
+
+
+def _diagonal(vertices: np.ndarray) -> float:
+    return float(np.linalg.norm(vertices.max(axis=0) - vertices.min(axis=0)))
+
+
+def landmark_pairs(landmarks: Any, n_a: int, n_b: int) -> np.ndarray:
+    """Check landmark pairs: a (k, 2) int64 array of (vertex of A, vertex of B)."""
+    if landmarks is None:
+        return np.empty((0, 2), dtype=np.int64)
+    try:
+        pairs = np.asarray(landmarks)
+    except (TypeError, ValueError) as err:
+        raise MeshError(f"landmarks must be (vertex_of_a, vertex_of_b) pairs: {err}") from None
+    if pairs.size == 0:
+        return np.empty((0, 2), dtype=np.int64)
+    if pairs.ndim != 2 or pairs.shape[1] != 2 or pairs.dtype.kind not in "iu":
+        raise MeshError("landmarks must be (vertex_of_a, vertex_of_b) integer pairs, "
+                        f"got an array of shape {pairs.shape} and type {pairs.dtype}")
+    pairs = pairs.astype(np.int64)
+    for side, column, n in (("A", 0, n_a), ("B", 1, n_b)):
+        ids = pairs[:, column]
+        bad = np.flatnonzero((ids < 0) | (ids >= n))
+        if len(bad):
+            raise MeshError(f"landmark {int(bad[0])}: vertex {int(ids[bad[0]])} of {side} is out "
+                            f"of range 0..{n - 1}")
+        values, counts = np.unique(ids, return_counts=True)
+        if (counts > 1).any():
+            raise MeshError(f"landmarks name vertex {int(values[counts > 1][0])} of {side} more "
+                            "than once")
+    return pairs
+
+
+def _check_maps(m_a: Any, m_b: Any) -> None:
+    for name, m in (("m_a", m_a), ("m_b", m_b)):
+        if not isinstance(m, SphereMap):
+            raise MeshError(f"{name} must be a SphereMap, got {type(m).__name__}")
+        if not m.valid:
+            raise MapError(f"{name} is not a certified bijection ({m.flipped} flipped faces); "
+                           "registration needs both maps valid")
+
+
+class Correspondence:
+    """Where every vertex of A lands on B, through two certified sphere maps.
+
+    Attributes (read-only)
+    ----------------------
+    transform : str
+        ``"rotation"``, ``"moebius"`` or ``"warp"``.
+    map_a : SphereMap
+        A's certified map in B's sphere frame (after the transform).
+    map_b : SphereMap
+        B's map.
+    a_on_b : SurfacePoints
+        For every vertex of A: the face of B, barycentric weights and position.
+    rotation : (3, 3) float64
+        The rotation of the sphere applied to A's map (the Möbius
+        transformation's rotation part for ``"moebius"`` and ``"warp"``).
+    moebius : dict or None
+        ``{"rotation": R, "boost": b}``: the map p -> R B_b(p) of
+        :mod:`spherify._align`; None for ``"rotation"``.
+    spatial : dict
+        The similarity that superimposes A on B in space: ``rotation`` (3, 3),
+        ``scale`` and ``translation`` (x -> scale * rotation @ x + translation).
+    residual : dict
+        ``rms`` and ``max`` distance between A's vertices (superimposed on B by
+        ``spatial``) and their images on B, relative to B's bounding-box
+        diagonal.
+    landmark_error : dict or None
+        With landmarks: ``max_angle`` (radians, between A's landmark on the
+        sphere and B's) and ``max_distance`` (of A's landmark's image on B to
+        B's landmark vertex, relative to B's diagonal).
+    seconds : dict
+        Wall time of each stage.
+    """
+
+    def __init__(self, transform: str, map_a: SphereMap, map_b: SphereMap, rotation: np.ndarray,
+                 moebius: Optional[Dict[str, np.ndarray]], pairs: np.ndarray,
+                 seconds: Dict[str, float], details: Optional[Dict[str, Any]] = None) -> None:
+        self._transform = transform
+        self._map_a = map_a
+        self._map_b = map_b
+        self._rotation = _read_only(rotation)
+        self._moebius = moebius
+        self._pairs = _read_only(pairs)
+        faces, bary, xyz = map_b.to_surface(map_a.points)
+        self._a_on_b = SurfacePoints(_read_only(faces), _read_only(bary), _read_only(xyz))
+        a, b = map_a.mesh.vertices, map_b.mesh.vertices
+        a_centre, b_centre = a.mean(axis=0), xyz.mean(axis=0)
+        a_c, y_c = a - a_centre, xyz - b_centre
+        a_scale = float(np.sqrt((a_c * a_c).sum(axis=1).mean())) or 1.0
+        y_scale = float(np.sqrt((y_c * y_c).sum(axis=1).mean())) or 1.0
+        spin = _align.kabsch(a_c, y_c)
+        scale = y_scale / a_scale
+        superimposed = scale * a_c @ spin.T + b_centre
+        distance = np.linalg.norm(superimposed - xyz, axis=1) / (_diagonal(b) or 1.0)
+        self._spatial = {"rotation": _read_only(spin), "scale": scale,
+                         "translation": _read_only(b_centre - scale * spin @ a_centre)}
+        self._residual = {"rms": float(np.sqrt(np.mean(distance ** 2))),
+                          "max": float(distance.max())}
+        self._landmark_error: Optional[Dict[str, float]] = None
+        if len(pairs):
+            pa, pb = map_a.points[pairs[:, 0]], map_b.points[pairs[:, 1]]
+            angle = np.arctan2(np.linalg.norm(np.cross(pa, pb), axis=1), (pa * pb).sum(axis=1))
+            gap = np.linalg.norm(xyz[pairs[:, 0]] - b[pairs[:, 1]], axis=1) / (_diagonal(b) or 1.0)
+            self._landmark_error = {"max_angle": float(angle.max()),
+                                    "max_distance": float(gap.max())}
+        self._seconds = dict(seconds)
+        self._details = dict(details or {})
+
+    @property
+    def transform(self) -> str:
+        return self._transform
+
+    @property
+    def map_a(self) -> SphereMap:
+        return self._map_a
+
+    @property
+    def map_b(self) -> SphereMap:
+        return self._map_b
+
+    @property
+    def a_on_b(self) -> SurfacePoints:
+        return self._a_on_b
+
+    @property
+    def rotation(self) -> np.ndarray:
+        return self._rotation
+
+    @property
+    def moebius(self) -> Optional[Dict[str, np.ndarray]]:
+        return None if self._moebius is None else dict(self._moebius)
+
+    @property
+    def spatial(self) -> Dict[str, Any]:
+        return dict(self._spatial)
+
+    @property
+    def landmarks(self) -> np.ndarray:
+        """The landmark pairs (k, 2): (vertex of A, vertex of B)."""
+        return self._pairs
+
+    @property
+    def residual(self) -> Dict[str, float]:
+        return dict(self._residual)
+
+    @property
+    def landmark_error(self) -> Optional[Dict[str, float]]:
+        return None if self._landmark_error is None else dict(self._landmark_error)
+
+    @property
+    def seconds(self) -> Dict[str, float]:
+        return dict(self._seconds)
+
+    @property
+    def details(self) -> Dict[str, Any]:
+        """How each stage went: the rotation's winning start, Gauss-Newton
+        steps, the warp's steps and how much of each wanted move it made."""
+        return dict(self._details)
+
+    def transfer(self, values_on_b: npt.ArrayLike) -> np.ndarray:
+        """Per-vertex values of B read at A's vertices (barycentric on B's faces).
+
+        Parameters
+        ----------
+        values_on_b : (n_b,) or (n_b, d) float
+            One value (or row) per vertex of B.
+
+        Returns
+        -------
+        (n_a,) or (n_a, d) float64
+
+        Raises
+        ------
+        MeshError
+            Not one value per vertex of B, or not numbers.
+        """
+        try:
+            values = np.asarray(values_on_b, dtype=np.float64)
+        except (TypeError, ValueError) as err:
+            raise MeshError(f"values_on_b must be numbers: {err}") from None
+        n_b = len(self._map_b.points)
+        if values.ndim not in (1, 2) or len(values) != n_b:
+            raise MeshError(f"values_on_b must have one value or row per vertex of B ({n_b}), "
+                            f"got shape {values.shape}")
+        corners = self._map_b.mesh.faces[self._a_on_b.faces]
+        bary = self._a_on_b.bary
+        if values.ndim == 1:
+            out: np.ndarray = (bary * values[corners]).sum(axis=1)
+        else:
+            out = np.einsum("ij,ijk->ik", bary, values[corners])
+        return out
+
+    def inverse(self) -> "Correspondence":
+        """B onto A: every vertex of B located on A through the same two maps
+        (the correspondence is a bijection, so this is its exact inverse up
+        to the barycentric interpolation)."""
+        return Correspondence(self._transform, self._map_b, self._map_a, np.eye(3), None,
+                              self._pairs[:, ::-1].copy(), self._seconds,
+                              {**self._details, "inverse of": "a_on_b"})
+
+    def __repr__(self) -> str:
+        return (f"Correspondence(transform={self._transform!r}, n_a={len(self._map_a.points)}, "
+                f"n_b={len(self._map_b.points)}, residual_rms={self._residual['rms']:.3g})")
+
+
+def _moved(current: SphereMap, points: np.ndarray) -> SphereMap:
+    """``current``'s mesh with ``points``, certified. Where a face would flip
+    (a triangle thinner than the rounding of a turn, or a strong boost
+    squeezing a thin tube), the flip-free moves take the vertices from the
+    valid ``current`` towards ``points`` instead, as far as the exact test allows."""
+    moved = SphereMap.from_points(current.mesh, points)
+    if moved.valid:
+        return moved
+    return _landmarks.move_towards(current, points, energy_sweeps=0)
+
+
+def register(m_a: SphereMap, m_b: SphereMap, *, landmarks: Optional[Sequence[Tuple[int, int]]] = None,
+             transform: str = "warp", progress: Any = None) -> Correspondence:
+    """Register shape A onto shape B through their certified sphere maps.
+
+    Parameters
+    ----------
+    m_a, m_b : SphereMap
+        Certified maps of A and B (any methods, or maps wrapped by
+        :meth:`SphereMap.from_points`).
+    landmarks : sequence of (vertex_of_a, vertex_of_b), optional
+        Points that should correspond. They choose the starting rotation
+        (with at least two pairs) and, with ``"warp"``, coincide exactly on
+        the sphere: A's landmark lands on B's landmark vertex.
+    transform : str
+        ``"rotation"``, ``"moebius"`` or ``"warp"`` (default); see the module doc.
+    progress : bool or callable, optional
+        ``True`` draws a bar on stderr; a callable gets ``(done, total)``.
+
+    Returns
+    -------
+    Correspondence
+        Cost: a few dozen ``to_surface`` calls on 2000 points for the
+        rotation and the Möbius fit; for the warp, 16 steps each of one
+        ``to_surface`` of A's vertices and one round of flip-free moves.
+
+    Raises
+    ------
+    MeshError
+        Unknown ``transform``, not SphereMaps, landmark ids out of range or
+        repeated.
+    MapError
+        A map that is not certified, or landmarks that cannot all be placed
+        (the error names them).
+    """
+    if transform not in TRANSFORMS:
+        raise MeshError(f"unknown transform {transform!r}; choose one of {', '.join(TRANSFORMS)}")
+    _check_maps(m_a, m_b)
+    pairs = landmark_pairs(landmarks, len(m_a.points), len(m_b.points))
+    report = as_callback(progress, "register")
+    seconds: Dict[str, float] = {}
+    details: Dict[str, Any] = {}
+    started = time.perf_counter()
+
+    landmark_rotation = None
+    if len(pairs) >= 2:
+        landmark_rotation = _align.kabsch(m_a.points[pairs[:, 0]], m_b.points[pairs[:, 1]])
+    rotation, start, steps = _align.best_rotation(m_a, m_b, landmark_rotation)
+    details.update(start=start, rotation_steps=steps)
+    map_a = _moved(m_a, m_a.points @ rotation.T)
+    seconds["rotation"] = time.perf_counter() - started
+    total = 2 + (sum(s for _, _, s in _warp.SCHEDULE) if transform == "warp" else 0)
+    if report:
+        report(1, total)
+    moebius: Optional[Dict[str, np.ndarray]] = None
+    if transform in ("moebius", "warp"):
+        started = time.perf_counter()
+        turn, boost, steps = _align.best_moebius(m_a, m_b, rotation)
+        candidate = _moved(map_a, _align.moebius_transform(turn, boost)(m_a.points))
+
+        def cost(m: SphereMap) -> float:
+            return _align.Cost(m_a.mesh.vertices, m.points, m_b)(lambda p: p)
+
+        # Kept only where it is better than the rotation on all of A's vertices.
+        if cost(candidate) < cost(map_a):
+            map_a = candidate
+            rotation = turn
+            moebius = {"rotation": _read_only(turn), "boost": _read_only(boost)}
+        else:
+            moebius = {"rotation": _read_only(rotation), "boost": _read_only(np.zeros(3))}
+        details["moebius_steps"] = steps
+        seconds["moebius"] = time.perf_counter() - started
+    if report:
+        report(2, total)
+    if transform == "warp":
+        started = time.perf_counter()
+        fixed = None
+        if len(pairs):
+            map_a = _landmarks.pin(map_a, pairs[:, 0], m_b.points[pairs[:, 1]])
+            fixed = pairs[:, 0]
+        seconds["landmarks"] = time.perf_counter() - started
+        started = time.perf_counter()
+
+        def heard(done: int, _: int) -> bool:
+            if report:
+                report(2 + done, total)
+            return False
+
+        map_a, run = _warp.warp(map_a, m_b, fixed=fixed, should_stop=heard)
+        details["warp_steps"] = run["steps"]
+        details["warp_moved"] = run["moved"]
+        seconds["warp"] = time.perf_counter() - started
+    if report:
+        report(total, total)
+    return Correspondence(transform, map_a, m_b, rotation, moebius, pairs, seconds, details)
