@@ -16,8 +16,8 @@ Rotations: starts from the identity, the rotations that carry the principal
 frame of A's degree-1 spherical harmonics (the best-fitting ellipsoid, thesis
 8.3) onto B's and, given landmark pairs, the rotation that sends A's
 landmarks onto B's on the sphere in least squares (Kabsch on the sphere); the
-best start is refined by Gauss-Newton on the rotation (central differences
-through ``to_surface``), on at most 2000 of A's vertices.
+best starts are refined by Gauss-Newton on the rotation (central differences
+through ``to_surface``), on at most 1000 of A's vertices (:func:`best_rotation`).
 
 Möbius transformations (the conformal automorphisms of the sphere; Baden,
 Crane and Kazhdan 2018 register shapes with them): T = R o B_b, a rotation
@@ -43,6 +43,10 @@ from ._spheremap import SphereMap
 __all__ = ["boost", "kabsch", "normalised", "best_rotation", "best_moebius"]
 
 SUBSAMPLE = 1000
+# Vertices on which every start is ranked, and how many of the best are refined.
+RANKING_SAMPLE = 150
+RANKING_STEPS = 3
+REFINED_STARTS = 3
 # The largest |b| a Möbius fit may reach: beyond it the boost squeezes half
 # the sphere into a cap too small for the map's triangles.
 MAX_BOOST = 0.9
@@ -104,6 +108,18 @@ class Cost:
     def __call__(self, transform: Callable[[np.ndarray], np.ndarray]) -> float:
         r = self.residual(transform)
         return float(r @ r)
+
+    def residuals_of_rotations(self, rotations: np.ndarray) -> np.ndarray:
+        """The residuals of many rotations (k, 3, 3) with one ``to_surface``
+        call: (k, 3 * points)."""
+        k, n = len(rotations), len(self.p)
+        turned = np.einsum("kij,nj->kni", rotations, self.p).reshape(k * n, 3)
+        _, _, xyz = self.m_b.to_surface(turned)
+        out = np.empty((k, 3 * n))
+        for i, b in enumerate(xyz.reshape(k, n, 3)):
+            b = normalised(b)
+            out[i] = (self.a @ kabsch(self.a, b).T - b).ravel()
+        return out
 
 
 def subsample_cost(m_a: SphereMap, m_b: SphereMap) -> Cost:
@@ -176,19 +192,78 @@ def refine_rotation(cost: Cost, rotation: np.ndarray, max_iter: int = 50) -> Tup
     return rodrigues(w) @ rotation, iterations
 
 
+def _batched_gauss_newton(cost: Cost, rotations: np.ndarray, steps: int) -> np.ndarray:
+    """A few plain Gauss-Newton steps on every rotation at once (central
+    differences; all residuals of a step in one ``to_surface`` call), so that
+    each start is ranked by the minimum its basin leads to, not by where it
+    begins."""
+    h = 1e-6
+    k = len(rotations)
+    probes = [rodrigues(sign * h * e) for e in np.eye(3) for sign in (1.0, -1.0)]
+    for _ in range(steps):
+        batch = np.concatenate([rotations] + [np.einsum("ij,kjl->kil", q, rotations)
+                                              for q in probes])
+        r = cost.residuals_of_rotations(batch).reshape(7, k, -1)
+        for i in range(k):
+            jac = np.stack([(r[1 + 2 * a, i] - r[2 + 2 * a, i]) / (2 * h) for a in range(3)],
+                           axis=1)
+            step = -np.linalg.lstsq(jac, r[0, i], rcond=None)[0]
+            angle = float(np.linalg.norm(step))
+            if angle > 0.5:  # a linearisation is not trusted beyond ~30 degrees
+                step *= 0.5 / angle
+            rotations[i] = rodrigues(step) @ rotations[i]
+    return rotations
+
+
+def octahedral_group() -> List[np.ndarray]:
+    """The 24 rotations that map the coordinate axes onto themselves."""
+    out = []
+    for perm in ((0, 1, 2), (1, 2, 0), (2, 0, 1), (1, 0, 2), (0, 2, 1), (2, 1, 0)):
+        for signs in ((1, 1, 1), (1, 1, -1), (1, -1, 1), (1, -1, -1),
+                      (-1, 1, 1), (-1, 1, -1), (-1, -1, 1), (-1, -1, -1)):
+            r = np.zeros((3, 3))
+            r[np.arange(3), perm] = signs
+            if np.linalg.det(r) > 0:
+                out.append(r)
+    return out
+
+
 def best_rotation(m_a: SphereMap, m_b: SphereMap,
                   landmark_rotation: Optional[np.ndarray] = None) -> Tuple[np.ndarray, str, int]:
     """The rotation of the sphere that best matches the shapes (module doc):
-    the rotation, the name of the start that won, and the Gauss-Newton steps."""
+    the rotation, the name of the start that won, and the Gauss-Newton steps.
+
+    Every start takes :data:`RANKING_STEPS` Gauss-Newton steps on
+    :data:`RANKING_SAMPLE` vertices (all starts at once), and the best
+    :data:`REFINED_STARTS` are refined to the end. Besides the identity, the harmonic frames
+    and the landmarks' rotation, each harmonic frame turned by the 24
+    rotations of the octahedral group is a start: the frame of a shape with
+    a near-symmetric ellipsoid (an octopus, whose eight arms make it round)
+    says little, and the cost has a minimum near each turn of it."""
     starts: List[Tuple[str, np.ndarray]] = []
     if landmark_rotation is not None:
         starts.append(("landmarks", landmark_rotation))
     starts.append(("identity", np.eye(3)))
-    starts += [(f"harmonic frame {k}", r) for k, r in enumerate(frame_candidates(m_a, m_b))]
+    frames = frame_candidates(m_a, m_b)
+    starts += [(f"harmonic frame {k}", r) for k, r in enumerate(frames)]
+    group = octahedral_group()[1:]  # the first is the identity
+    starts += [(f"harmonic frame {k} turned {j + 1}", g @ r)
+               for k, r in enumerate(frames) for j, g in enumerate(group)]
+    pick = np.unique(np.linspace(0, len(m_a.points) - 1, RANKING_SAMPLE).astype(np.int64))
+    rough = Cost(m_a.mesh.vertices[pick], m_a.points[pick], m_b)
+    rotations = _batched_gauss_newton(rough, np.stack([r for _, r in starts]), RANKING_STEPS)
+    values = (rough.residuals_of_rotations(rotations) ** 2).sum(axis=1)
+    ranked = [(starts[i][0], rotations[i]) for i in np.argsort(values, kind="stable")]
+    ranked = ranked[:REFINED_STARTS]
     cost = subsample_cost(m_a, m_b)
-    name, best = min(starts, key=lambda s: cost(_turn(s[1])))
-    rotation, iterations = refine_rotation(cost, best)
-    return rotation, name, iterations
+    best: Optional[Tuple[float, np.ndarray, str, int]] = None
+    for name, start in ranked:
+        rotation, iterations = refine_rotation(cost, start)
+        value = cost(_turn(rotation))
+        if best is None or value < best[0]:
+            best = (value, rotation, name, iterations)
+    assert best is not None
+    return best[1], best[2], best[3]
 
 
 def best_moebius(m_a: SphereMap, m_b: SphereMap, rotation: np.ndarray,
