@@ -100,6 +100,76 @@ def population(n: int, size: int) -> Dict[str, float]:
             "correspond_seconds": done - mapped, "register_seconds_summed": pop.seconds["register"]}
 
 
+def face_colours(mesh: sp.Mesh, vertex_colours: np.ndarray) -> np.ndarray:
+    out: np.ndarray = np.clip(vertex_colours[mesh.faces].mean(axis=1), 0.0, 1.0)
+    return out
+
+
+def position_colours(points: np.ndarray, box: np.ndarray) -> np.ndarray:
+    """A colour per point from its position in the bounding box of ``box``:
+    each axis to one of red, green and blue."""
+    lo, hi = box.min(axis=0), box.max(axis=0)
+    out: np.ndarray = (points - lo) / np.where(hi > lo, hi - lo, 1.0)
+    return out
+
+
+def pictures(folder: Path, small: bool) -> List[Path]:
+    """Three pictures for docs/correspondence.md: colours carried from A to B
+    by the rotation and by the warp; a feature-aligned morph strip; a
+    population's mean and first mode."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    folder.mkdir(parents=True, exist_ok=True)
+    written = []
+    hand = SHARED / "hand.obj"
+    a = sp.load(hand) if hand.exists() and not small else sp.datasets.tentacles(3000)
+    m_a = sp.embed(a)
+    copy = sp.datasets.deformed_copy(m_a, bend=0.1, seed=3)
+    m_b = sp.embed(copy.mesh)
+    fig = plt.figure(figsize=(12, 4))
+    panels = [("A", a, face_colours(a, position_colours(a.vertices, a.vertices)))]
+    for transform in ("rotation", "warp"):
+        back = sp.register(m_a, m_b, transform=transform).inverse()
+        # Each vertex of B takes the colour of the point of A it corresponds to.
+        where = back.a_on_b.positions
+        panels.append((f"B, colours through {transform}", copy.mesh,
+                       face_colours(copy.mesh, position_colours(where, a.vertices))))
+    for k, (title, mesh, colours) in enumerate(panels):
+        ax = fig.add_subplot(1, 3, k + 1, projection="3d")
+        sp.plot.mesh(mesh, colors=colours, title=title, ax=ax)
+    path = folder / "correspondence_colours.png"
+    fig.savefig(path, dpi=80, bbox_inches="tight")
+    plt.close(fig)
+    written.append(path)
+
+    mo = sp.morph(m_a, m_b, align="warp")
+    fig = plt.figure(figsize=(15, 3))
+    for k, t in enumerate(np.linspace(0, 1, 5)):
+        ax = fig.add_subplot(1, 5, k + 1, projection="3d")
+        sp.plot.mesh(mo.at(float(t)), title=f"t = {t:.2f}", ax=ax)
+    path = folder / "correspondence_morph.png"
+    fig.savefig(path, dpi=80, bbox_inches="tight")
+    plt.close(fig)
+    written.append(path)
+
+    maps = [m_a] + [sp.embed(sp.datasets.deformed_copy(m_a, level=5, bend=0.08, seed=s).mesh)
+                    for s in range(8 if small else 12)]
+    pop = sp.correspond(maps, level=5)
+    variances, modes = pop.modes(1)
+    fig = plt.figure(figsize=(12, 4))
+    for k, t in enumerate((-2.0, 0.0, 2.0)):
+        ax = fig.add_subplot(1, 3, k + 1, projection="3d")
+        shape = sp.Mesh(pop.mean().vertices + t * np.sqrt(variances[0]) * modes[0], pop.faces)
+        sp.plot.mesh(shape, title="mean" if t == 0 else f"mean {t:+.0f} sd along mode 1", ax=ax)
+    path = folder / "correspondence_population.png"
+    fig.savefig(path, dpi=80, bbox_inches="tight")
+    plt.close(fig)
+    written.append(path)
+    return written
+
+
 def table(rows: List[Dict[str, object]], landmarks: int) -> str:
     labels = list(TRANSFORMS) + (["warp+landmarks"] if landmarks else [])
     head = "| mesh | V | " + " | ".join(f"{t} mean / p95 (x map)" for t in labels) + " |"
@@ -123,8 +193,12 @@ def main() -> None:
     parser.add_argument("--population", type=int, default=0, help="shapes for correspond")
     parser.add_argument("--population-size", type=int, default=20000)
     parser.add_argument("--json", default=None, help="also write the rows here")
+    parser.add_argument("--pictures", default=None, help="write the docs' pictures here")
     args = parser.parse_args()
     warnings.simplefilter("ignore", sp.SpherifyWarning)
+    if args.pictures:
+        for path in pictures(Path(args.pictures), args.small):
+            print(f"wrote {path}")
     rows = []
     for name, mesh in corpus(args.small, args.only):
         row = run_mesh(name, mesh, args.landmarks)
