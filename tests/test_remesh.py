@@ -66,7 +66,7 @@ def test_an_uncertified_map_cannot_be_remeshed() -> None:
 
 @pytest.mark.parametrize("kwargs, match", [
     ({"kind": "quads"}, "unknown remesh kind 'quads'"),
-    ({"level": 11}, "level must be an integer in 0..10"),
+    ({"level": 10}, "level must be an integer in 0..9"),
     ({"level": -1}, "level must be"),
     ({"level": 2.0}, "level must be"),
 ])

@@ -41,6 +41,8 @@ from ._cli_options import (add_input_flags, add_method_flags, add_progress_flag,
                            method_options_of, shows_progress)
 from ._embed import embed
 from ._errors import SpherifyError, SpherifyWarning
+from ._limits import (ATLAS_HEIGHT_MAX, DISTANCE_SAMPLES_MAX, GEOMETRY_IMAGE_SIZE_MAX,
+                      MORPH_FRAMES_MAX, REMESH_LEVEL_MAX)
 from ._mesh import Mesh, save
 from ._spheremap import SphereMap, ThetaPhiMap
 
@@ -111,6 +113,14 @@ def _cmd_harmonics(args: argparse.Namespace, load: Callable[[argparse.Namespace]
 
 def _cmd_remesh(args: argparse.Namespace, load: Callable[[argparse.Namespace], Mesh]) -> int:
     out = output_path(args)
+    if not 0 <= args.samples <= DISTANCE_SAMPLES_MAX:
+        raise SpherifyError(f"--samples must be in 0..{DISTANCE_SAMPLES_MAX:,}, got {args.samples}")
+    if args.geometry_image is None and not 0 <= args.level <= REMESH_LEVEL_MAX:
+        raise SpherifyError(f"--level must be in 0..{REMESH_LEVEL_MAX}, got {args.level}")
+    if args.geometry_image is not None and not (
+            3 <= args.geometry_image <= GEOMETRY_IMAGE_SIZE_MAX and args.geometry_image % 2):
+        raise SpherifyError("--geometry-image must be an odd size in "
+                            f"3..{GEOMETRY_IMAGE_SIZE_MAX}, got {args.geometry_image}")
     m = mapped(load(args), args)
     if not certified(m):
         print("refusing: the map is not a certified bijection")
@@ -143,8 +153,8 @@ def _cmd_remesh(args: argparse.Namespace, load: Callable[[argparse.Namespace], M
 
 def _cmd_morph(args: argparse.Namespace, load: Callable[[argparse.Namespace], Mesh]) -> int:
     out = output_path(args)
-    if args.frames < 2:
-        raise SpherifyError(f"--frames must be at least 2, got {args.frames}")
+    if not 2 <= args.frames <= MORPH_FRAMES_MAX:
+        raise SpherifyError(f"--frames must be in 2..{MORPH_FRAMES_MAX}, got {args.frames}")
     a = load(args)
     if args.target_dataset:
         b = datasets.make(args.target_dataset, args.n_vertices)
@@ -186,8 +196,8 @@ def _cmd_texture(args: argparse.Namespace, load: Callable[[argparse.Namespace], 
     out = output_path(args)
     if out.suffix.lower() != ".obj":
         raise SpherifyError(f"texture writes OBJ (with MTL and PNG): give OUT.obj, got {out}")
-    if args.size < 2:
-        raise SpherifyError(f"--size must be at least 2, got {args.size}")
+    if not 2 <= args.size <= ATLAS_HEIGHT_MAX:
+        raise SpherifyError(f"--size must be in 2..{ATLAS_HEIGHT_MAX}, got {args.size}")
     m = mapped(load(args), args)
     start = time.perf_counter()
     t = texture.uv(m, args.projection)
@@ -237,7 +247,8 @@ def add_commands(sub: Any, load: Callable[[argparse.Namespace], Mesh],
     kind.add_argument("--geometry-image", type=int, default=None, metavar="SIZE",
                       help="octahedral geometry image of odd SIZE instead")
     p.add_argument("--samples", type=int, default=100_000,
-                   help="random sphere points for the distance (default: 100000)")
+                   help="random sphere points for the distance, at most "
+                        f"{DISTANCE_SAMPLES_MAX:,} (default: 100000)")
     p.set_defaults(func=lambda args: _cmd_remesh(args, load))
 
     p = common("texture", "per-corner UVs and a baked texture, as OBJ + MTL (thesis 8.5)")
@@ -246,7 +257,7 @@ def add_commands(sub: Any, load: Callable[[argparse.Namespace], Mesh],
     p.add_argument("--pattern", default="checkerboard", choices=["checkerboard", "grid"],
                    help="the procedural texture baked into the atlas (default: checkerboard)")
     p.add_argument("--size", type=int, default=1024,
-                   help="atlas height in pixels (default: 1024)")
+                   help=f"atlas height in pixels, 2..{ATLAS_HEIGHT_MAX} (default: 1024)")
     p.set_defaults(func=lambda args: _cmd_texture(args, load))
 
     p = common("morph", "morph one mesh into another through their maps (thesis 8.4)")
@@ -254,7 +265,7 @@ def add_commands(sub: Any, load: Callable[[argparse.Namespace], Mesh],
     p.add_argument("--target-dataset", choices=datasets.names(),
                    help="use a generated shape as the target")
     p.add_argument("--frames", type=int, default=5,
-                   help="frames from A (first) to B (last) (default: 5)")
+                   help=f"frames from A (first) to B (last), 2..{MORPH_FRAMES_MAX} (default: 5)")
     p.add_argument("--align", default="rotation",
                    choices=["rotation", "moebius", "warp", "landmarks", "none"],
                    help="how A's sphere map is brought onto B's before the morph: the rotation "

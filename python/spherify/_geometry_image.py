@@ -26,6 +26,7 @@ from typing import Tuple, Union
 import numpy as np
 
 from . import _args
+from ._limits import GEOMETRY_IMAGE_SIZE_MAX
 from ._atomic import write_bytes_atomically
 from ._errors import FormatError, MeshError
 from ._files import file_errors, require_regular_file
@@ -39,9 +40,9 @@ PathLike = Union[str, "os.PathLike[str]"]
 
 
 def _size(size: object) -> int:
-    n = _args.integer(size, "size", 3, 8193)
+    n = _args.integer(size, "size", 3, GEOMETRY_IMAGE_SIZE_MAX)
     if n % 2 == 0:
-        raise MeshError(f"size must be an odd integer in 3..8193, got {size!r}")
+        raise MeshError(f"size must be an odd integer in 3..{GEOMETRY_IMAGE_SIZE_MAX}, got {size!r}")
     return n
 
 
@@ -81,7 +82,7 @@ def geometry_image(m: SphereMap, size: int) -> np.ndarray:
     m : SphereMap
         A certified map.
     size : int
-        Odd, 3..8193.
+        Odd, 3..4097 (:data:`spherify._limits.GEOMETRY_IMAGE_SIZE_MAX`).
 
     Returns
     -------

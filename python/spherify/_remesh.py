@@ -14,6 +14,7 @@ from typing import Dict
 import numpy as np
 
 from . import _args, datasets
+from ._limits import DISTANCE_SAMPLES_MAX, REMESH_LEVEL_MAX
 from ._errors import MeshError
 from ._mesh import Mesh
 from ._spheremap import SphereMap
@@ -27,7 +28,7 @@ _CHUNK = 1 << 20
 
 
 def _level(level: object) -> int:
-    return _args.integer(level, "level", 0, 10)
+    return _args.integer(level, "level", 0, REMESH_LEVEL_MAX)
 
 
 def remesh_map(m: SphereMap, kind: str = "icosphere", *, level: int = 4) -> SphereMap:
@@ -46,7 +47,8 @@ def remesh_map(m: SphereMap, kind: str = "icosphere", *, level: int = 4) -> Sphe
     kind : str
         ``"icosphere"`` (the subdivided icosahedron of 8.1).
     level : int
-        Subdivisions of the icosahedron, 0..10 (``10 * 4**level + 2`` vertices).
+        Subdivisions of the icosahedron, 0..9 (``10 * 4**level + 2`` vertices;
+        the bound is :data:`spherify._limits.REMESH_LEVEL_MAX`).
 
     Raises
     ------
@@ -98,7 +100,7 @@ def surface_distance(a: SphereMap, b: SphereMap, *, samples: int = 100_000,
     MapError
         Either map is not a certified bijection.
     """
-    samples = _args.integer(samples, "samples", 0)
+    samples = _args.integer(samples, "samples", 0, DISTANCE_SAMPLES_MAX)
     rng = np.random.default_rng(seed)
     diagonal = float(np.linalg.norm(np.ptp(a.mesh.vertices, axis=0)))
     largest, squares = 0.0, 0.0

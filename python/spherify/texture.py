@@ -57,11 +57,12 @@ from typing import Any, Callable, Dict, List, Optional, Union
 import numpy as np
 import numpy.typing as npt
 
-from . import _core
+from . import _args, _core
 from ._atomic import write_bytes_atomically
 from ._errors import FormatError, MeshError
 from ._files import file_errors
 from ._geometry_image import _chunk, octahedron_unfolded
+from ._limits import ATLAS_HEIGHT_MAX
 from ._mesh import Mesh
 from ._quality import quality
 from ._spheremap import SphereMap
@@ -194,10 +195,17 @@ class UVLayout:
         """The atlas image: ``texture(directions)`` (for example
         ``sp.datasets.checkerboard``) at every pixel. ``width`` defaults to
         ``1.5 height`` for the cube atlas, ``2 height`` for equirectangular
-        and ``height`` for octahedral. Returns (height, width, 3) float64."""
+        and ``height`` for octahedral. Returns (height, width, 3) float64.
+
+        ``height`` is an integer in 1..4096 and ``width`` in 1..8192
+        (:data:`spherify._limits.ATLAS_HEIGHT_MAX`: the largest atlas fits
+        in 4 GB with its directions); anything else is a MeshError before
+        anything is allocated. The texture's values must be finite."""
+        height = _args.integer(height, "height", 1, ATLAS_HEIGHT_MAX)
         if width is None:
             aspect = {"cube": 1.5, "equirectangular": 2.0}.get(self._projection, 1.0)
             width = int(round(height * aspect))
+        width = _args.integer(width, "width", 1, 2 * ATLAS_HEIGHT_MAX)
         image: np.ndarray = np.asarray(texture(self.directions(height, width)), dtype=np.float64)
         return image
 
