@@ -76,8 +76,10 @@ impl UnknownName {
 pub enum TopologyProblem {
     /// The operation needs a closed, connected, manifold genus-0 mesh.
     NotSphere,
-    /// The operation needs a topological disk (one boundary loop, Euler characteristic 1).
-    NotDisk,
+    /// The operation needs a topological disk (one boundary loop, Euler
+    /// characteristic 1); the mesh has `loops` boundary loops and Euler
+    /// characteristic `euler`.
+    NotDisk { loops: usize, euler: i64 },
     /// An edge is shared by more than two faces, or twice in the same direction.
     NonManifoldEdge { a: u32, b: u32, faces: usize },
     /// The faces around a vertex do not form a single fan.
@@ -99,9 +101,10 @@ impl fmt::Display for TopologyProblem {
             TopologyProblem::NotSphere => {
                 write!(f, "the mesh is not a closed, connected, manifold genus-0 surface")
             }
-            TopologyProblem::NotDisk => write!(
+            TopologyProblem::NotDisk { loops, euler } => write!(
                 f,
-                "the mesh is not a topological disk (one boundary loop, Euler characteristic 1)"
+                "the mesh is not a topological disk: it has {loops} boundary loop{} and Euler characteristic {euler}, where a disk has one loop and Euler characteristic 1",
+                if *loops == 1 { "" } else { "s" }
             ),
             TopologyProblem::NonManifoldEdge { a, b, faces } => write!(
                 f,

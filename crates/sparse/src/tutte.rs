@@ -94,11 +94,11 @@ pub enum TutteError {
     Weight(#[from] BadWeight),
     /// Conjugate gradients need a symmetric matrix, and mean-value weights do
     /// not give one.
-    #[error("the {solver:?} solver needs symmetric weights, but mean-value weights are not symmetric: use the direct (auto) or Gauss-Seidel solver")]
+    #[error("the {solver} solver needs symmetric weights, but mean-value weights are not symmetric: use the direct (auto) or Gauss-Seidel solver")]
     SolverNeedsSymmetricWeights { solver: SolverKind },
     /// An iterative solver ran out of iterations; `uv` is its last iterate
     /// with the fixed vertices in place, for inspection or a restart.
-    #[error("the {solver:?} solver did not converge in {iterations} iterations (relative residual {residual:e})")]
+    #[error("the {solver} solver did not converge in {iterations} iterations (relative residual {residual:e})")]
     NoConvergence { solver: SolverKind, iterations: usize, residual: f64, uv: Vec<[f64; 2]> },
     #[error(transparent)]
     Solve(#[from] SparseError),
@@ -113,7 +113,7 @@ pub fn boundary_loop(mesh: &Mesh, he: &HalfEdgeMesh) -> Result<Vec<u32>, Topolog
     let euler = he.n_vertices() as i64 - he.n_edges() as i64 + he.n_faces() as i64;
     if loops.len() != 1 || euler != 1 {
         return Err(TopologyError {
-            problem: TopologyProblem::NotDisk,
+            problem: TopologyProblem::NotDisk { loops: loops.len(), euler },
             report: Box::new(validate::check(mesh)),
         });
     }
@@ -527,14 +527,20 @@ mod tests {
         let err = tutte(&tetra, &TutteParams::default()).unwrap_err();
         assert!(matches!(
             err,
-            TutteError::Topology(TopologyError { problem: TopologyProblem::NotDisk, .. })
+            TutteError::Topology(TopologyError {
+                problem: TopologyProblem::NotDisk { loops: 0, euler: 2 },
+                ..
+            })
         ));
+        // The message says what the mesh has, not only what a disk would.
+        assert!(err.to_string().contains("it has 0 boundary loops and Euler characteristic 2"));
         // The grid without its middle square's two triangles: two boundary loops.
         let mesh = grid(3);
         let faces: Vec<[u32; 3]> =
             mesh.faces().iter().enumerate().filter(|(f, _)| *f / 2 != 4).map(|(_, &f)| f).collect();
         let annulus = Mesh::new(mesh.positions().to_vec(), faces).unwrap();
-        assert!(matches!(tutte(&annulus, &TutteParams::default()), Err(TutteError::Topology(_))));
+        let err = tutte(&annulus, &TutteParams::default()).unwrap_err();
+        assert!(err.to_string().contains("it has 2 boundary loops and Euler characteristic 0"));
     }
 
     #[test]
@@ -543,7 +549,10 @@ mod tests {
         let mut params = TutteParams { solver: SolverKind::GaussSeidel, ..TutteParams::default() };
         params.solve.max_iter = 2;
         match tutte(&mesh, &params) {
-            Err(TutteError::NoConvergence { iterations, uv, .. }) => {
+            Err(err @ TutteError::NoConvergence { .. }) => {
+                // The solver by the name the caller gives it.
+                assert!(err.to_string().starts_with("the gauss_seidel solver did not converge"));
+                let TutteError::NoConvergence { iterations, uv, .. } = err else { unreachable!() };
                 assert!(iterations >= 2);
                 assert_eq!(uv.len(), mesh.n_vertices());
             }

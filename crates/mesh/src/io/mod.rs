@@ -384,6 +384,21 @@ pub(crate) fn byte_error(name: &str, offset: usize, message: impl Into<String>) 
 /// Polygons with more corners than this are named in the fan note.
 pub(crate) const HUGE_POLYGON: usize = 1000;
 
+/// The most corners a polygon of a mesh file may have (issue 26, finding 10):
+/// a fan of more triangles from one corner is no surface anyone meant, and a
+/// single 100 MB line of corners would otherwise become 52 million
+/// triangles. Readers refuse a larger polygon as soon as they have read one
+/// corner too many (OFF from its declared count), before it is stored.
+pub(crate) const MAX_POLYGON_CORNERS: usize = 65_536;
+
+/// The message for a polygon that has more than [`MAX_POLYGON_CORNERS`] corners.
+pub(crate) fn polygon_too_large(corners: impl std::fmt::Display) -> String {
+    format!(
+        "a face has {corners} corners; a polygon may have at most {MAX_POLYGON_CORNERS} \
+         (split it into smaller faces)"
+    )
+}
+
 /// Collects triangles from polygons of any size, fanning larger ones from their
 /// first corner, and counts what it did for the note.
 #[derive(Default)]

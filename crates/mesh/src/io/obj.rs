@@ -9,7 +9,10 @@
 //! ([`write_per_corner`], for `sp.texture`).
 
 use super::text::{self, next_token, skip_space, take_f64, trim_end, Lines};
-use super::{finish, line_error, LoadedMesh, Triangles, VertexAttributes};
+use super::{
+    finish, line_error, polygon_too_large, LoadedMesh, Triangles, VertexAttributes,
+    MAX_POLYGON_CORNERS,
+};
 use crate::error::MeshError;
 use crate::Mesh;
 use std::io::Write;
@@ -240,6 +243,10 @@ impl<'n> Reader<'n> {
         while let Some(token) = next_token(&mut rest) {
             if token.starts_with(b"#") {
                 break;
+            }
+            if self.corners.len() == MAX_POLYGON_CORNERS {
+                let msg = polygon_too_large(format!("more than {MAX_POLYGON_CORNERS}"));
+                return Err(line_error(self.name, number, msg));
             }
             // Fast path for the most common corner, a plain positive index.
             if let Some(index) = text::parse_u64(token).filter(|&i| i > 0 && i <= self.max_vertices)

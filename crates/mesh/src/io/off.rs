@@ -9,7 +9,10 @@
 //! as in the ModelNet data sets) is read as `OFF 490 518 0`.
 
 use super::text::{self, next_token, take_f64, Lines};
-use super::{finish, line_error, LoadedMesh, Triangles, VertexAttributes};
+use super::{
+    finish, line_error, polygon_too_large, LoadedMesh, Triangles, VertexAttributes,
+    MAX_POLYGON_CORNERS,
+};
 use crate::error::MeshError;
 use crate::mesh::MAX_VERTICES;
 use crate::Mesh;
@@ -174,6 +177,9 @@ fn read_face(rest: &mut &[u8], nv: u64, corners: &mut Vec<u32>) -> Result<(), St
     })?;
     if n < 3 {
         return Err(format!("a face needs at least 3 vertices, this one has {n}"));
+    }
+    if n > MAX_POLYGON_CORNERS as u64 {
+        return Err(polygon_too_large(n));
     }
     for _ in 0..n {
         let token = next_token(rest);

@@ -352,4 +352,48 @@ mod notes_of_doubtful_files {
             ]
         );
     }
+
+    /// Issue 26, finding 10: a polygon of more than MAX_POLYGON_CORNERS corners
+    /// is refused where it stands, in every format that has polygons.
+    #[test]
+    fn a_polygon_beyond_the_bound_is_refused_naming_its_line() {
+        let n = MAX_POLYGON_CORNERS + 1;
+        let mut obj = String::from("v 0 0 0\nv 1 0 0\nv 0 1 0\nf");
+        let mut off = String::from("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n");
+        off += &format!("{n}");
+        for k in 0..n {
+            obj += &format!(" {}", k % 3 + 1);
+            off += &format!(" {}", k % 3);
+        }
+        obj += "\n";
+        off += "\n";
+        let ply = format!(
+            "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n\
+             property float z\nelement face 1\nproperty list int int vertex_indices\nend_header\n\
+             0 0 0\n1 0 0\n0 1 0\n{n}{}\n",
+            (0..n).map(|k| format!(" {}", k % 3)).collect::<String>()
+        );
+        for (text, format, line) in [
+            (obj.as_bytes(), FileFormat::Obj, Some(4)),
+            (off.as_bytes(), FileFormat::Off, Some(6)),
+            (ply.as_bytes(), FileFormat::Ply, None),
+        ] {
+            let err = read_bytes(text, format, "x").unwrap_err();
+            let message = err.to_string();
+            assert!(message.contains("a polygon may have at most 65536"), "{format:?}: {message}");
+            if let Some(line) = line {
+                assert_eq!(location(Err(err)), Location::Line(line), "{format:?}");
+            }
+        }
+        // At the bound it is read (and fanned), with the note.
+        let at = MAX_POLYGON_CORNERS;
+        let mut ok = String::from("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n");
+        ok += &format!("{at}");
+        for k in 0..at {
+            ok += &format!(" {}", k % 3);
+        }
+        ok += "\n";
+        let result = read_bytes(ok.as_bytes(), FileFormat::Off, "x");
+        assert!(!matches!(result, Err(MeshError::Format(_))));
+    }
 }

@@ -4,7 +4,9 @@
 
 use super::header::Layout;
 use crate::error::MeshError;
-use crate::io::{finish, LoadedMesh, Triangles, VertexAttributes};
+use crate::io::{
+    finish, polygon_too_large, LoadedMesh, Triangles, VertexAttributes, MAX_POLYGON_CORNERS,
+};
 
 /// Where parsed values go.
 pub(super) struct Sink {
@@ -60,6 +62,9 @@ impl Sink {
                 "vertex index {index} is out of range: the file has {} vertices",
                 self.nv
             ));
+        }
+        if self.corners.len() == MAX_POLYGON_CORNERS {
+            return Err(polygon_too_large(format!("more than {MAX_POLYGON_CORNERS}")));
         }
         self.corners.push(index as u32);
         Ok(())
