@@ -279,11 +279,11 @@ def correspond(maps: Sequence[SphereMap], *, reference: int = 0, landmarks: Any 
             results[i] = future.result()
             if report:
                 report(done, len(others))
-    done = [r for r in results if r is not None]
-    registered = sum(r[2] for r in done)
+    finished = [r for r in results if r is not None]
+    registered = sum(r[2] for r in finished)
     aligning = time.perf_counter()
-    points, scales = _procrustes(np.stack([r[0] for r in done]))
+    points, scales = _procrustes(np.stack([r[0] for r in finished]))
     seconds = {"register": registered, "procrustes": time.perf_counter() - aligning,
                "total": time.perf_counter() - started}
     return Population(points, np.array(faces, dtype=np.int64), scales,
-                      [r[1] for r in done], seconds, int(reference))
+                      [r[1] for r in finished], seconds, int(reference))

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass
-from typing import Any, Dict, Optional, Sequence, Tuple
+from typing import Any, Dict, Optional
 
 import numpy as np
 import numpy.typing as npt
@@ -268,7 +268,7 @@ def _moved(current: SphereMap, points: np.ndarray) -> SphereMap:
     return _landmarks.move_towards(current, points, energy_sweeps=0)
 
 
-def register(m_a: SphereMap, m_b: SphereMap, *, landmarks: Optional[Sequence[Tuple[int, int]]] = None,
+def register(m_a: SphereMap, m_b: SphereMap, *, landmarks: Any = None,
              transform: str = "warp", progress: Any = None) -> Correspondence:
     """Register shape A onto shape B through their certified sphere maps.
 
@@ -277,7 +277,7 @@ def register(m_a: SphereMap, m_b: SphereMap, *, landmarks: Optional[Sequence[Tup
     m_a, m_b : SphereMap
         Certified maps of A and B (any methods, or maps wrapped by
         :meth:`SphereMap.from_points`).
-    landmarks : sequence of (vertex_of_a, vertex_of_b), optional
+    landmarks : sequence of (vertex_of_a, vertex_of_b) or (k, 2) int array, optional
         Points that should correspond. They choose the starting rotation
         (with at least two pairs) and, with ``"warp"``, coincide exactly on
         the sphere: A's landmark lands on B's landmark vertex.
