@@ -215,6 +215,20 @@ pub(crate) fn drag(
     ring: &[u32],
     points: &[[f64; 3]],
 ) -> Option<[f64; 3]> {
+    drag_above(p, goal, ring, points, 0.0)
+}
+
+/// [`drag`] keeping every face's det above `floor` (or above half its det
+/// before the step, for a face already below `floor`): soft moves towards
+/// targets that need not be reached must not crush triangles against each
+/// other on the way.
+pub(crate) fn drag_above(
+    p: [f64; 3],
+    goal: [f64; 3],
+    ring: &[u32],
+    points: &[[f64; 3]],
+    floor: f64,
+) -> Option<[f64; 3]> {
     if p == goal {
         return Some(goal);
     }
@@ -227,7 +241,8 @@ pub(crate) fn drag(
         let (a, b) = (points[ring[j] as usize], points[ring[(j + 1) % m] as usize]);
         let rate = det3(d, a, b);
         if rate < 0.0 {
-            s_safe = s_safe.min(-det3(p, a, b) / rate);
+            let det = det3(p, a, b);
+            s_safe = s_safe.min((det - floor.min(0.5 * det)) / -rate);
         }
     }
     if waypoint == goal && s_safe > 1.0 && positive_star(goal, ring, points) {
