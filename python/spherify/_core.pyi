@@ -132,13 +132,25 @@ def embed(
     method: str,
     options: Optional[Dict[str, Any]] = None,
     progress: Optional[Callable[[int, int], object]] = None,
+    landmark_ids: Optional[npt.NDArray[np.int64]] = None,
+    landmark_points: Optional[npt.NDArray[np.float64]] = None,
 ) -> CoreSphereMap: ...
 def improve(
     sphere_map: CoreSphereMap,
     options: Optional[Dict[str, Any]] = None,
     progress: Optional[Callable[[int, int], object]] = None,
+    landmark_ids: Optional[npt.NDArray[np.int64]] = None,
+    landmark_points: Optional[npt.NDArray[np.float64]] = None,
 ) -> CoreSphereMap: ...
 def from_points(mesh: CoreMesh, points: npt.NDArray[np.float64]) -> CoreSphereMap: ...
+def move_towards(
+    sphere_map: CoreSphereMap,
+    targets: npt.NDArray[np.float64],
+    weights: npt.NDArray[np.float64],
+    fixed: npt.NDArray[np.int64],
+    energy_sweeps: int = 3,
+    progress: Optional[Callable[[int, int], object]] = None,
+) -> CoreSphereMap: ...
 def harmonics_fit(
     map: CoreSphereMap, lmax: int, oversample: int = 1
 ) -> Tuple[npt.NDArray[np.float64], Dict[str, Any]]: ...

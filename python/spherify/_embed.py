@@ -12,6 +12,7 @@ import numpy as np
 
 from . import _core
 from ._errors import MeshError, SpherifyWarning, TopologyError
+from ._landmarks import as_landmarks, recorded
 from ._mesh import MeshLike, as_mesh
 from ._progress import as_callback
 from ._spheremap import SphereMap, ThetaPhiMap, warn_if_thin
@@ -90,7 +91,7 @@ def pass_method(owners: List[str], quote: str = '"') -> str:
 
 
 def embed(mesh: MeshLike, method: str = "progressive", *, progress: Any = None,
-          **options: Any) -> SphereMap:
+          landmarks: Any = None, **options: Any) -> SphereMap:
     """Map a closed genus-0 mesh onto the unit sphere.
 
     Parameters
@@ -155,6 +156,20 @@ def embed(mesh: MeshLike, method: str = "progressive", *, progress: Any = None,
         Most double-double refinement steps per embedding (default 8). It
         stops earlier once the rectangle is flip-free, or once a step changes
         no coordinate (every further step would give the same bits).
+    landmarks : mapping or pair, optional
+        ``{vertex_id: (x, y, z)}`` or ``(vertex_ids (k,), points (k, 3))``:
+        after the method's map, each landmark is moved onto its target
+        direction exactly (its stored point is the normalised target)
+        through valid maps only, then the method's energy (isometric for
+        methods without one) is lowered with the landmarks held; see
+        ``crates/sphere/src/methods/progressive/landmarks.rs``. The map
+        records them (``m.landmarks``) and ``m.seconds`` gets a
+        ``"landmarks"`` stage. Ids out of range or repeated, targets not
+        finite or zero, two landmarks at one direction: :class:`MeshError`
+        naming them. A method whose map is not valid, or a set no map
+        realises (neighbours at opposite points, a face of three landmarks
+        upside down, a drag that stalls after its bounded work):
+        :class:`MapError` naming the landmarks.
     progress : bool or callable
         ``poles="graph"`` (and the progressive method, below): ``True`` draws
         a text progress bar on stderr; a callable receives ``(done, total)``
@@ -221,9 +236,12 @@ def embed(mesh: MeshLike, method: str = "progressive", *, progress: Any = None,
     mesh = as_mesh(mesh)
     if "initial" in options and options["initial"] is not None:
         options["initial"] = np.ascontiguousarray(options["initial"], dtype=np.float64)
+    pinned = None if landmarks is None else as_landmarks(landmarks)
+    ids, targets = (None, None) if pinned is None else pinned
     try:
         core = _core.embed(mesh._core, method, dict(options),
-                           as_callback(progress, "graph poles" if method == "theta_phi" else method))
+                           as_callback(progress, "graph poles" if method == "theta_phi" else method),
+                           ids, targets)
     except MeshError as err:
         stray = stray_options(options, method) if method in methods() else None
         if method != "progressive" or stray is None or isinstance(err, TopologyError):
@@ -236,6 +254,8 @@ def embed(mesh: MeshLike, method: str = "progressive", *, progress: Any = None,
     if core.tp_valid is None:
         plain = SphereMap(core, mesh)
         plain._options = dict(options)
+        if ids is not None:
+            plain._landmarks = recorded(plain, ids)
         warn_if_thin(plain)
         return plain
     result = ThetaPhiMap(core, mesh)
@@ -250,7 +270,8 @@ def embed(mesh: MeshLike, method: str = "progressive", *, progress: Any = None,
     return result
 
 
-def improve(sphere_map: SphereMap, *, progress: Any = None, **options: Any) -> SphereMap:
+def improve(sphere_map: SphereMap, *, progress: Any = None, landmarks: Any = None,
+            **options: Any) -> SphereMap:
     """Lower a distortion energy of a valid map with flip-free moves.
 
     Thesis 9.3.2's local iteration: each vertex moves in the tangent plane by
@@ -269,6 +290,11 @@ def improve(sphere_map: SphereMap, *, progress: Any = None, **options: Any) -> S
         A valid map (``sphere_map.valid``).
     progress : callable or True, optional
         ``(done, total)`` after every sweep; ``True`` shows a bar.
+    landmarks : mapping or pair, optional
+        As for :func:`embed`: pinned exactly after the improvement, then the
+        energy is lowered again with them held. Without it, a map that had
+        landmarks keeps them only if they still sit on their points (they
+        are not held by a plain ``improve``): pass ``m.landmarks`` to keep them.
     **options
         ``energy`` ("isometric"; any of the progressive method's), ``max_iter``
         (30 sweeps) and ``tol`` (stop when a sweep lowers the energy by less
@@ -280,9 +306,17 @@ def improve(sphere_map: SphereMap, *, progress: Any = None, **options: Any) -> S
     MapError
         ``sphere_map`` is not a valid GC-embedding (``sphere_map.valid`` is False).
     MeshError
-        An unknown energy or a value out of range.
+        An unknown energy or a value out of range; bad landmarks (as for
+        :func:`embed`).
+    MapError
+        Also a set of landmarks no map realises.
     """
-    core = _core.improve(sphere_map._core, dict(options), as_callback(progress, "improve"))
+    pinned = None if landmarks is None else as_landmarks(landmarks)
+    ids, targets = (None, None) if pinned is None else pinned
+    core = _core.improve(sphere_map._core, dict(options), as_callback(progress, "improve"),
+                         ids, targets)
     result = SphereMap(core, sphere_map.mesh)
+    if ids is not None:
+        result._landmarks = recorded(result, ids)
     warn_if_thin(result)
     return result

@@ -3,8 +3,11 @@
 
 The record holds everything a map holds: the (oriented) mesh with its notes
 and attributes, the points, the method, its options, iterations, status,
-message, seconds, notes and details, and for theta-phi the poles, the cut
-path and the rectangle. It holds no verdict that is believed: rebuilding a
+message, seconds, notes and details, for theta-phi the poles, the cut
+path and the rectangle, and for a map pinned to landmarks ``landmark_ids``
+and ``landmark_points`` (each point must be the map's own point for its id,
+bit for bit, or the file is refused: an older spherify, which does not read
+them, loads the map without its landmarks). It holds no verdict that is believed: rebuilding a
 map sends the mesh through the core's validation and the parts through
 ``_core.restore_map``, which certifies the points (``valid``, thesis 3.4) and
 for theta-phi makes the cut again and checks the rectangle (``tp_valid``)
@@ -107,6 +110,8 @@ def record(m: "SphereMap") -> Record:
         "faces": m.mesh.faces,
         "points": m.points,
     })
+    if m.landmarks is not None:
+        arrays.update(landmark_ids=m.landmarks[0], landmark_points=m.landmarks[1])
     if isinstance(m, ThetaPhiMap):
         arrays.update(poles=np.array(m.poles, dtype=np.int64), cut_path=m.cut_path,
                       theta_phi=m.theta_phi)
@@ -248,8 +253,36 @@ def rebuild(arrays: Any, source: str) -> "SphereMap":
     if projected is not None:
         notes = notes + [projected]
     cls = SphereMap if core.tp_valid is None else ThetaPhiMap
-    return cls._restored(core, mesh, seconds=seconds, notes=notes, options=options,
-                         details=details)
+    m = cls._restored(core, mesh, seconds=seconds, notes=notes, options=options,
+                      details=details)
+    if "landmark_ids" in names or "landmark_points" in names:
+        m._landmarks = _landmarks(arrays, names, m.points, fail)
+    return m
+
+
+def _landmarks(arrays: Any, names: Any, points: np.ndarray,
+               fail: Callable[[str], FormatError]) -> Tuple[np.ndarray, np.ndarray]:
+    """A pinned map's landmarks as stored: ids in range and each point the
+    map's own point for its id, bit for bit (what pinning guarantees), or a
+    :class:`FormatError`: a file is data, not proof."""
+    if not {"landmark_ids", "landmark_points"} <= set(names):
+        raise fail("landmark_ids and landmark_points are stored together")
+    ids, stored = np.asarray(arrays["landmark_ids"]), np.asarray(arrays["landmark_points"])
+    if ids.ndim != 1 or ids.dtype.kind not in "iu" or stored.shape != (len(ids), 3) \
+            or stored.dtype != np.float64:
+        raise fail(f"landmarks must be ids (k,) and float64 points (k, 3), got "
+                   f"{ids.dtype}{ids.shape} and {stored.dtype}{stored.shape}")
+    if len(ids) and (ids.min() < 0 or ids.max() >= len(points)):
+        raise fail(f"a landmark id is not a vertex of the mesh ({len(points)} vertices)")
+    ids = ids.astype(np.int64)
+    if not np.array_equal(points[ids], stored):
+        wrong = int(np.argmax((points[ids] != stored).any(axis=1)))
+        raise fail(f"landmark {int(ids[wrong])} is stored at {stored[wrong].tolist()}, "
+                   f"but the map has it at {points[ids[wrong]].tolist()}")
+    ids.flags.writeable = False
+    stored = stored.copy()
+    stored.flags.writeable = False
+    return ids, stored
 
 
 @file_errors

@@ -70,7 +70,10 @@ class SphereMap:
     message : str
         Why the method stopped, in words.
     seconds : dict of str to float
-        Time per stage, ending with ``"certify"`` (the exact test of 3.4).
+        Time per stage, ending with ``"certify"`` (the exact test of 3.4);
+        ``"landmarks"`` when the map was pinned to landmarks.
+    landmarks : (ids, points) or None
+        The landmarks the map was pinned to (see the property).
     report : SphereReport
         The exact validity verdict of thesis 3.4 on ``points``, computed in
         the core with the points.
@@ -103,6 +106,8 @@ class SphereMap:
         self._stored_seconds: Optional[List[Tuple[str, float]]] = None
         self._stored_details: Dict[str, Any] = {}
         self._diagonal_cache: Optional[float] = None
+        # (ids, points) of a map pinned by landmarks= (see _landmarks.recorded).
+        self._landmarks: Optional[Tuple[np.ndarray, np.ndarray]] = None
 
     @classmethod
     def _restored(cls, core: _core.CoreSphereMap, mesh: Mesh, *, seconds: List[Tuple[str, float]],
@@ -220,6 +225,15 @@ class SphereMap:
     @property
     def notes(self) -> List[str]:
         return list(self._notes)
+
+    @property
+    def landmarks(self) -> Optional[Tuple[np.ndarray, np.ndarray]]:
+        """``(ids (k,) int64, points (k, 3) float64)``, read-only: the
+        landmarks the map was pinned to (``landmarks=`` of
+        :func:`spherify.embed` / :func:`spherify.improve`), each point the
+        normalised target, exactly the map's point for that id; None
+        without landmarks."""
+        return self._landmarks
 
     @property
     def report(self) -> SphereReport:

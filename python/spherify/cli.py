@@ -54,7 +54,8 @@ from . import _args, _cli_apps, _cli_correspondence, _core, _files, _formats, da
 from ._cli_options import (UsageError, add_input_flags, add_method_flags, add_progress_flag,
                            method_options_of, shows_progress)
 from ._embed import embed, methods
-from ._errors import MeshError, SpherifyError, SpherifyWarning, TopologyError
+from ._errors import MapError, MeshError, SpherifyError, SpherifyWarning, TopologyError
+from ._landmarks import read_landmarks
 from ._mesh import Mesh, check, check_sphere, load, orient, save, weld
 from ._persist import record
 from ._quality import quality
@@ -162,6 +163,7 @@ def pair_is_consistent(out: Union[str, bytes, "os.PathLike[Any]"]) -> bool:
 
 def _cmd_check(args: argparse.Namespace) -> int:
     start = time.perf_counter()
+    landmarks = None if args.landmarks is None else read_landmarks(args.landmarks)
     mesh = _load(args)
     loaded = time.perf_counter()
     report = check(mesh)
@@ -247,6 +249,7 @@ def _cmd_map(args: argparse.Namespace) -> int:
         raise UsageError(f"-o {out}: this is {what}; spherify map writes OUT and records its "
                          "hash in OUT's .npz, so OUT must be a regular file")
     start = time.perf_counter()
+    landmarks = None if args.landmarks is None else read_landmarks(args.landmarks)
     mesh = _load(args)
     loaded = time.perf_counter()
     report = check(mesh)
@@ -261,9 +264,13 @@ def _cmd_map(args: argparse.Namespace) -> int:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", SpherifyWarning)  # reported below instead
         try:
-            m = embed(mesh, method, **options)
+            m = embed(mesh, method, landmarks=landmarks, **options)
         except TopologyError:
             raise
+        except MapError as err:
+            # Landmarks no map realises, or a method whose map is not valid.
+            print(f"refusing to pin the landmarks: {err}")
+            return 1
         except MeshError as err:
             # The method refused this mesh (radial on a mesh that is not
             # star-shaped): a property of the input, like an invalid mesh.
@@ -386,6 +393,10 @@ def main(argv: Optional[List[str]] = None) -> int:
         if name == "map":
             add_method_flags(p)
             add_progress_flag(p)
+            p.add_argument("--landmarks", default=None, metavar="FILE",
+                           help="pin vertices to directions exactly: a .npz (ids, points), .json "
+                                "({\"ids\": [...], \"points\": [...]} or {id: [x, y, z]}) or "
+                                ".csv (id,x,y,z lines)")
         p.set_defaults(func=func)
     text = "map many meshes, in parallel and resumably"
     p = sub.add_parser("batch", help=text, description=text)

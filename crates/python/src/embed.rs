@@ -15,7 +15,8 @@ use spherify_sphere::method_options::{OptionDefault, OptionKind, OptionValue};
 use spherify_sphere::methods::theta_phi::{PoleChoice, ThetaPhiParams};
 use spherify_sphere::point_map::from_points::from_points as core_from_points;
 use spherify_sphere::{
-    embed as core_embed, improve_embedding, GenusZeroMesh, Method, MethodName, SphereError,
+    embed as core_embed, improve_embedding, pin_embedding, GenusZeroMesh, Method, MethodName,
+    SphereError,
 };
 
 use crate::convert::rows;
@@ -119,30 +120,43 @@ fn method(name: MethodName, options: &Options<'_>) -> PyResult<Method> {
     }
 }
 
-/// embed(mesh, method, options: dict | None, progress: callable | None) -> CoreSphereMap.
+/// embed(mesh, method, options: dict | None, progress: callable | None,
+/// landmark_ids: (k,) int64 | None, landmark_points: (k, 3) float64 | None)
+/// -> CoreSphereMap.
 ///
-/// Validates and orients the mesh once (`GenusZeroMesh`), runs the method and
+/// Validates and orients the mesh once (`GenusZeroMesh`), runs the method,
+/// pins the landmarks when given (`spherify_sphere::pin_embedding`) and
 /// certifies the points, all in the core with the GIL released. `progress`
 /// receives `(done, total)` from the stages that report; Ctrl-C stops them.
 #[pyfunction]
-#[pyo3(signature = (mesh, method, options=None, progress=None))]
+#[pyo3(signature = (mesh, method, options=None, progress=None, landmark_ids=None, landmark_points=None))]
 pub fn embed(
     py: Python<'_>,
     mesh: &CoreMesh,
     method: &str,
     options: Option<&Bound<'_, PyDict>>,
     progress: Option<&Bound<'_, PyAny>>,
+    landmark_ids: Option<PyReadonlyArrayDyn<'_, i64>>,
+    landmark_points: Option<PyReadonlyArrayDyn<'_, f64>>,
 ) -> PyResult<CoreSphereMap> {
     let name = MethodName::from_str(method).map_err(|e| mesh_error(e.to_string()))?;
     let options = Options::new(py, name, options)?;
     let method = self::method(name, &options)?;
     options.finish()?;
+    let given = crate::landmarks::given(landmark_ids, landmark_points)?;
     let mesh_arg = mesh;
     let shared = Arc::clone(&mesh.mesh);
     // Detachable: Ctrl-C inside one long factorisation answers at once.
     let result = crate::progress::run_detachable(py, progress, move |report| {
         let mesh = GenusZeroMesh::new(shared).map_err(SphereError::from)?;
-        let embedding = core_embed(&mesh, &method, report)?;
+        // Landmarks are checked before the method runs: a bad set costs nothing.
+        let landmarks =
+            given.as_ref().map(|g| crate::landmarks::landmarks(&mesh, g)).transpose()?;
+        let mut embedding = core_embed(&mesh, &method, report)?;
+        if let Some(landmarks) = landmarks {
+            let params = crate::landmarks::pin_params(&method);
+            embedding = pin_embedding(&mesh, &embedding, &landmarks, &params, report)?;
+        }
         Ok::<_, SphereError>((mesh, embedding))
     })?;
     let (mesh, embedding) = result.map_err(|e| sphere_error(py, e))?;
@@ -150,27 +164,38 @@ pub fn embed(
     Ok(CoreSphereMap::new(mesh.shared_mesh(), caller, embedding, mesh.reoriented_faces()))
 }
 
-/// improve(sphere_map, options: dict | None, progress) -> CoreSphereMap.
+/// improve(sphere_map, options: dict | None, progress, landmark_ids,
+/// landmark_points) -> CoreSphereMap.
 ///
 /// Lowers a distortion energy of a valid map with flip-free moves (thesis
-/// 9.3.2) and certifies the result, in the core with the GIL released. A map
-/// that is not a valid GC-embedding raises MapError.
+/// 9.3.2), pins the landmarks when given (then lowers the energy again with
+/// them held) and certifies the result, in the core with the GIL released. A
+/// map that is not a valid GC-embedding raises MapError.
 #[pyfunction]
-#[pyo3(signature = (sphere_map, options=None, progress=None))]
+#[pyo3(signature = (sphere_map, options=None, progress=None, landmark_ids=None, landmark_points=None))]
 pub fn improve(
     py: Python<'_>,
     sphere_map: &CoreSphereMap,
     options: Option<&Bound<'_, PyDict>>,
     progress: Option<&Bound<'_, PyAny>>,
+    landmark_ids: Option<PyReadonlyArrayDyn<'_, i64>>,
+    landmark_points: Option<PyReadonlyArrayDyn<'_, f64>>,
 ) -> PyResult<CoreSphereMap> {
     let options = Options::new(py, MethodName::Improve, options)?;
     let params = crate::progressive::improve_params(&options)?;
     options.finish()?;
+    let given = crate::landmarks::given(landmark_ids, landmark_points)?;
     let shared = sphere_map.shared_mesh();
     let start = sphere_map.embedding().clone();
     let result = crate::progress::run_detachable(py, progress, move |report| {
         let mesh = GenusZeroMesh::new(shared).map_err(SphereError::from)?;
-        let embedding = improve_embedding(&mesh, &start, &params, report)?;
+        let landmarks =
+            given.as_ref().map(|g| crate::landmarks::landmarks(&mesh, g)).transpose()?;
+        let mut embedding = improve_embedding(&mesh, &start, &params, report)?;
+        if let Some(landmarks) = landmarks {
+            let pin = crate::landmarks::pin_params_for(params.energy);
+            embedding = pin_embedding(&mesh, &embedding, &landmarks, &pin, report)?;
+        }
         Ok::<_, SphereError>((mesh, embedding))
     })?;
     let (mesh, embedding) = result.map_err(|e| sphere_error(py, e))?;

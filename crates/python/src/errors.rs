@@ -134,7 +134,9 @@ pub fn sphere_error(py: Python<'_>, err: SphereError) -> PyErr {
             convergence_error(py, err.to_string(), points, *iterations, None, status.name())
         }
         SphereError::Solve(s) => sparse_error(py, s),
-        SphereError::InvalidStart { .. } => class::MapError::new_err(err.to_string()),
+        SphereError::InvalidStart { .. } | SphereError::LandmarkConflict { .. } => {
+            class::MapError::new_err(err.to_string())
+        }
         SphereError::Insertion { .. } => convergence_error(
             py,
             err.to_string(),

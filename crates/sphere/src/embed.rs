@@ -15,6 +15,8 @@ use crate::genus_zero::GenusZeroMesh;
 use crate::methods::alexa::{alexa_with_progress, AlexaParams};
 use crate::methods::gotsman::{gotsman_with_progress, GotsmanParams};
 use crate::methods::progressive::improve::{improve, ImproveParams};
+use crate::methods::progressive::landmarks::{pin_landmarks, Landmarks, PinParams};
+use crate::methods::progressive::move_towards::{move_towards, TowardsParams};
 use crate::methods::progressive::{progressive, ProgressiveParams};
 use crate::methods::radial::kernel::KernelPoint;
 use crate::methods::radial::{radial_map, Center};
@@ -262,6 +264,61 @@ pub fn improve_embedding(
     );
     kept.iterations = 0;
     Ok(Embedding::certified(mesh, MethodName::Improve, kept, Details::None))
+}
+
+/// The map `start` with its landmarks pinned exactly to their targets
+/// ([`pin_landmarks`]) and certified. The method's name is kept, but not what
+/// it computed besides the points: a theta-phi start becomes a plain
+/// GC-embedding ([`MethodName::Improve`]), since its map h no longer
+/// describes the moved points. The stage `"landmarks"` is added to the
+/// start's seconds.
+///
+/// # Errors
+/// [`SphereError::InvalidStart`] when `start` is not a valid GC-embedding
+/// (`MapError` in Python); [`SphereError::LandmarkConflict`]; cancellation.
+pub fn pin_embedding(
+    mesh: &GenusZeroMesh,
+    start: &Embedding,
+    landmarks: &Landmarks,
+    params: &PinParams,
+    progress: &(dyn Fn(usize, usize) -> bool + Sync),
+) -> Result<Embedding, SphereError> {
+    if !start.certificate.valid {
+        return Err(SphereError::InvalidStart {
+            flipped: start.certificate.flipped_faces.len(),
+            degree: start.certificate.covering_degree,
+        });
+    }
+    let (pinned, _) = pin_landmarks(mesh, &start.result.points, landmarks, params, progress)?;
+    let mut result = start.result.clone();
+    result.seconds.retain(|(stage, _)| *stage != "certify");
+    result.seconds.extend(pinned.seconds);
+    result.points = pinned.points;
+    result.message = format!("{}; {}", start.result.message, pinned.message);
+    let (method, details) = match &start.details {
+        Details::ThetaPhi(_) => (MethodName::Improve, Details::None),
+        other => (start.method, other.clone()),
+    };
+    Ok(Embedding::certified(mesh, method, result, details))
+}
+
+/// [`move_towards`] from `start`'s points, certified as a plain GC-embedding
+/// ([`MethodName::Improve`]).
+///
+/// # Errors
+/// As [`move_towards`].
+pub fn move_towards_embedding(
+    mesh: &GenusZeroMesh,
+    start: &Embedding,
+    targets: &[[f64; 3]],
+    weights: &[f64],
+    fixed: &[i64],
+    params: &TowardsParams,
+    progress: &(dyn Fn(usize, usize) -> bool + Sync),
+) -> Result<Embedding, SphereError> {
+    let result =
+        move_towards(mesh, &start.result.points, targets, weights, fixed, params, progress)?;
+    Ok(Embedding::certified(mesh, MethodName::Improve, result, Details::None))
 }
 
 #[cfg(test)]

@@ -40,7 +40,26 @@ pub enum SphereError {
     /// or one too large or too small ([`crate::certificate::geometry_range`]).
     #[error("{message}")]
     Geometry { message: String },
+    /// Landmarks that no map can take as given: ids out of range or repeated,
+    /// targets with no direction, two landmarks at one point
+    /// ([`crate::methods::progressive::landmarks::Landmarks::new`]).
+    #[error("landmarks {}: {reason}", list_ids(ids))]
+    BadLandmarks { ids: Vec<usize>, reason: String },
+    /// Landmarks that could not all be pinned to their targets: a set no
+    /// valid map realises (two neighbours at opposite points, a face of three
+    /// landmarks upside down), or a drag that stalled after its bounded work.
+    #[error("landmarks {} cannot all be pinned to their targets: {reason}", list_ids(ids))]
+    LandmarkConflict { ids: Vec<usize>, reason: String },
     /// A progress callback asked a long stage to stop.
     #[error("{stage} stopped by the progress callback after {done} of {total} steps")]
     Cancelled { stage: &'static str, done: usize, total: usize },
+}
+
+/// Vertex ids for a message: the first 20 and how many more.
+fn list_ids(ids: &[usize]) -> String {
+    let shown: Vec<String> = ids.iter().take(20).map(|i| i.to_string()).collect();
+    match ids.len() {
+        n if n > 20 => format!("{} (and {} more)", shown.join(", "), n - 20),
+        _ => shown.join(", "),
+    }
 }

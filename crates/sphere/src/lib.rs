@@ -83,7 +83,10 @@ pub mod point_map;
 pub struct ReadmeSnippets;
 
 pub use certificate::validity::{check_sphere, SphereReport};
-pub use embed::{embed, improve_embedding, Details, Embedding, Method, MethodName, UnknownMethod};
+pub use embed::{
+    embed, improve_embedding, move_towards_embedding, pin_embedding, Details, Embedding, Method,
+    MethodName, UnknownMethod,
+};
 pub use embedding::{SphereEmbedding, Status};
 pub use error::SphereError;
 pub use genus_zero::GenusZeroMesh;

@@ -33,7 +33,9 @@ pub mod distortion_energy;
 pub mod flip_free;
 mod hierarchy;
 pub mod improve;
+pub mod landmarks;
 pub mod mobius_centring;
+pub mod move_towards;
 mod placement;
 mod ring_mesh;
 

@@ -426,9 +426,26 @@ impl Problem<'_> {
         tolerance: f64,
         stop: &(dyn Fn(usize) -> bool + Sync),
     ) -> Result<Optimised, Stopped> {
+        self.optimise_holding(rings, points, max_sweeps, tolerance, None, stop)
+    }
+
+    /// [`Problem::optimise`] with the vertices marked in `held` (one flag
+    /// per vertex) never moved: the landmarks of
+    /// [`crate::methods::progressive::landmarks`]. With `None` it is
+    /// `optimise` itself, move for move.
+    pub fn optimise_holding(
+        &self,
+        rings: &[Vec<u32>],
+        points: &mut [[f64; 3]],
+        max_sweeps: usize,
+        tolerance: f64,
+        held: Option<&[bool]>,
+        stop: &(dyn Fn(usize) -> bool + Sync),
+    ) -> Result<Optimised, Stopped> {
         let stars = self.stars(rings);
         let classes = colour_classes(rings);
-        let mut active = vec![true; rings.len()];
+        let free = |v: u32| held.is_none_or(|h| !h[v as usize]);
+        let mut active: Vec<bool> = (0..rings.len() as u32).map(free).collect();
         let mut k = self.area_scale(&stars, points);
         let mut energy = self.total_energy(k, &stars, points);
         let mut result =
@@ -442,7 +459,7 @@ impl Problem<'_> {
             for &v in &moved {
                 active[v as usize] = true;
                 for &r in stars.ring(v) {
-                    active[r as usize] = true;
+                    active[r as usize] = free(r);
                 }
             }
             k = self.area_scale(&stars, points);

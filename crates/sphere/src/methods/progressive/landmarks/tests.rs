@@ -1,0 +1,227 @@
+//! Tests of landmark pinning and of the soft moves towards targets, beside them.
+
+use super::*;
+use crate::methods::progressive::move_towards::{move_towards, TowardsParams};
+use crate::methods::progressive::{progressive, ProgressiveParams};
+use spherify_mesh::solids::{bumpy, capsule, icosphere};
+use spherify_mesh::Mesh;
+
+fn mapped(mesh: Mesh) -> (GenusZeroMesh, Vec<[f64; 3]>) {
+    let mesh = GenusZeroMesh::new(mesh).unwrap();
+    let e = progressive(&mesh, &ProgressiveParams::default(), &|_, _| true).unwrap();
+    (mesh, e.points)
+}
+
+/// `p` turned by `degrees` about an axis orthogonal to it, chosen by `seed`.
+fn turned(p: [f64; 3], degrees: f64, seed: usize) -> [f64; 3] {
+    let (e1, e2) = tangent_basis(p);
+    let a = seed as f64 * 2.399963; // the golden angle: directions spread out
+    let dir = add(scale(e1, a.cos()), scale(e2, a.sin()));
+    let t = degrees.to_radians();
+    normalize(add(scale(p, t.cos()), scale(dir, t.sin()))).unwrap()
+}
+
+/// Vertices spread over the map: farthest-point sampling from vertex 0.
+fn spread(points: &[[f64; 3]], k: usize) -> Vec<i64> {
+    let mut chosen = vec![0usize];
+    let mut near: Vec<f64> = points.iter().map(|&p| angle(p, points[0])).collect();
+    while chosen.len() < k {
+        let next = (0..points.len()).max_by(|&a, &b| near[a].total_cmp(&near[b])).unwrap();
+        chosen.push(next);
+        for (d, &p) in near.iter_mut().zip(points) {
+            *d = d.min(angle(p, points[next]));
+        }
+    }
+    chosen.into_iter().map(|i| i as i64).collect()
+}
+
+fn pin(
+    mesh: &GenusZeroMesh,
+    points: &[[f64; 3]],
+    ids: &[i64],
+    targets: &[[f64; 3]],
+) -> Result<Vec<[f64; 3]>, SphereError> {
+    let landmarks = Landmarks::new(mesh.n_vertices(), ids, targets)?;
+    let (e, _) = pin_landmarks(mesh, points, &landmarks, &PinParams::default(), &|_, _| true)?;
+    Ok(e.points)
+}
+
+fn assert_pinned(mesh: &GenusZeroMesh, points: &[[f64; 3]], ids: &[i64], targets: &[[f64; 3]]) {
+    let report = check_sphere(mesh.faces(), points);
+    assert!(report.valid, "{report:?}");
+    assert!(report.min_area_ratio > 1e-12, "{}", report.min_area_ratio);
+    for (&i, &t) in ids.iter().zip(targets) {
+        assert_eq!(points[i as usize], normalize(t).unwrap(), "landmark {i}");
+    }
+}
+
+#[test]
+fn landmarks_45_degrees_away_land_exactly_on_a_valid_map() {
+    for (name, shape) in [("icosphere", icosphere(3)), ("bumpy", bumpy(2))] {
+        let (mesh, points) = mapped(shape);
+        for k in [1, 3, 8] {
+            let ids = spread(&points, k);
+            let targets: Vec<[f64; 3]> =
+                ids.iter().enumerate().map(|(j, &i)| turned(points[i as usize], 45.0, j)).collect();
+            let pinned = pin(&mesh, &points, &ids, &targets)
+                .unwrap_or_else(|e| panic!("{name}, {k} landmarks: {e}"));
+            assert_pinned(&mesh, &pinned, &ids, &targets);
+        }
+    }
+}
+
+#[test]
+fn a_long_capsule_takes_its_ends_to_new_places() {
+    let (mesh, points) = mapped(capsule(8, 60, 8.0));
+    let ids = spread(&points, 4);
+    let targets: Vec<[f64; 3]> =
+        ids.iter().enumerate().map(|(j, &i)| turned(points[i as usize], 30.0, j)).collect();
+    let pinned = pin(&mesh, &points, &ids, &targets).unwrap();
+    assert_pinned(&mesh, &pinned, &ids, &targets);
+}
+
+#[test]
+fn pinning_gives_the_same_bits_on_one_and_two_threads() {
+    let (mesh, points) = mapped(bumpy(2));
+    let ids = spread(&points, 8);
+    let targets: Vec<[f64; 3]> =
+        ids.iter().enumerate().map(|(j, &i)| turned(points[i as usize], 40.0, j)).collect();
+    let on = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+        pool.install(|| pin(&mesh, &points, &ids, &targets).unwrap())
+    };
+    assert_eq!(on(1), on(2));
+}
+
+#[test]
+fn neighbours_at_opposite_points_and_an_upside_down_face_are_conflicts() {
+    let (mesh, points) = mapped(icosphere(1));
+    let [a, b, c] = mesh.faces()[0];
+    let t = points[a as usize];
+    let err = pin(&mesh, &points, &[a as i64, b as i64], &[t, scale(t, -1.0)]).unwrap_err();
+    match err {
+        SphereError::LandmarkConflict { ids, .. } => {
+            let mut want = vec![a as usize, b as usize];
+            want.sort_unstable();
+            assert_eq!(ids, want);
+        }
+        other => panic!("{other}"),
+    }
+    // The face's corners at their own places, two of them swapped.
+    let (pa, pb, pc) = (points[a as usize], points[b as usize], points[c as usize]);
+    let err = pin(&mesh, &points, &[a as i64, b as i64, c as i64], &[pb, pa, pc]).unwrap_err();
+    assert!(
+        matches!(err, SphereError::LandmarkConflict { ref ids, .. } if ids.len() == 3),
+        "{err}"
+    );
+    assert!(err.to_string().contains("upside down"), "{err}");
+}
+
+#[test]
+fn a_crossing_that_no_map_realises_stops_with_the_landmarks_named() {
+    // A vertex of the icosphere and its whole ring pinned where they are,
+    // and the vertex itself asked to leave its ring for the far side: no
+    // valid map has it there, and the drag must say so in bounded work.
+    let (mesh, points) = mapped(icosphere(2));
+    let rings = rings_of(&mesh);
+    let v = 0u32;
+    let mut ids: Vec<i64> = rings[v as usize].iter().map(|&r| r as i64).collect();
+    let mut targets: Vec<[f64; 3]> =
+        rings[v as usize].iter().map(|&r| points[r as usize]).collect();
+    ids.push(v as i64);
+    targets.push(scale(points[v as usize], -1.0));
+    let err = pin(&mesh, &points, &ids, &targets).unwrap_err();
+    match err {
+        SphereError::LandmarkConflict { ids, reason } => {
+            assert!(ids.contains(&(v as usize)), "{ids:?}: {reason}");
+        }
+        other => panic!("{other}"),
+    }
+}
+
+#[test]
+fn bad_sets_are_refused_before_any_move() {
+    let n = 10;
+    let t = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
+    let bad = |ids: &[i64], targets: &[[f64; 3]]| match Landmarks::new(n, ids, targets) {
+        Err(SphereError::BadLandmarks { ids, reason }) => (ids, reason),
+        other => panic!("{other:?}"),
+    };
+    assert_eq!(bad(&[1, 10], &t).0, vec![10]);
+    assert_eq!(bad(&[-1, 2], &t).0, vec![0]);
+    assert_eq!(bad(&[3, 3], &t).0, vec![3]);
+    assert_eq!(bad(&[3, 4], &[[0.0; 3], [1.0, 0.0, 0.0]]).0, vec![3]);
+    assert_eq!(bad(&[3, 4], &[[f64::NAN, 0.0, 0.0], [1.0, 0.0, 0.0]]).0, vec![3]);
+    let (ids, reason) = bad(&[5, 4], &[[2.0, 0.0, 0.0], [1.0, 0.0, 0.0]]);
+    assert_eq!(ids, vec![4, 5]);
+    assert!(reason.contains("same direction"), "{reason}");
+    assert!(bad(&[1], &t).1.contains("1 ids but 2"));
+}
+
+#[test]
+fn pinning_stops_when_the_callback_says_so() {
+    let (mesh, points) = mapped(icosphere(2));
+    let ids = spread(&points, 3);
+    let targets: Vec<[f64; 3]> =
+        ids.iter().enumerate().map(|(j, &i)| turned(points[i as usize], 45.0, j)).collect();
+    let landmarks = Landmarks::new(mesh.n_vertices(), &ids, &targets).unwrap();
+    let err = pin_landmarks(&mesh, &points, &landmarks, &PinParams::default(), &|_, _| false)
+        .unwrap_err();
+    assert!(matches!(err, SphereError::Cancelled { stage: "landmarks", .. }), "{err}");
+}
+
+#[test]
+fn holding_nothing_is_optimise_move_for_move() {
+    let (mesh, points) = mapped(bumpy(2));
+    let rings = rings_of(&mesh);
+    let problem = Problem {
+        energy: Energy::Isometric,
+        surface: mesh.positions(),
+        area_floor: area_floor(&mesh),
+    };
+    let (mut a, mut b) = (points.clone(), points.clone());
+    problem.optimise(&rings, &mut a, 5, 0.0, &|_| false).unwrap();
+    problem.optimise_holding(&rings, &mut b, 5, 0.0, None, &|_| false).unwrap();
+    assert_eq!(a, b);
+    let held: Vec<bool> = (0..points.len()).map(|i| i % 3 == 0).collect();
+    let mut c = points.clone();
+    problem.optimise_holding(&rings, &mut c, 5, 0.0, Some(&held), &|_| false).unwrap();
+    for i in (0..points.len()).step_by(3) {
+        assert_eq!(c[i], points[i]);
+    }
+}
+
+#[test]
+fn move_towards_keeps_the_map_valid_and_the_fixed_vertices_still() {
+    let (mesh, points) = mapped(bumpy(2));
+    let n = points.len();
+    let targets: Vec<[f64; 3]> = (0..n).map(|i| turned(points[i], 20.0, 7)).collect();
+    let weights: Vec<f64> = (0..n).map(|i| if i % 5 == 0 { 0.0 } else { 1.0 }).collect();
+    let fixed: Vec<i64> = (0..n as i64).filter(|i| i % 7 == 0).collect();
+    let e = move_towards(
+        &mesh,
+        &points,
+        &targets,
+        &weights,
+        &fixed,
+        &TowardsParams::default(),
+        &|_, _| true,
+    )
+    .unwrap();
+    assert!(check_sphere(mesh.faces(), &e.points).valid);
+    for &i in &fixed {
+        assert_eq!(e.points[i as usize], points[i as usize]);
+    }
+    // Without energy sweeps, the weighted vertices got closer and the others stayed.
+    let params = TowardsParams { energy_sweeps: 0, ..Default::default() };
+    let e =
+        move_towards(&mesh, &points, &targets, &weights, &fixed, &params, &|_, _| true).unwrap();
+    let before: f64 =
+        (0..n).filter(|i| weights[*i] > 0.0).map(|i| angle(points[i], targets[i])).sum();
+    let after: f64 =
+        (0..n).filter(|i| weights[*i] > 0.0).map(|i| angle(e.points[i], targets[i])).sum();
+    assert!(after < 0.5 * before, "{before} -> {after}");
+    for i in (0..n).filter(|i| weights[*i] == 0.0) {
+        assert_eq!(e.points[i], points[i]);
+    }
+}
