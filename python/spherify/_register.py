@@ -27,6 +27,7 @@ import numpy as np
 import numpy.typing as npt
 
 from . import _align, _landmarks, _warp
+from ._embed import improve
 from ._errors import MapError, MeshError
 from ._progress import as_callback
 from ._spheremap import SphereMap
@@ -345,7 +346,9 @@ def register(m_a: SphereMap, m_b: SphereMap, *, landmarks: Any = None,
         started = time.perf_counter()
         fixed = None
         if len(pairs):
-            map_a = _landmarks.pin(map_a, pairs[:, 0], m_b.points[pairs[:, 1]])
+            # Each A landmark exactly at its B landmark's sphere point (a
+            # MapError names the landmarks no map can place there).
+            map_a = improve(map_a, landmarks=(pairs[:, 0], m_b.points[pairs[:, 1]]))
             fixed = pairs[:, 0]
         seconds["landmarks"] = time.perf_counter() - started
         started = time.perf_counter()

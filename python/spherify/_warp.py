@@ -30,7 +30,8 @@ Smoothing is done on the sphere: each field is spread by barycentric weights
 read back with the same weights. Its cost does not grow with the mesh.
 Landmark pairs are held fixed (each A landmark at its B landmark's sphere
 point) and weigh :data:`LANDMARK_WEIGHT` times a mean vertex in the bend, so
-the bend follows them.
+the bend follows them, and in the moves, where they want none: the moves
+around a landmark taper to it rather than crowd onto it.
 """
 
 from __future__ import annotations
@@ -186,6 +187,10 @@ def warp(map_a: SphereMap, m_b: SphereMap, *, fixed: Optional[np.ndarray] = None
             delta = smooth(residual, bend_width) - residual
             chord = np.einsum("ij,ijk->ik", bary, sphere_b[faces_b[face]])
             wanted = _unit_rows(chord + np.einsum("ijk,ik->ij", jacobians[face], delta)) - q
+            if fixed is not None and len(fixed):
+                # Held vertices want no move and weigh heavily, so the moves
+                # around a landmark taper to it instead of piling onto it.
+                wanted[fixed] = 0.0
             target = _unit_rows(q + smooth(wanted, move_width))
             current = _landmarks.move_towards(current, target, fixed=fixed, energy_sweeps=0)
             want = np.linalg.norm(target - q, axis=1)
