@@ -80,11 +80,16 @@ def run_mesh(name: str, mesh: sp.Mesh, landmarks: int) -> Dict[str, object]:
     for label, pairs in runs:
         transform = "warp" if label.startswith("warp") else label
         start = time.perf_counter()
-        c = sp.register(m_a, m_b, transform=transform, landmarks=pairs)
+        try:
+            c = sp.register(m_a, m_b, transform=transform, landmarks=pairs)
+        except sp.SpherifyError as err:
+            row[label] = {"error": f"{type(err).__name__}: {err}"}
+            continue
         took = time.perf_counter() - start
         e = errors(c, copy)
         row[label] = {"mean": float(e.mean()), "p95": float(np.percentile(e, 95)),
                       "max": float(e.max()), "ratio": took / mapping, "valid": c.map_a.valid,
+                      "margin": c.map_a.margin,
                       "landmark_angle": (c.landmark_error or {}).get("max_angle")}
     row["seconds"] = time.perf_counter() - started
     return row
@@ -179,6 +184,9 @@ def table(rows: List[Dict[str, object]], landmarks: int) -> str:
         for t in labels:
             r = row[t]
             assert isinstance(r, dict)
+            if "error" in r:
+                cells.append(str(r["error"]).split(":")[0])
+                continue
             mark = "" if r["valid"] else " INVALID"
             cells.append(f"{100 * r['mean']:.2f}% / {100 * r['p95']:.2f}% ({r['ratio']:.1f}x){mark}")
         lines.append(f"| {row['mesh']} | {row['n_a']} | " + " | ".join(cells) + " |")

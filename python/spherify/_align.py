@@ -232,6 +232,7 @@ def best_rotation(m_a: SphereMap, m_b: SphereMap,
                   landmark_rotation: Optional[np.ndarray] = None) -> Tuple[np.ndarray, str, int]:
     """The rotation of the sphere that best matches the shapes (module doc):
     the rotation, the name of the start that won, and the Gauss-Newton steps.
+    Given the landmarks' rotation, only it is refined.
 
     Every start takes :data:`RANKING_STEPS` Gauss-Newton steps on
     :data:`RANKING_SAMPLE` vertices (all starts at once), and the best
@@ -240,10 +241,12 @@ def best_rotation(m_a: SphereMap, m_b: SphereMap,
     rotations of the octahedral group is a start: the frame of a shape with
     a near-symmetric ellipsoid (an octopus, whose eight arms make it round)
     says little, and the cost has a minimum near each turn of it."""
-    starts: List[Tuple[str, np.ndarray]] = []
     if landmark_rotation is not None:
-        starts.append(("landmarks", landmark_rotation))
-    starts.append(("identity", np.eye(3)))
+        # Landmarks say which of a symmetric shape's equally good rotations is
+        # meant: only their rotation is refined.
+        rotation, iterations = refine_rotation(subsample_cost(m_a, m_b), landmark_rotation)
+        return rotation, "landmarks", iterations
+    starts: List[Tuple[str, np.ndarray]] = [("identity", np.eye(3))]
     frames = frame_candidates(m_a, m_b)
     starts += [(f"harmonic frame {k}", r) for k, r in enumerate(frames)]
     group = octahedral_group()[1:]  # the first is the identity
