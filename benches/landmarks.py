@@ -1,12 +1,17 @@
 """Landmark-exact maps (issue 23, item 1) on the real-mesh corpus.
 
     python benches/landmarks.py [--k 3 8 32 64] [--degrees 45] [--max-vertices 60000]
+                                [--mode independent|swirl]
 
 For each valid corpus mesh of ``../shared/meshes`` (MANIFEST.json; or
 ``$SPHERIFY_SHARED_MESHES``), the default map first, then for each k: k
-landmarks by farthest-point sampling on that map, each target the landmark's
-point turned by a random angle up to ``--degrees`` in a random direction,
-and ``sp.embed(mesh, landmarks=...)``. Prints validity, the largest angle
+landmarks by farthest-point sampling on that map, and
+``sp.embed(mesh, landmarks=...)``. The targets: ``independent`` (default),
+each landmark's point turned by a random angle up to ``--degrees`` in its own
+random direction (for many landmarks, moves larger than their spacing
+scramble their order); ``swirl``, the landmarks' points under one smooth
+warp of the sphere (a turn about a random axis growing along it) whose
+largest displacement is ``--degrees``. Prints validity, the largest angle
 from a landmark to its target, the smallest triangle over the mean, and the
 time against the plain map (and the "landmarks" stage alone), or the error.
 """
@@ -46,12 +51,23 @@ def targets_for(points: np.ndarray, degrees: float, seed: int) -> np.ndarray:
     return np.cos(t) * points + np.sin(t) * tangent
 
 
+def swirled(points: np.ndarray, degrees: float, seed: int) -> np.ndarray:
+    axis = np.random.default_rng(seed).normal(size=3)
+    axis /= np.linalg.norm(axis)
+    z = points @ axis
+    # (1 + z) / 2 * sqrt(1 - z^2) is largest, 0.6495..., at z = 1/2.
+    turn = np.radians(degrees) / 0.6495190528383290 * (1 + z) / 2
+    c, s = np.cos(turn)[:, None], np.sin(turn)[:, None]
+    return c * points + s * np.cross(axis, points) + (1 - c) * z[:, None] * axis
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--k", type=int, nargs="+", default=[3, 8, 32, 64])
     parser.add_argument("--degrees", type=float, default=45.0)
     parser.add_argument("--max-vertices", type=int, default=60000)
     parser.add_argument("--only", nargs="*", default=None, help="mesh names")
+    parser.add_argument("--mode", choices=["independent", "swirl"], default="independent")
     args = parser.parse_args()
     root = Path(os.environ.get("SPHERIFY_SHARED_MESHES", ROOT))
     if not (root / "MANIFEST.json").is_file():
@@ -69,7 +85,8 @@ def main() -> int:
         plain_s = time.perf_counter() - started
         for k in args.k:
             ids = spread(plain.points, k)
-            targets = targets_for(plain.points[ids], args.degrees, seed=k)
+            targets = (swirled(plain.points[ids], args.degrees, seed=k) if args.mode == "swirl"
+                       else targets_for(plain.points[ids], args.degrees, seed=k))
             started = time.perf_counter()
             try:
                 m = sp.embed(mesh, landmarks=(ids, targets))

@@ -82,10 +82,10 @@ fn a_long_capsule_takes_its_ends_to_new_places() {
 
 #[test]
 fn pinning_gives_the_same_bits_on_one_and_two_threads() {
-    let (mesh, points) = mapped(bumpy(2));
+    let (mesh, points) = mapped(bumpy(3));
     let ids = spread(&points, 8);
     let targets: Vec<[f64; 3]> =
-        ids.iter().enumerate().map(|(j, &i)| turned(points[i as usize], 40.0, j)).collect();
+        ids.iter().enumerate().map(|(j, &i)| turned(points[i as usize], 45.0, j)).collect();
     let on = |threads: usize| {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
         pool.install(|| pin(&mesh, &points, &ids, &targets).unwrap())
