@@ -237,3 +237,26 @@ def test_random_meshes_and_random_landmarks(surface: mg.Surface, k: int, degrees
         assert "same direction" in str(err)
         return
     assert m.valid and angles(m.points[ids], targets).max() < 1e-14
+
+
+@pytest.mark.parametrize("suffix", [".json", ".csv", ".npz"])
+def test_the_command_line_pins_landmarks_from_a_file(tmp_path, suffix: str) -> None:
+    import json
+
+    from spherify.cli import main
+    mesh = sp.datasets.make("ellipsoid", n_vertices=300)
+    sp.save(mesh, tmp_path / "e.obj")
+    points = sp.embed(mesh).points
+    landmarks = {0: (points[0] + 0.3 * points[100]).tolist(), 100: points[100].tolist()}
+    path = tmp_path / f"l{suffix}"
+    if suffix == ".json":
+        path.write_text(json.dumps(landmarks))
+    elif suffix == ".csv":
+        path.write_text("id,x,y,z\n" + "".join(f"{i},{a},{b},{c}\n"
+                                               for i, (a, b, c) in landmarks.items()))
+    else:
+        np.savez(path, ids=np.array(list(landmarks)), points=np.array(list(landmarks.values())))
+    out = tmp_path / "s.obj"
+    assert main(["map", str(tmp_path / "e.obj"), "-o", str(out), "--landmarks", str(path)]) == 0
+    m = sp.load_map(out.with_suffix(".npz"))
+    assert m.valid and list(m.landmarks[0]) == [0, 100]

@@ -163,7 +163,6 @@ def pair_is_consistent(out: Union[str, bytes, "os.PathLike[Any]"]) -> bool:
 
 def _cmd_check(args: argparse.Namespace) -> int:
     start = time.perf_counter()
-    landmarks = None if args.landmarks is None else read_landmarks(args.landmarks)
     mesh = _load(args)
     loaded = time.perf_counter()
     report = check(mesh)

@@ -39,6 +39,9 @@ const DONE: f64 = 1e-6;
 /// exp(-36) ~ 2e-16: a basis function is zero beyond this many widths squared.
 const CUTOFF: f64 = 36.0;
 
+/// Lowers the energy of a map with the landmarks held (flip-free).
+pub(super) type Relax<'a> = dyn FnMut(&mut [[f64; 3]]) -> Result<(), Stopped> + 'a;
+
 /// Runs the flow on `points` (a valid map of `faces`, kept valid); returns
 /// the increments kept. After each increment `relax` lowers the energy with
 /// the landmarks held (flip-free): the flow alone piles triangles up in
@@ -51,7 +54,7 @@ pub(super) fn flow(
     faces: &[[u32; 3]],
     points: &mut Vec<[f64; 3]>,
     landmarks: &Landmarks,
-    relax: &mut dyn FnMut(&mut [[f64; 3]]) -> Result<(), Stopped>,
+    relax: &mut Relax<'_>,
     stop: &(dyn Fn() -> bool + Sync),
 ) -> Result<usize, Stopped> {
     let k = landmarks.len();
@@ -198,8 +201,9 @@ fn interpolate(
         for row in col + 1..k {
             let f = a[row][col] / a[col][col];
             if f != 0.0 {
-                for m in col..k {
-                    a[row][m] -= f * a[col][m];
+                let (upper, lower) = a.split_at_mut(row);
+                for (x, &y) in lower[0][col..].iter_mut().zip(&upper[col][col..]) {
+                    *x -= f * y;
                 }
                 b[row] = sub(b[row], scale(b[col], f));
             }
