@@ -218,10 +218,12 @@ pub(crate) fn drag(
     drag_above(p, goal, ring, points, 0.0)
 }
 
-/// [`drag`] keeping every face's det above `floor` (or above half its det
-/// before the step, for a face already below `floor`): soft moves towards
-/// targets that need not be reached must not crush triangles against each
-/// other on the way.
+/// [`drag`] keeping every face's det above `floor`, and a face already below
+/// `floor` from shrinking at all: soft moves towards targets that need not be
+/// reached must not crush triangles against each other on the way. (Letting
+/// such a face halve per step, as before, let the sixteen rounds of a
+/// registration warp crush the thin faces of an octopus's map to det 0 in
+/// floating point: halving compounds over calls.)
 pub(crate) fn drag_above(
     p: [f64; 3],
     goal: [f64; 3],
@@ -242,7 +244,7 @@ pub(crate) fn drag_above(
         let rate = det3(d, a, b);
         if rate < 0.0 {
             let det = det3(p, a, b);
-            s_safe = s_safe.min((det - floor.min(0.5 * det)) / -rate);
+            s_safe = s_safe.min((det - floor.min(det)) / -rate);
         }
     }
     if waypoint == goal && s_safe > 1.0 && positive_star(goal, ring, points) {

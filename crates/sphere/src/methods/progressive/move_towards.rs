@@ -40,7 +40,7 @@ impl Default for TowardsParams {
 /// Drag steps of one vertex in one pass.
 const STEPS_PER_PASS: usize = 4;
 /// The drags keep every face's det above this fraction of the mean (faces
-/// already below it at most halve per step): without it, random targets
+/// already below it do not shrink): without it, random targets
 /// crushed triangles to the double-precision floor (measured on a
 /// 2000-vertex `tentacles` with every vertex 10 degrees off in its own
 /// direction: smallest triangle 0.0 of the mean, in floating point).

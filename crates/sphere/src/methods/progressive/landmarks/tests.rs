@@ -225,3 +225,24 @@ fn move_towards_keeps_the_map_valid_and_the_fixed_vertices_still() {
         assert_eq!(e.points[i], points[i]);
     }
 }
+
+#[test]
+fn repeated_soft_moves_never_shrink_the_smallest_face() {
+    // Every vertex pulled 10 degrees in its own direction, twenty times over
+    // (as a registration's warp calls it): the smallest face may not shrink
+    // below where it started or the floor, whichever is lower.
+    let (mesh, mut points) = mapped(bumpy(2));
+    let start = check_sphere(mesh.faces(), &points).min_area_ratio;
+    let params = TowardsParams { energy_sweeps: 0, ..Default::default() };
+    let n = points.len();
+    let weights = vec![1.0; n];
+    for round in 0..20 {
+        let targets: Vec<[f64; 3]> = (0..n).map(|i| turned(points[i], 10.0, i + round)).collect();
+        points = move_towards(&mesh, &points, &targets, &weights, &[], &params, &|_, _| true)
+            .unwrap()
+            .points;
+    }
+    let report = check_sphere(mesh.faces(), &points);
+    assert!(report.valid);
+    assert!(report.min_area_ratio >= 0.5 * start.min(1e-2), "{start} -> {}", report.min_area_ratio);
+}
