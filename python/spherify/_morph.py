@@ -38,8 +38,10 @@ ALIGNS = ("rotation", "moebius", "warp", "landmarks", "none")
 class Morph:
     """A morph from A's surface to B's with A's connectivity (thesis 8.4).
 
-    Attributes (read-only)
-    ----------------------
+    All attributes are read-only.
+
+    Attributes
+    ----------
     rotation : (3, 3) float64
         The rotation of the sphere applied to A's sphere points before B's
         inverse map (identity for ``align="none"``; the Möbius
@@ -76,26 +78,32 @@ class Morph:
 
     @property
     def rotation(self) -> np.ndarray:
+        """(3, 3) float64: the rotation of the sphere applied to A's sphere points."""
         return self._rotation
 
     @property
     def start(self) -> np.ndarray:
+        """(n, 3) float64: A's vertices (normalised with ``normalize``)."""
         return self._start
 
     @property
     def end(self) -> np.ndarray:
+        """(n, 3) float64: where A's vertices land on B's surface."""
         return self._end
 
     @property
     def faces(self) -> np.ndarray:
+        """(m, 3) int64: A's faces."""
         return self._faces
 
     @property
     def correspondence(self) -> Optional[Correspondence]:
+        """The registration behind ``"rotation"``, ``"moebius"`` and ``"warp"``, else None."""
         return self._correspondence
 
     @property
     def alignment(self) -> Dict[str, Any]:
+        """How the alignment went (see the class docstring)."""
         return dict(self._alignment)
 
     def at(self, t: float) -> Mesh:

@@ -36,8 +36,10 @@ PROCRUSTES_ROUNDS = 20
 class Population:
     """Shapes on one connectivity, aligned in space.
 
-    Attributes (read-only)
-    ----------------------
+    All attributes are read-only.
+
+    Attributes
+    ----------
     points : (shapes, points, 3) float64
         Every shape at the common sphere points, centred, at unit rms radius
         and turned onto the mean (generalised Procrustes).
@@ -68,26 +70,32 @@ class Population:
 
     @property
     def points(self) -> np.ndarray:
+        """(shapes, points, 3) float64: every shape at the common sphere points, aligned."""
         return self._points
 
     @property
     def faces(self) -> np.ndarray:
+        """(m, 3) int64: the common connectivity."""
         return self._faces
 
     @property
     def scales(self) -> np.ndarray:
+        """(shapes,) float64: each shape's rms radius before scaling."""
         return self._scales
 
     @property
     def residuals(self) -> List[Dict[str, float]]:
+        """Each registration's ``residual`` (see :class:`Correspondence`)."""
         return [dict(r) for r in self._residuals]
 
     @property
     def seconds(self) -> Dict[str, float]:
+        """``register`` (summed over shapes), ``procrustes`` and ``total`` (wall time)."""
         return dict(self._seconds)
 
     @property
     def reference(self) -> int:
+        """The index of the reference shape."""
         return self._reference
 
     def __len__(self) -> int:

@@ -96,8 +96,10 @@ def _check_maps(m_a: Any, m_b: Any) -> None:
 class Correspondence:
     """Where every vertex of A lands on B, through two certified sphere maps.
 
-    Attributes (read-only)
-    ----------------------
+    All attributes are read-only.
+
+    Attributes
+    ----------
     transform : str
         ``"rotation"``, ``"moebius"`` or ``"warp"``.
     map_a : SphereMap
@@ -163,30 +165,37 @@ class Correspondence:
 
     @property
     def transform(self) -> str:
+        """"rotation", "moebius" or "warp"."""
         return self._transform
 
     @property
     def map_a(self) -> SphereMap:
+        """A's certified map in B's sphere frame (after the transform)."""
         return self._map_a
 
     @property
     def map_b(self) -> SphereMap:
+        """B's map."""
         return self._map_b
 
     @property
     def a_on_b(self) -> SurfacePoints:
+        """For every vertex of A: the face of B, barycentric weights and position."""
         return self._a_on_b
 
     @property
     def rotation(self) -> np.ndarray:
+        """(3, 3) float64: the rotation of the sphere applied to A's map."""
         return self._rotation
 
     @property
     def moebius(self) -> Optional[Dict[str, np.ndarray]]:
+        """``{"rotation": R, "boost": b}`` (p -> R B_b(p)), or None for ``"rotation"``."""
         return None if self._moebius is None else dict(self._moebius)
 
     @property
     def spatial(self) -> Dict[str, Any]:
+        """The similarity that superimposes A on B in space: ``rotation``, ``scale``, ``translation``."""
         return dict(self._spatial)
 
     @property
@@ -196,14 +205,17 @@ class Correspondence:
 
     @property
     def residual(self) -> Dict[str, float]:
+        """``rms`` and ``max`` distance between A superimposed on B and A's images on B, over B's diagonal."""
         return dict(self._residual)
 
     @property
     def landmark_error(self) -> Optional[Dict[str, float]]:
+        """With landmarks: ``max_angle`` (radians) and ``max_distance`` (over B's diagonal); else None."""
         return None if self._landmark_error is None else dict(self._landmark_error)
 
     @property
     def seconds(self) -> Dict[str, float]:
+        """Wall time of each stage."""
         return dict(self._seconds)
 
     @property
