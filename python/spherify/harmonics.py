@@ -72,19 +72,23 @@ class Harmonics:
 
     @property
     def lmax(self) -> int:
+        """The largest degree."""
         return self._lmax
 
     @property
     def coefficients(self) -> np.ndarray:
+        """((lmax + 1)**2, 3) float64: row ``l**2 + l + m`` for degree ``l``, order ``m``."""
         return self._c
 
     @property
     def degrees(self) -> np.ndarray:
+        """((lmax + 1)**2,) int64: the degree of each row."""
         l = np.arange(self._lmax + 1)
         return _read_only(np.repeat(l, 2 * l + 1).astype(np.int64))
 
     @property
     def info(self) -> Dict[str, Any]:
+        """What :func:`fit` did: ``n_theta`` x ``n_phi`` samples, ``seconds``."""
         return dict(self._info)
 
     def evaluate(self, points: npt.ArrayLike) -> np.ndarray:
