@@ -70,7 +70,7 @@ def test_bad_arguments(blob: sp.ThetaPhiMap, default_map: sp.SphereMap) -> None:
     for limits in [(1.0, 1.0), (2.0, 1.0), (0.0, np.inf), (0.0, 1.0, 2.0)]:
         with pytest.raises(sp.MeshError, match="low < high"):
             sp.plot.mesh(blob.mesh, values=np.zeros(blob.mesh.n_faces), limits=limits)
-    radial = sp.embed(sp.datasets.icosphere(1), "radial")
+    radial = sp.embed(sp.datasets.icosphere(subdivisions=1), "radial")
     with pytest.raises(sp.MeshError, match="theta-phi"):
         sp.plot.rectangle(radial)
     with pytest.raises(sp.MeshError, match="theta-phi"):
