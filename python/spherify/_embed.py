@@ -156,12 +156,14 @@ def embed(mesh: MeshLike, method: str = "progressive", *, progress: Any = None,
         stops earlier once the rectangle is flip-free, or once a step changes
         no coordinate (every further step would give the same bits).
     progress : bool or callable
-        ``poles="graph"`` (and the progressive method, below): ``True`` draws
-        a text progress bar on stderr; a callable receives ``(done, total)``
-        (here: sources), with ``done`` increasing and ending at ``total``, at
-        most about 100 times, from a worker thread. If it raises, the search
-        stops and the exception propagates. Ctrl-C stops the search in any
-        case. Default ``None``: silent.
+        ``True`` draws a text progress bar on stderr; a callable receives
+        ``(done, total)``, with ``done`` increasing and ending at ``total``, at
+        most about 100 times, from a worker thread. What is counted:
+        sources for ``poles="graph"``, vertices inserted for the progressive
+        method (below), iterations of at most ``max_iter`` for relaxation,
+        Alexa and Gotsman (a run that converges early jumps to ``total``).
+        If it raises, the method stops and the exception propagates. Ctrl-C
+        stops it in any case. Default ``None``: silent.
 
     Returns
     -------

@@ -32,6 +32,7 @@ import numpy.typing as npt
 from . import harmonics
 from ._errors import MeshError
 from ._mesh import Mesh
+from ._progress import to_surface_in_chunks
 from ._spheremap import SphereMap
 
 __all__ = ["Morph", "morph"]
@@ -76,6 +77,10 @@ class _Cost:
 
     def residual(self, rotation: np.ndarray) -> np.ndarray:
         _, _, xyz = self.m_b.to_surface(self.p @ rotation.T)
+        return self.residual_at(xyz)
+
+    def residual_at(self, xyz: np.ndarray) -> np.ndarray:
+        """The residual where the rotated points land on B's surface."""
         b = _normalised(xyz)
         s = _kabsch(self.a, b)
         r: np.ndarray = (self.a @ s.T - b).ravel()
@@ -155,11 +160,12 @@ class Morph:
     """
 
     def __init__(self, m_a: SphereMap, m_b: SphereMap, rotation: np.ndarray,
-                 alignment: Dict[str, Any]) -> None:
+                 alignment: Dict[str, Any], end: Optional[np.ndarray] = None) -> None:
         self._rotation = rotation
         self._rotation.flags.writeable = False
         self._start = m_a.mesh.vertices
-        _, _, end = m_b.to_surface(m_a.points @ rotation.T)
+        if end is None:
+            _, _, end = m_b.to_surface(m_a.points @ rotation.T)
         end.flags.writeable = False
         self._end = end
         self._faces = m_a.mesh.faces
@@ -167,22 +173,28 @@ class Morph:
 
     @property
     def rotation(self) -> np.ndarray:
+        """(3, 3) float64: the rotation of the sphere applied to A's sphere points before B's
+        inverse map."""
         return self._rotation
 
     @property
     def start(self) -> np.ndarray:
+        """(n, 3) float64: A's vertices."""
         return self._start
 
     @property
     def end(self) -> np.ndarray:
+        """(n, 3) float64: where A's vertices land on B's surface."""
         return self._end
 
     @property
     def faces(self) -> np.ndarray:
+        """(m, 3) int64: A's faces."""
         return self._faces
 
     @property
     def alignment(self) -> Dict[str, Any]:
+        """How the rotation was found (see the class docstring)."""
         return dict(self._alignment)
 
     def at(self, t: float) -> Mesh:
@@ -199,7 +211,8 @@ class Morph:
 
 
 def morph(m_a: SphereMap, m_b: SphereMap, *, align: str = "rotation",
-          landmarks: Optional[Sequence[Tuple[int, int]]] = None) -> Morph:
+          landmarks: Optional[Sequence[Tuple[int, int]]] = None,
+          progress: Any = None) -> Morph:
     """Morph A's surface into B's through their sphere maps (thesis 8.4).
 
     Parameters
@@ -213,6 +226,10 @@ def morph(m_a: SphereMap, m_b: SphereMap, *, align: str = "rotation",
         rotation of the landmarks, not refined. ``"none"``: the identity.
     landmarks : sequence of (i_a, j_b), optional
         Vertex pairs that should correspond (at least 2 for ``"landmarks"``).
+    progress : bool or callable, optional
+        ``True`` draws a bar on stderr, a callable receives ``(done, total)``:
+        A's vertices located on B's surface so far (the long part on large
+        meshes), as for :func:`spherify.embed`.
 
     Returns
     -------
@@ -261,9 +278,11 @@ def morph(m_a: SphereMap, m_b: SphereMap, *, align: str = "rotation",
         name, best = min(starts, key=lambda s: cost(s[1]))
         rotation, iterations = _refine(cost, best)
         alignment.update(start=name, iterations=iterations)
+    # A's every vertex located on B's surface once (three times before):
+    # the residual, the spatial rotation and the morph's end all read it.
+    end = to_surface_in_chunks(m_b, m_a.points @ rotation.T, progress, "morph")[2]
     full = _Cost(m_a.mesh.vertices, m_a.points, m_b)
-    r = full.residual(rotation).reshape(-1, 3)
+    r = full.residual_at(end).reshape(-1, 3)
     alignment["residual"] = float(np.sqrt((r * r).sum(axis=1).mean()))
-    b = _normalised(m_b.to_surface(m_a.points @ rotation.T)[2])
-    alignment["spatial_rotation"] = _kabsch(full.a, b)
-    return Morph(m_a, m_b, np.array(rotation, dtype=np.float64), alignment)
+    alignment["spatial_rotation"] = _kabsch(full.a, _normalised(end))
+    return Morph(m_a, m_b, np.array(rotation, dtype=np.float64), alignment, end)
