@@ -140,8 +140,10 @@ def _refine(cost: _Cost, rotation: np.ndarray, max_iter: int = 50) -> Tuple[np.n
 class Morph:
     """A morph from A's surface to B's with A's connectivity (thesis 8.4).
 
-    Attributes (read-only)
-    ----------------------
+    All attributes are read-only.
+
+    Attributes
+    ----------
     rotation : (3, 3) float64
         The rotation of the sphere applied to A's sphere points before B's
         inverse map (identity for ``align="none"``).

@@ -51,8 +51,12 @@ def _read_only(array: np.ndarray) -> np.ndarray:
 class SphereMap:
     """Points on the unit sphere, one per vertex, and the verdict on them.
 
-    Attributes (all read-only)
-    --------------------------
+    Every map also has ``to_sphere`` (the map h from surface points to the
+    sphere) and ``to_surface`` (its inverse), see below. All attributes are
+    read-only.
+
+    Attributes
+    ----------
     mesh : Mesh
         The (consistently, outward oriented) mesh the map belongs to: the
         input itself when it needed no reorientation.
@@ -81,9 +85,6 @@ class SphereMap:
     details : dict
         What the method computed besides the points (radial: ``center``,
         ``kernel_depth``, ``lp_pivots``; theta-phi: see :class:`ThetaPhiMap`).
-
-    Every map also has ``to_sphere`` (the map h from surface points to the
-    sphere) and ``to_surface`` (its inverse), see below.
     """
 
     def __init__(self, core: _core.CoreSphereMap, mesh: Mesh) -> None:
@@ -399,8 +400,10 @@ class ThetaPhiMap(SphereMap):
     """A theta-phi map (thesis ch. 6): a :class:`SphereMap` with the poles,
     the cut and the rectangle it was made from.
 
-    Attributes (all read-only)
-    --------------------------
+    All attributes are read-only.
+
+    Attributes
+    ----------
     poles : (int, int)
         The north and south pole vertex ids (thesis 6.2).
     cut_path : (k + 2,) int64

@@ -44,8 +44,10 @@ def _read_only(array: np.ndarray) -> np.ndarray:
 class Harmonics:
     """Real spherical-harmonic coefficients of a surface's x, y and z.
 
-    Attributes (read-only)
-    ----------------------
+    All attributes are read-only.
+
+    Attributes
+    ----------
     lmax : int
         The largest degree.
     coefficients : ((lmax + 1)**2, 3) float64

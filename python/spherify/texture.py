@@ -117,8 +117,10 @@ def _rotation_to_north(p: np.ndarray) -> np.ndarray:
 class UVLayout:
     """Per-corner texture coordinates of a mesh and the atlas they point into.
 
-    Attributes (read-only)
-    ----------------------
+    All attributes are read-only.
+
+    Attributes
+    ----------
     projection : str
     uv : (m, 3, 2) float64
         Corner k of face f at ``uv[f, k]``, in [0, 1]^2, v upwards (OBJ).
