@@ -158,3 +158,15 @@ def test_applications_report_the_points_they_locate(monkeypatch: pytest.MonkeyPa
                         progress=lambda done, total: rows.append((done, total)))
     assert rows[-1] == (100, 100) and len(rows) == 2  # 64 rows a piece
     assert (image == layout.bake(sp.datasets.checkerboard, 100)).all()
+
+
+def test_harmonics_report_rings_and_orders() -> None:
+    m = sp.embed(sp.datasets.bumpy_blob(n_vertices=800))
+    calls: List[Tuple[int, int]] = []
+    lmax = 40
+    c = sp.harmonics.fit(m, lmax, progress=lambda done, total: calls.append((done, total)))
+    total = 2 * (lmax + 1) + lmax + 1  # rings sampled, rings summed, orders
+    assert {t for _, t in calls} == {total} and calls[-1] == (total, total)
+    done = [d for d, _ in calls]
+    assert done == sorted(set(done)) and len(calls) > 10
+    assert (c.coefficients == sp.harmonics.fit(m, lmax).coefficients).all()

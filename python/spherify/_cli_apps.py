@@ -87,7 +87,7 @@ def _cmd_harmonics(args: argparse.Namespace, load: Callable[[argparse.Namespace]
         print("refusing: the map is not a certified bijection")
         return 1
     start = time.perf_counter()
-    c = harmonics.fit(m, args.lmax, oversample=args.oversample)
+    c = harmonics.fit(m, args.lmax, oversample=args.oversample, progress=bar(args))
     fitted = time.perf_counter()
     filtered = c
     if args.lowpass is not None:

@@ -140,7 +140,8 @@ def improve(
 ) -> CoreSphereMap: ...
 def from_points(mesh: CoreMesh, points: npt.NDArray[np.float64]) -> CoreSphereMap: ...
 def harmonics_fit(
-    map: CoreSphereMap, lmax: int, oversample: int = 1
+    map: CoreSphereMap, lmax: int, oversample: int = 1,
+    progress: Optional[Callable[[int, int], object]] = None,
 ) -> Tuple[npt.NDArray[np.float64], Dict[str, Any]]: ...
 def harmonics_evaluate(
     coefficients: npt.NDArray[np.float64], points: npt.NDArray[np.float64]

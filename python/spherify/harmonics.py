@@ -31,6 +31,7 @@ import numpy.typing as npt
 from . import _args, _core
 from ._errors import MeshError
 from ._mesh import Mesh
+from ._progress import as_callback
 from ._spheremap import SphereMap, _float_rows
 
 __all__ = ["Harmonics", "fit"]
@@ -177,7 +178,7 @@ class Harmonics:
         return f"Harmonics(lmax={self._lmax})"
 
 
-def fit(m: SphereMap, lmax: int, *, oversample: int = 1) -> Harmonics:
+def fit(m: SphereMap, lmax: int, *, oversample: int = 1, progress: Any = None) -> Harmonics:
     """The real spherical-harmonic coefficients of ``m``'s surface up to ``lmax``.
 
     The surface is sampled through ``m.to_surface`` on a grid of the sphere,
@@ -198,6 +199,10 @@ def fit(m: SphereMap, lmax: int, *, oversample: int = 1) -> Harmonics:
         Largest degree, 0..2000.
     oversample : int, default 1
         1..8; the grid may hold at most 2**24 points.
+    progress : bool or callable, optional
+        ``True`` draws a bar on stderr, a callable receives ``(done, total)``
+        (rings sampled, then rings summed and orders transformed), as for
+        :func:`spherify.embed`. Worth it from a degree of a few hundred.
 
     Returns
     -------
@@ -214,7 +219,8 @@ def fit(m: SphereMap, lmax: int, *, oversample: int = 1) -> Harmonics:
         raise MeshError(f"fit needs a SphereMap, got {type(m).__name__}")
     lmax = _args.integer(lmax, "lmax", 0)
     oversample = _args.integer(oversample, "oversample", 1)
-    coefficients, info = _core.harmonics_fit(m._core, lmax, oversample)
+    coefficients, info = _core.harmonics_fit(m._core, lmax, oversample,
+                                             as_callback(progress, "harmonics"))
     info["seconds"] = dict(info["seconds"])
     return Harmonics(coefficients, info)
 
