@@ -140,6 +140,8 @@ class _Buffer:
 
     def accessor(self, array: np.ndarray, kind: str, target: int,
                  bounds: bool = False) -> int:
+        """An accessor of ``array`` in a view of its own; ``bounds``: its
+        per-component min and max (which glTF requires of POSITION)."""
         component = UNSIGNED_INT if array.dtype == np.uint32 else FLOAT
         flat = array.reshape(len(array), -1)
         accessor: Dict[str, Any] = {
@@ -176,7 +178,7 @@ def glb_bytes(vertices: np.ndarray, faces: np.ndarray, *, sphere: Optional[np.nd
     primitive: Dict[str, Any] = {
         "attributes": attributes, "mode": TRIANGLES,
         "indices": buffer.accessor(faces.reshape(-1).astype(np.uint32), "SCALAR",
-                                   ELEMENT_ARRAY_BUFFER, True)}
+                                   ELEMENT_ARRAY_BUFFER)}
     document: Dict[str, Any] = {"asset": {"version": "2.0", "generator": generator},
                                 "scene": 0, "scenes": [{"nodes": [0]}],
                                 "nodes": [{"mesh": 0, "name": "spherify"}]}
