@@ -2,8 +2,9 @@
 (issue 24, item 8): ``sp.save(mesh, "out.glb", sphere=m.points, uv=layout,
 texture=image)``.
 
-One file that any glTF viewer (Blender, three.js, the Khronos sample viewer)
-opens: a scene with one node and one triangle primitive whose attributes are
+One file for glTF viewers and engines (read back here by pygltflib, trimesh
+and VTK's glTF importer): a scene with one node and one triangle primitive
+whose attributes are
 
 * ``POSITION`` (float32) and ``NORMAL`` (float32, area-weighted vertex
   normals, unit length),
