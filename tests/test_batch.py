@@ -733,3 +733,19 @@ def test_workers_is_checked_by_the_one_integer_checker(workers: Any, tmp_path: P
     with pytest.raises(sp.MeshError, match="workers must be an integer"):
         sp.batch(tmp_path / "in", tmp_path / "out", workers=workers)
     assert not (tmp_path / "out").exists()
+
+
+def test_the_repr_is_one_line_of_counts(tmp_path: Path) -> None:
+    """issue 24: the repr printed every row (10 KB for 5 meshes)."""
+    rows = ([{"status": "done", "certified": True, "input": f"m{k}.ply"} for k in range(3)]
+            + [{"status": "failed", "certified": False, "error": "x" * 500},
+               {"status": "done", "certified": False}])
+    result = sp.BatchResult(rows=rows, skipped=2, journal=tmp_path / "journal.jsonl",
+                            summary=tmp_path / "summary.csv")
+    text = repr(result)
+    assert text == (f"BatchResult(5 meshes: 3 certified, 1 failed, 1 not certified; 2 of them "
+                    f"done by an earlier run; journal {tmp_path / 'journal.jsonl'})")
+    assert "\n" not in text and "xxx" not in text
+    one = sp.BatchResult(rows=rows[:1], skipped=0, journal=Path("j"), summary=Path("s"),
+                         interrupted=True)
+    assert repr(one) == "BatchResult(1 mesh: 1 certified, 0 failed; interrupted; journal j)"

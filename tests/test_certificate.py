@@ -29,7 +29,7 @@ def uncertified_theta_phi() -> sp.ThetaPhiMap:
 
 def invalid_radial() -> sp.SphereMap:
     """A radial map from outside the mesh: points, but not a GC-embedding."""
-    m = sp.embed(sp.datasets.icosphere(2), "radial", center=(3.0, 0.5, 0.25))
+    m = sp.embed(sp.datasets.icosphere(subdivisions=2), "radial", center=(3.0, 0.5, 0.25))
     assert not m.valid and m.flipped > 0
     return m
 
@@ -65,7 +65,7 @@ def test_arrays_are_read_only() -> None:
 def test_an_edited_copy_of_the_points_does_not_change_the_map() -> None:
     m = invalid_radial()
     forged = m.points.copy()
-    forged[:] = sp.embed(sp.datasets.icosphere(2), "radial").points
+    forged[:] = sp.embed(sp.datasets.icosphere(subdivisions=2), "radial").points
     assert not m.valid
     with pytest.raises(sp.MapError, match="not a valid GC-embedding"):
         m.to_surface(np.array([[1.0, 0.0, 0.0]]))
@@ -81,14 +81,14 @@ def test_the_core_result_cannot_be_changed_either() -> None:
 
 
 def test_a_certified_map_answers() -> None:
-    m = sp.embed(sp.datasets.icosphere(2), "radial")
+    m = sp.embed(sp.datasets.icosphere(subdivisions=2), "radial")
     assert m.valid
     faces, bary, xyz = m.to_surface(m.points[:5])
     np.testing.assert_allclose(xyz, m.mesh.vertices[:5], atol=1e-12)
 
 
 def test_theta_phi_arrays_are_named_and_only_on_theta_phi_maps() -> None:
-    m = sp.embed(sp.datasets.icosphere(1), method="theta_phi")
+    m = sp.embed(sp.datasets.icosphere(subdivisions=1), method="theta_phi")
     assert isinstance(m, sp.ThetaPhiMap)
     np.testing.assert_array_equal(m._core.theta_phi_array("theta_phi"), m.theta_phi)
     with pytest.raises(sp.MeshError, match="no theta-phi array"):

@@ -16,7 +16,7 @@ def unit(points: np.ndarray) -> np.ndarray:
 
 @pytest.fixture(scope="module")
 def sphere_mesh() -> sp.Mesh:
-    return sp.datasets.icosphere(3)
+    return sp.datasets.icosphere(subdivisions=3)
 
 
 def test_projected_icosphere_is_valid(sphere_mesh: sp.Mesh) -> None:

@@ -120,6 +120,15 @@ def test_texture_writes_obj_mtl_and_png(tmp_path: Path, capsys: pytest.CaptureFi
     assert "OBJ" in capsys.readouterr().err
 
 
+def test_texture_writes_one_glb(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    out = tmp_path / "t.glb"
+    assert cli.main(["texture", "--dataset", "bumpy_blob", "--n-vertices", "500",
+                     "--size", "32", "-o", str(out)]) == 0
+    assert "sphere points and the texture" in capsys.readouterr().out
+    assert [p.name for p in tmp_path.iterdir()] == ["t.glb"]
+    assert out.read_bytes()[:4] == b"glTF"
+
+
 @pytest.mark.parametrize("command, extra", [
     ("harmonics", ["--lmax", "4"]), ("remesh", ["--level", "1"]), ("texture", []),
     ("morph", ["--target-dataset", "ellipsoid"]),

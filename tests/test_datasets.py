@@ -197,7 +197,7 @@ def test_no_self_intersections_small(name, size):
 
 def test_crossing_pairs_sees_an_intersection():
     # two tetrahedra, one pushed through a face of the other
-    mesh = datasets.icosphere(0)
+    mesh = datasets.icosphere(subdivisions=0)
     V, F = mesh.vertices, mesh.faces
     W = np.concatenate([V, V * 0.5 + [0.9, 0, 0]])
     assert crossing_pairs(W, np.concatenate([F, F + len(V)])) > 0
@@ -217,12 +217,24 @@ def test_star_shapes():
 
 def test_icosphere_counts():
     for k in range(5):
-        mesh = datasets.icosphere(k)
+        mesh = datasets.icosphere(subdivisions=k)
         V, F = mesh.vertices, mesh.faces
         assert (len(V), len(F)) == (10 * 4**k + 2, 20 * 4**k)
         assert np.allclose(np.linalg.norm(V, axis=1), 1.0)
         W, G = make_arrays("icosphere", 10 * 4**k + 2)
         assert np.array_equal(V, W) and np.array_equal(F, G)
+
+
+def test_icosphere_takes_a_vertex_count_like_every_shape():
+    """issue 24: icosphere's first argument is a vertex count, as for the
+    other shapes; subdivisions is a keyword."""
+    assert datasets.icosphere().n_vertices == 642
+    assert datasets.icosphere(2562).n_vertices == 2562
+    assert datasets.icosphere(1000).n_vertices == 10 * 10**2 + 2
+    with pytest.raises(spherify.MeshError, match="not both"):
+        datasets.icosphere(642, subdivisions=3)
+    with pytest.raises(TypeError):
+        datasets.icosphere(642, 3)  # type: ignore[misc]
 
 
 def test_shapes_sit_where_documented():
@@ -282,13 +294,13 @@ def test_bad_vertex_count_raises(bad):
 
 
 @pytest.mark.parametrize("call", [
-    lambda: spherify.datasets.icosphere(True),
+    lambda: spherify.datasets.icosphere(subdivisions=True),
     lambda: spherify.datasets.ellipsoid(n_vertices=True),
     lambda: spherify.datasets.bumpy_blob(n_vertices=500, bumps=np.bool_(True)),
     lambda: spherify.datasets.urchin(n_vertices=500, spikes=True),
     lambda: spherify.datasets.checkerboard(np.eye(3), squares=True),
-    lambda: spherify.remesh_map(spherify.embed(spherify.datasets.icosphere(1)), level=True),
-    lambda: spherify.geometry_image(spherify.embed(spherify.datasets.icosphere(1)), size=True),
+    lambda: spherify.remesh_map(spherify.embed(spherify.datasets.icosphere(subdivisions=1)), level=True),
+    lambda: spherify.geometry_image(spherify.embed(spherify.datasets.icosphere(subdivisions=1)), size=True),
 ])
 def test_integer_arguments_refuse_bools_with_one_message(call):
     """Every integer argument goes through one checker: a bool is not a count
@@ -329,7 +341,7 @@ def test_core_check_agrees(name):
 
 
 def test_public_functions_return_meshes():
-    meshes = [datasets.icosphere(2), datasets.ellipsoid(500), datasets.bumpy_blob(500),
+    meshes = [datasets.icosphere(subdivisions=2), datasets.ellipsoid(500), datasets.bumpy_blob(500),
               datasets.helix_tube(500), datasets.urchin(3000), datasets.tentacles(2000)]
     for mesh in meshes:
         assert isinstance(mesh, spherify.Mesh)

@@ -199,14 +199,14 @@ def test_tetrahedron_by_hand() -> None:
 
 
 def test_deterministic() -> None:
-    mesh = sp.datasets.icosphere(2)
+    mesh = sp.datasets.icosphere(subdivisions=2)
     first = sp.dijkstra(mesh, 0)
     second = sp.dijkstra(mesh, 0)
     assert first[0].tobytes() == second[0].tobytes() and np.array_equal(first[1], second[1])
 
 
 def test_icosphere_hops_match_the_reference() -> None:
-    mesh = sp.datasets.icosphere(2)
+    mesh = sp.datasets.icosphere(subdivisions=2)
     n, E = mesh.n_vertices, edges(mesh.faces)
     w = edge_lengths(mesh.vertices, E)
     for source in (0, n // 2, n - 1):

@@ -1,5 +1,5 @@
 """The formats read and written in Python: .npz / .npy pairs, FreeSurfer
-surfaces and GIfTI (through nibabel), and meshes from trimesh-like objects."""
+surfaces and GIfTI (through nibabel); other libraries' meshes are in test_interop.py."""
 
 from __future__ import annotations
 
@@ -239,22 +239,6 @@ def test_mesh_from_an_object_with_vertices_and_faces() -> None:
             assert made.valid
     with pytest.raises(sp.MeshError, match="vertices"):
         sp.Mesh(np.zeros((4, 3)))
-
-
-def test_trimesh_both_ways() -> None:
-    trimesh = pytest.importorskip("trimesh")
-    mesh = blob()
-    t = mesh.to_trimesh()
-    assert isinstance(t, trimesh.Trimesh)
-    assert np.array_equal(t.vertices, mesh.vertices) and np.array_equal(t.faces, mesh.faces)
-    back = sp.Mesh(t)
-    assert np.array_equal(back.vertices, mesh.vertices) and np.array_equal(back.faces, mesh.faces)
-
-
-def test_to_trimesh_without_trimesh_says_so(monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setitem(sys.modules, "trimesh", None)
-    with pytest.raises(ImportError, match="pip install trimesh"):
-        blob().to_trimesh()
 
 
 def test_cli_maps_a_freesurfer_surface_to_a_radius_100_sphere(

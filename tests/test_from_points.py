@@ -11,7 +11,7 @@ import spherify as sp
 
 
 def test_a_spheres_own_vertices_are_a_valid_map_with_both_directions() -> None:
-    mesh = sp.datasets.icosphere(2)
+    mesh = sp.datasets.icosphere(subdivisions=2)
     m = sp.SphereMap.from_points(mesh, mesh.vertices)
     assert type(m) is sp.SphereMap
     assert m.method == "points" and m.status == "direct" and m.iterations == 0
@@ -29,7 +29,7 @@ def test_a_spheres_own_vertices_are_a_valid_map_with_both_directions() -> None:
 
 
 def test_a_map_on_another_radius_is_projected_and_the_projection_reported() -> None:
-    mesh = sp.datasets.icosphere(1)
+    mesh = sp.datasets.icosphere(subdivisions=1)
     m = sp.SphereMap.from_points(mesh, 100.0 * mesh.vertices)
     assert m.valid
     np.testing.assert_allclose(np.linalg.norm(m.points, axis=1), 1.0, atol=1e-15)
@@ -37,7 +37,7 @@ def test_a_map_on_another_radius_is_projected_and_the_projection_reported() -> N
 
 
 def test_the_surface_can_be_any_shape() -> None:
-    mesh = sp.datasets.icosphere(2)
+    mesh = sp.datasets.icosphere(subdivisions=2)
     blob = sp.Mesh(mesh.vertices * np.array([3.0, 1.0, 0.5]), mesh.faces)
     m = sp.SphereMap.from_points(blob, mesh.vertices)
     assert m.valid
@@ -46,7 +46,7 @@ def test_the_surface_can_be_any_shape() -> None:
 
 
 def test_a_vertex_moved_across_is_not_valid_and_has_no_inverse() -> None:
-    mesh = sp.datasets.icosphere(2)
+    mesh = sp.datasets.icosphere(subdivisions=2)
     points = mesh.vertices.copy()
     points[0] = -points[0]
     m = sp.SphereMap.from_points(mesh, points)
@@ -59,13 +59,13 @@ def test_a_vertex_moved_across_is_not_valid_and_has_no_inverse() -> None:
 
 
 def test_a_mirrored_map_is_not_valid() -> None:
-    mesh = sp.datasets.icosphere(1)
+    mesh = sp.datasets.icosphere(subdivisions=1)
     m = sp.SphereMap.from_points(mesh, mesh.vertices * np.array([1.0, 1.0, -1.0]))
     assert not m.valid and m.report.covering_degree == -1
 
 
 def test_arrays_are_read_only_and_the_verdict_cannot_be_set() -> None:
-    mesh = sp.datasets.icosphere(1)
+    mesh = sp.datasets.icosphere(subdivisions=1)
     m = sp.SphereMap.from_points(mesh, mesh.vertices)
     with pytest.raises(ValueError):
         m.points[0, 0] = 5.0
@@ -76,7 +76,7 @@ def test_arrays_are_read_only_and_the_verdict_cannot_be_set() -> None:
 
 
 def test_an_inward_mesh_is_reoriented_and_the_points_keep_their_vertices() -> None:
-    mesh = sp.datasets.icosphere(1)
+    mesh = sp.datasets.icosphere(subdivisions=1)
     inward = sp.Mesh(mesh.vertices, mesh.faces[:, ::-1])
     m = sp.SphereMap.from_points(inward, mesh.vertices)
     assert m.valid and m.notes and "reoriented" in m.notes[0]
@@ -89,14 +89,14 @@ def test_an_inward_mesh_is_reoriented_and_the_points_keep_their_vertices() -> No
     ("not numbers", "must be numbers"),
 ])
 def test_wrong_shapes_are_mesh_errors(bad: object, match: str) -> None:
-    mesh = sp.datasets.icosphere(1)
+    mesh = sp.datasets.icosphere(subdivisions=1)
     with pytest.raises(sp.MeshError, match=match):
         sp.SphereMap.from_points(mesh, bad)  # type: ignore[arg-type]
 
 
 @given(row=st.integers(0, 41), bad=st.sampled_from([np.nan, np.inf, -np.inf, 0.0]))
 def test_points_without_direction_name_their_row(row: int, bad: float) -> None:
-    mesh = sp.datasets.icosphere(1)
+    mesh = sp.datasets.icosphere(subdivisions=1)
     points = mesh.vertices.copy()
     points[row] = [bad, bad, bad] if bad == 0.0 else [bad, 0.0, 1.0]
     with pytest.raises(sp.MeshError, match=f"points row {row}: .* has no direction"):
@@ -104,7 +104,7 @@ def test_points_without_direction_name_their_row(row: int, bad: float) -> None:
 
 
 def test_a_mesh_that_is_not_genus_zero_is_a_topology_error() -> None:
-    mesh = sp.datasets.icosphere(1)
+    mesh = sp.datasets.icosphere(subdivisions=1)
     open_mesh = (mesh.vertices, mesh.faces[1:])
     with pytest.raises(sp.TopologyError):
         sp.SphereMap.from_points(open_mesh, mesh.vertices)
@@ -113,7 +113,7 @@ def test_a_mesh_that_is_not_genus_zero_is_a_topology_error() -> None:
 @given(seed=st.integers(0, 2**32 - 1))
 def test_a_random_rotation_of_the_sphere_is_still_valid_and_agrees_with_check_sphere(
         seed: int) -> None:
-    mesh = sp.datasets.icosphere(2)
+    mesh = sp.datasets.icosphere(subdivisions=2)
     q, r = np.linalg.qr(np.random.default_rng(seed).normal(size=(3, 3)))
     q = q * np.sign(np.diag(r))
     if np.linalg.det(q) < 0:

@@ -19,7 +19,7 @@ import spherify as sp
 from _exact import exact_verdict
 
 SHAPES: Dict[str, Callable[[], sp.Mesh]] = {
-    "icosphere2": lambda: sp.datasets.icosphere(2),
+    "icosphere2": lambda: sp.datasets.icosphere(subdivisions=2),
     "ellipsoid": lambda: sp.datasets.ellipsoid(800),
     "thin_ellipsoid": lambda: sp.datasets.ellipsoid(800, axes=(1.0, 0.3, 0.2)),
     "bumpy_blob_500": lambda: sp.datasets.bumpy_blob(n_vertices=500),
@@ -88,7 +88,7 @@ def test_chord_rho_reaches_the_weights() -> None:
 
 
 def test_ten_thousand_vertices_in_seconds() -> None:
-    mesh = sp.datasets.icosphere(5)
+    mesh = sp.datasets.icosphere(subdivisions=5)
     assert mesh.n_vertices == 10242
     start = time.perf_counter()
     m = sp.embed(mesh, "gotsman")

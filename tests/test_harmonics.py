@@ -13,7 +13,7 @@ import spherify as sp
 
 def ellipsoid_map(level: int, axes=(2.0, 1.0, 0.5)) -> sp.SphereMap:
     """An icosphere scaled to an ellipsoid, mapped by its own unit vertices."""
-    ico = sp.datasets.icosphere(level)
+    ico = sp.datasets.icosphere(subdivisions=level)
     return sp.SphereMap.from_points(sp.Mesh(ico.vertices * np.array(axes), ico.faces),
                                     ico.vertices)
 
@@ -121,7 +121,7 @@ def test_filters_do_what_they_say_per_degree() -> None:
 
 
 def test_evaluate_at_the_grid_and_at_vertices_agrees_with_the_surface_for_a_round_map() -> None:
-    ico = sp.datasets.icosphere(4)
+    ico = sp.datasets.icosphere(subdivisions=4)
     m = sp.SphereMap.from_points(ico, ico.vertices)
     c = sp.harmonics.fit(m, 3)
     # The unit sphere's coordinates are degree 1: rebuilt to the PL error.
@@ -147,7 +147,7 @@ def test_coefficients_are_read_only() -> None:
 
 
 def test_an_uncertified_map_has_no_harmonics() -> None:
-    ico = sp.datasets.icosphere(2)
+    ico = sp.datasets.icosphere(subdivisions=2)
     points = ico.vertices.copy()
     points[0] = -points[0]
     with pytest.raises(sp.MapError, match="not a bijection"):

@@ -85,8 +85,8 @@ def test_every_method_is_described() -> None:
 # ----------------------------------------------------------------------- meshes
 
 SHAPES: Dict[str, Callable[[], sp.Mesh]] = {
-    "icosphere1": lambda: sp.datasets.icosphere(1),
-    "icosphere2": lambda: sp.datasets.icosphere(2),
+    "icosphere1": lambda: sp.datasets.icosphere(subdivisions=1),
+    "icosphere2": lambda: sp.datasets.icosphere(subdivisions=2),
     "ellipsoid": lambda: sp.datasets.ellipsoid(250, axes=(1.0, 0.5, 0.3)),
     "bumpy_blob": lambda: sp.datasets.bumpy_blob(300, amplitude=0.4),
     "helix_tube": lambda: sp.datasets.helix_tube(150),    # star-shaped from no point
@@ -115,7 +115,7 @@ def torus(n_around: int = 9, n_tube: int = 5) -> sp.Mesh:
 
 
 def not_genus_zero(name: str) -> sp.Mesh:
-    ico = sp.datasets.icosphere(1)
+    ico = sp.datasets.icosphere(subdivisions=1)
     if name == "torus":
         return torus()
     if name == "open":                     # one face missing: a disk

@@ -112,7 +112,7 @@ def test_bad_arguments(blob: sp.SphereMap) -> None:
         sp.morph(blob, blob, landmarks=[(0, 0), (1, 10**6)])
     with pytest.raises(sp.MeshError, match="t must be"):
         sp.morph(blob, blob, align="none").at(1.5)
-    ico = sp.datasets.icosphere(2)
+    ico = sp.datasets.icosphere(subdivisions=2)
     points = ico.vertices.copy()
     points[0] = -points[0]
     with pytest.raises(sp.MapError):

@@ -59,7 +59,7 @@ def test_saving_keeps_the_mode_and_writes_through_a_symlink(tmp_path: Path, blob
     real.chmod(0o600)
     link = tmp_path / "link.ply"
     link.symlink_to(real.name)
-    other = sp.datasets.icosphere(2)
+    other = sp.datasets.icosphere(subdivisions=2)
     sp.save(other, link)
     assert link.is_symlink()
     assert stat.S_IMODE(real.stat().st_mode) == 0o600
@@ -96,7 +96,7 @@ def test_a_long_legal_name_is_written_by_every_writer(tmp_path: Path, blob: sp.M
 
 @pytest.mark.parametrize("scale", [1e300, 1e-320])
 def test_stl_refuses_coordinates_it_would_turn_into_inf_or_zero(scale: float, tmp_path: Path) -> None:
-    mesh = sp.datasets.icosphere(1)
+    mesh = sp.datasets.icosphere(subdivisions=1)
     big = sp.Mesh(mesh.vertices * scale, mesh.faces)
     with pytest.raises(sp.MeshError, match="32-bit floats cannot hold"):
         sp.save(big, tmp_path / "x.stl")

@@ -70,7 +70,7 @@ def test_bad_arguments(blob: sp.ThetaPhiMap, default_map: sp.SphereMap) -> None:
     for limits in [(1.0, 1.0), (2.0, 1.0), (0.0, np.inf), (0.0, 1.0, 2.0)]:
         with pytest.raises(sp.MeshError, match="low < high"):
             sp.plot.mesh(blob.mesh, values=np.zeros(blob.mesh.n_faces), limits=limits)
-    radial = sp.embed(sp.datasets.icosphere(1), "radial")
+    radial = sp.embed(sp.datasets.icosphere(subdivisions=1), "radial")
     with pytest.raises(sp.MeshError, match="theta-phi"):
         sp.plot.rectangle(radial)
     with pytest.raises(sp.MeshError, match="theta-phi"):
@@ -91,3 +91,24 @@ def test_face_quality_agrees_with_quality(blob: sp.ThetaPhiMap) -> None:
     assert l2 == pytest.approx(q["stretch_l2"], rel=1e-9)
     with pytest.raises(sp.MeshError):
         sp.face_quality(blob.mesh, blob.points[:-1])
+
+
+def test_up_turns_a_y_up_model_upright(tmp_path: Path) -> None:
+    """issue 24: Y-up models (most scans, OBJ and glTF files) were drawn lying
+    down; up="y" draws their y axis upwards, by a rotation (no mirror)."""
+    from spherify.plot import _upright
+
+    V = np.eye(3)
+    turned = _upright(V, "y")
+    assert np.array_equal(turned[1], [0.0, 0.0, 1.0])  # y is drawn as the vertical
+    assert np.linalg.det(turned) == 1.0  # a rotation: faces keep their orientation
+    assert np.array_equal(_upright(V, "z"), V)
+    tall = sp.datasets.ellipsoid(n_vertices=300, axes=(0.3, 1.0, 0.3))  # long along y
+    fig = sp.plot.mesh(tall, up="y", path=tmp_path / "up.png")
+    assert (tmp_path / "up.png").stat().st_size > 0 and fig is not None
+    m = sp.embed(tall)
+    sp.plot.sphere(m, up="y", path=tmp_path / "sphere.png")
+    with pytest.raises(sp.MeshError, match="up must be one of z, y, x"):
+        sp.plot.mesh(tall, up="w")
+    with pytest.raises(sp.MeshError, match="up must be one of"):
+        sp.plot.sphere(m, up="-y")

@@ -70,7 +70,7 @@ def test_an_exception_in_the_callable_stops_the_search(error: type, mesh_2000: s
 
 
 def test_true_draws_a_bar_on_stderr(capsys: pytest.CaptureFixture[str]) -> None:
-    sp.embed(sp.datasets.icosphere(2), method="theta_phi", poles="graph", progress=True)
+    sp.embed(sp.datasets.icosphere(subdivisions=2), method="theta_phi", poles="graph", progress=True)
     err = capsys.readouterr().err
     assert err.startswith("\rgraph poles [")
     assert "[" + "#" * 30 + "] 100%  162/162  " in err and err.endswith(" s\n")
@@ -88,15 +88,15 @@ def test_text_bar_redraws_at_most_20_times_a_second() -> None:
 
 @pytest.mark.parametrize("value", [False, None])
 def test_false_and_none_are_silent(value: object, capsys: pytest.CaptureFixture[str]) -> None:
-    sp.embed(sp.datasets.icosphere(1), method="theta_phi", poles="graph", progress=value)
+    sp.embed(sp.datasets.icosphere(subdivisions=1), method="theta_phi", poles="graph", progress=value)
     assert capsys.readouterr().err == ""
 
 
 def test_bad_progress_value_raises() -> None:
     with pytest.raises(sp.MeshError, match="progress"):
-        sp.embed(sp.datasets.icosphere(1), method="theta_phi", poles="graph", progress=3)
+        sp.embed(sp.datasets.icosphere(subdivisions=1), method="theta_phi", poles="graph", progress=3)
     with pytest.raises(sp.MeshError, match="progress"):
-        sp._core.embed(sp.datasets.icosphere(1)._core, "theta_phi", {"poles": "graph"}, 3)
+        sp._core.embed(sp.datasets.icosphere(subdivisions=1)._core, "theta_phi", {"poles": "graph"}, 3)
 
 
 def test_cli_progress_flag(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
@@ -109,3 +109,64 @@ def test_cli_progress_flag(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -
     assert cli.main(["map", "--dataset", "icosphere", "--n-vertices", "200", "--method", "theta_phi",
                      "--poles", "graph", "-o", str(out)]) == 0
     assert capsys.readouterr().err == ""
+
+
+# --- the iterative methods and the applications (issue 24, item 4) ------------
+
+@pytest.mark.parametrize("method", ["relaxation", "alexa", "gotsman"])
+def test_iterative_methods_report_their_iterations(method: str) -> None:
+    mesh = sp.datasets.bumpy_blob(n_vertices=500)
+    calls: List[Tuple[int, int]] = []
+    m = sp.embed(mesh, method, progress=lambda done, total: calls.append((done, total)))
+    assert calls, f"{method} reported nothing"
+    (total,) = {t for _, t in calls}
+    done = [d for d, _ in calls]
+    assert done == sorted(set(done)) and done[-1] == total  # ends at the end
+    assert m.iterations <= total
+    # the same bits as without a callable
+    assert (m.points == sp.embed(mesh, method).points).all()
+
+
+def test_applications_report_the_points_they_locate(monkeypatch: pytest.MonkeyPatch) -> None:
+    from spherify import _progress
+
+    monkeypatch.setattr(_progress, "CHUNK_ROWS", 500)  # several pieces on a small mesh
+    m = sp.embed(sp.datasets.bumpy_blob(n_vertices=800))
+    target = sp.embed(sp.datasets.ellipsoid(n_vertices=600))
+
+    def counted(call: object) -> List[Tuple[int, int]]:
+        calls: List[Tuple[int, int]] = []
+        assert callable(call)
+        call(lambda done, total: calls.append((done, total)))
+        return calls
+
+    for run, total in [
+        (lambda p: sp.morph(m, target, progress=p), m.mesh.n_vertices),
+        (lambda p: sp.remesh(m, level=3, progress=p), 642),
+        (lambda p: sp.geometry_image(m, 33, progress=p), 33 * 33),
+    ]:
+        calls = counted(run)
+        assert len(calls) > 1 and calls[-1] == (total, total)
+        assert [d for d, _ in calls] == sorted({d for d, _ in calls})
+    # the same arrays as in one piece
+    assert (sp.morph(m, target, progress=lambda d, t: None).end
+            == sp.morph(m, target).end).all()
+    assert (sp.geometry_image(m, 33, progress=True) == sp.geometry_image(m, 33)).all()
+    layout = sp.texture.uv(m)
+    rows: List[Tuple[int, int]] = []
+    image = layout.bake(sp.datasets.checkerboard, 100,
+                        progress=lambda done, total: rows.append((done, total)))
+    assert rows[-1] == (100, 100) and len(rows) == 2  # 64 rows a piece
+    assert (image == layout.bake(sp.datasets.checkerboard, 100)).all()
+
+
+def test_harmonics_report_rings_and_orders() -> None:
+    m = sp.embed(sp.datasets.bumpy_blob(n_vertices=800))
+    calls: List[Tuple[int, int]] = []
+    lmax = 40
+    c = sp.harmonics.fit(m, lmax, progress=lambda done, total: calls.append((done, total)))
+    total = 2 * (lmax + 1) + lmax + 1  # rings sampled, rings summed, orders
+    assert {t for _, t in calls} == {total} and calls[-1] == (total, total)
+    done = [d for d, _ in calls]
+    assert done == sorted(set(done)) and len(calls) > 10
+    assert (c.coefficients == sp.harmonics.fit(m, lmax).coefficients).all()

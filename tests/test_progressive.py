@@ -164,7 +164,7 @@ def test_improve_refuses_a_map_that_is_not_valid() -> None:
 
 @pytest.mark.parametrize("options", [{"energy": "harmonic"}, {"max_iter": -1}, {"tol": -1.0}])
 def test_improve_refuses_bad_options(options: Dict[str, Any]) -> None:
-    start = sp.embed(sp.datasets.icosphere(2), "theta_phi")
+    start = sp.embed(sp.datasets.icosphere(subdivisions=2), "theta_phi")
     with pytest.raises(sp.MeshError):
         sp.improve(start, **options)
 
@@ -176,7 +176,7 @@ def test_every_corpus_mesh_gets_a_valid_map(valid_corpus_entry: Dict[str, Any]) 
 
 def test_an_improved_map_survives_pickle_and_save(tmp_path: Path) -> None:
     import pickle
-    better = sp.improve(sp.embed(sp.datasets.icosphere(3), "theta_phi"), max_iter=3)
+    better = sp.improve(sp.embed(sp.datasets.icosphere(subdivisions=3), "theta_phi"), max_iter=3)
     back = pickle.loads(pickle.dumps(better))
     assert back.method == "improve" and back.valid
     assert np.array_equal(back.points, better.points)
@@ -210,7 +210,7 @@ def test_the_cli_maps_with_the_progressive_method(tmp_path: Path) -> None:
 def test_a_certified_map_with_a_sliver_warns_about_its_margin() -> None:
     # Issue 13, item 8: a valid map whose thinnest triangle is 1e-14 of the
     # mean says that distinct points may map to the same doubles.
-    mesh = sp.datasets.icosphere(2)
+    mesh = sp.datasets.icosphere(subdivisions=2)
     points = mesh.vertices / np.linalg.norm(mesh.vertices, axis=1, keepdims=True)
     quiet = sp.SphereMap.from_points(mesh, points)
     assert quiet.valid and quiet.margin > 0.1
@@ -225,7 +225,7 @@ def test_a_certified_map_with_a_sliver_warns_about_its_margin() -> None:
 def test_margins_are_over_the_mean_triangle_for_every_map() -> None:
     # A round mesh's thinnest triangle is a sizeable fraction of the mean, in
     # theta-phi's rectangle as on the sphere: the same scale for THIN_MARGIN.
-    mesh = sp.datasets.icosphere(3)
+    mesh = sp.datasets.icosphere(subdivisions=3)
     tp = sp.embed(mesh, "theta_phi")
     # sp.embed's thin-margin check reads the margin without building the cut mesh.
     assert tp._cut_mesh is None

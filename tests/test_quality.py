@@ -40,7 +40,7 @@ def assert_finite(q: Dict[str, Any]) -> None:
 def test_a_similarity_has_no_distortion() -> None:
     # The icosphere's own directions against the icosphere moved, turned and
     # scaled: angles, shapes and area shares are all kept.
-    sphere = sp.datasets.icosphere(3)
+    sphere = sp.datasets.icosphere(subdivisions=3)
     points = sphere.vertices / np.linalg.norm(sphere.vertices, axis=1, keepdims=True)
     c, s = np.cos(1.1), np.sin(1.1)
     R = np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
@@ -74,7 +74,7 @@ def test_a_flat_stretch_by_two() -> None:
 
 
 def test_the_sphere_stretched_into_an_ellipsoid() -> None:
-    sphere = sp.datasets.icosphere(3)
+    sphere = sp.datasets.icosphere(subdivisions=3)
     V, F = sphere.vertices, sphere.faces
     mesh = sp.Mesh(V * [2.0, 1.0, 1.0], F)
     q = sp.quality(mesh, V)

@@ -151,7 +151,7 @@ def test_same_input_same_output() -> None:
 # --------------------------------------------------------------------------
 
 def test_a_point_centre_inside_and_outside() -> None:
-    mesh = sp.datasets.icosphere(2)
+    mesh = sp.datasets.icosphere(subdivisions=2)
     inside = sp.embed(mesh, "radial", center=(0.1, -0.2, 0.05))
     assert inside.valid and on_unit_sphere(inside.points)
     assert "given point" in inside.message
@@ -168,20 +168,20 @@ def test_a_point_centre_inside_and_outside() -> None:
     (0.0, float("inf"), 0.0), ("a", "b", "c"), b"abc", 5, 2.5, np.zeros((1, 3)), {"x": 1.0},
 ])
 def test_bad_centres_raise_mesh_error(center: Any) -> None:
-    mesh = sp.datasets.icosphere(1)
+    mesh = sp.datasets.icosphere(subdivisions=1)
     with pytest.raises(sp.MeshError, match="center"):
         sp.embed(mesh, "radial", center=center)
 
 
 def test_a_centre_on_a_vertex_raises_mesh_error() -> None:
-    mesh = sp.datasets.icosphere(1)
+    mesh = sp.datasets.icosphere(subdivisions=1)
     with pytest.raises(sp.MeshError, match="vertex 3"):
         sp.embed(mesh, "radial", center=tuple(mesh.vertices[3]))
 
 
 def test_unknown_option_raises_mesh_error() -> None:
     with pytest.raises(sp.MeshError):
-        sp.embed(sp.datasets.icosphere(1), "radial", centre="kernel")
+        sp.embed(sp.datasets.icosphere(subdivisions=1), "radial", centre="kernel")
 
 
 # --------------------------------------------------------------------------

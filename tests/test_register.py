@@ -159,7 +159,7 @@ def test_bad_input(blob: sp.SphereMap) -> None:
         sp.register(blob, blob, landmarks=[(0.5, 1.0)])
     with pytest.raises(sp.MeshError, match="SphereMap"):
         sp.register(blob, blob.mesh)  # type: ignore[arg-type]
-    ico = sp.datasets.icosphere(2)
+    ico = sp.datasets.icosphere(subdivisions=2)
     points = ico.vertices.copy()
     points[0] = -points[0]
     with pytest.raises(sp.MapError, match="not a certified bijection"):

@@ -19,8 +19,8 @@ from _exact import exact_verdict
 METHODS = ["relaxation", "alexa"]
 
 SHAPES: Dict[str, Callable[[], sp.Mesh]] = {
-    "icosphere2": lambda: sp.datasets.icosphere(2),
-    "icosphere3": lambda: sp.datasets.icosphere(3),
+    "icosphere2": lambda: sp.datasets.icosphere(subdivisions=2),
+    "icosphere3": lambda: sp.datasets.icosphere(subdivisions=3),
     "ellipsoid": lambda: sp.datasets.ellipsoid(800),
     "thin_ellipsoid": lambda: sp.datasets.ellipsoid(800, axes=(1.0, 0.3, 0.2)),
     "bumpy_blob": lambda: sp.datasets.bumpy_blob(n_vertices=1000),
@@ -85,7 +85,7 @@ def test_relaxation_weights(options: Dict[str, Any]) -> None:
 
 
 def test_alexa_constant_step() -> None:
-    mesh = sp.datasets.icosphere(3)
+    mesh = sp.datasets.icosphere(subdivisions=3)
     m = sp.embed(mesh, "alexa", c=1.0, initial=scrambled(mesh, 0.3))
     assert_honest(m, mesh, 10000)
     assert m.valid, m.message
@@ -148,7 +148,7 @@ def test_tentacles_give_up_honestly(method: str) -> None:
 
 @pytest.mark.parametrize("method", METHODS)
 def test_start_in_a_hemisphere_is_collapsed_at_once(method: str) -> None:
-    mesh = sp.datasets.icosphere(2)
+    mesh = sp.datasets.icosphere(subdivisions=2)
     m = sp.embed(mesh, method, center=(3.0, 0.0, 0.0))
     assert_honest(m, mesh, 10000)
     assert (m.status, m.iterations) == ("collapsed", 0)
@@ -188,22 +188,22 @@ def test_deterministic_and_max_iter_zero(method: str) -> None:
 ])
 def test_bad_arguments_raise_mesh_error(method: str, options: Dict[str, Any]) -> None:
     with pytest.raises(sp.MeshError):
-        sp.embed(sp.datasets.icosphere(2), method, **options)
+        sp.embed(sp.datasets.icosphere(subdivisions=2), method, **options)
 
 
 @pytest.mark.parametrize("options", [{"weights": "bogus"}, {"weights": "chord", "rho": float("inf")}])
 def test_bad_relaxation_weights(options: Dict[str, Any]) -> None:
     with pytest.raises(sp.MeshError):
-        sp.embed(sp.datasets.icosphere(2), "relaxation", **options)
+        sp.embed(sp.datasets.icosphere(subdivisions=2), "relaxation", **options)
 
 
 @pytest.mark.parametrize("c", [0.0, -1.0, float("nan"), float("inf")])
 def test_bad_alexa_step(c: float) -> None:
     with pytest.raises(sp.MeshError, match="c = "):
-        sp.embed(sp.datasets.icosphere(2), "alexa", c=c)
+        sp.embed(sp.datasets.icosphere(subdivisions=2), "alexa", c=c)
 
 
 def test_centre_on_a_vertex_is_a_mesh_error() -> None:
-    mesh = sp.datasets.icosphere(2)
+    mesh = sp.datasets.icosphere(subdivisions=2)
     with pytest.raises(sp.MeshError, match="vertex 7"):
         sp.embed(mesh, "relaxation", center=tuple(mesh.vertices[7]))

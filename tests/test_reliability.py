@@ -194,7 +194,7 @@ def test_a_forked_child_can_use_every_call_after_the_parent_did() -> None:
 REENTRANT_SCRIPT = """
     import spherify as sp
     mesh = sp.datasets.bumpy_blob(n_vertices=600)
-    small = sp.datasets.icosphere(1)
+    small = sp.datasets.icosphere(subdivisions=1)
     seen = []
 
     def progress(done, total):
@@ -325,7 +325,7 @@ def test_ctrl_c_inside_one_long_harmonics_call_is_answered(name: str) -> None:
         import spherify as sp
         m = sp.embed(sp.datasets.bumpy_blob(n_vertices=2000), "theta_phi")
         h = sp.harmonics.fit(m, 600) if "{name}" == "evaluate" else None
-        q = sp.datasets.icosphere(7).vertices
+        q = sp.datasets.icosphere(subdivisions=7).vertices
         q = np.concatenate([q] * 2)
         print("READY", flush=True)
         {HARMONICS_CALLS[name]}

@@ -26,7 +26,7 @@ def blob_map() -> sp.SphereMap:
 def test_the_remesh_is_a_valid_genus_zero_mesh_on_the_surface(blob_map: sp.SphereMap) -> None:
     for level in (0, 2, 4):
         r = sp.remesh(blob_map, "icosphere", level=level)
-        ico = sp.datasets.icosphere(level)
+        ico = sp.datasets.icosphere(subdivisions=level)
         assert r.n_vertices == ico.n_vertices and np.array_equal(r.faces, ico.faces)
         report = sp.check(r)
         assert report.valid and report.genus == 0, report
@@ -54,7 +54,7 @@ def test_the_distance_of_a_surface_to_itself_is_zero_and_is_symmetric(
 
 
 def test_an_uncertified_map_cannot_be_remeshed() -> None:
-    ico = sp.datasets.icosphere(2)
+    ico = sp.datasets.icosphere(subdivisions=2)
     points = ico.vertices.copy()
     points[0] = -points[0]
     m = sp.SphereMap.from_points(ico, points)

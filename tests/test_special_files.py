@@ -31,7 +31,7 @@ pytestmark = pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="needs FIFOs (
 
 @pytest.fixture(scope="module")
 def sphere_map() -> sp.SphereMap:
-    return sp.embed(sp.datasets.icosphere(1), method="theta_phi")
+    return sp.embed(sp.datasets.icosphere(subdivisions=1), method="theta_phi")
 
 
 def writers(m: sp.SphereMap) -> Dict[str, Callable[[Path], Any]]:
@@ -243,8 +243,8 @@ def test_python_writers_follow_links_and_keep_the_mode_as_the_core_does(
     (lambda d: sp.load_map(d / "missing.spheremap.npz"), FileNotFoundError),
     (lambda d: sp.load_geometry_image(d / "missing.png"), FileNotFoundError),
     (lambda d: sp.load(d), IsADirectoryError),
-    (lambda d: sp.save(sp.datasets.icosphere(0), d / "no" / "t.ply"), FileNotFoundError),
-    (lambda d: sp.save(sp.datasets.icosphere(0), d / "no" / "t.npz"), FileNotFoundError),
+    (lambda d: sp.save(sp.datasets.icosphere(subdivisions=0), d / "no" / "t.ply"), FileNotFoundError),
+    (lambda d: sp.save(sp.datasets.icosphere(subdivisions=0), d / "no" / "t.npz"), FileNotFoundError),
 ])
 def test_what_the_system_refuses_is_a_file_error_and_its_builtin(
         tmp_path: Path, call: Callable[[Path], Any], builtin: type) -> None:

@@ -56,7 +56,7 @@ def embed_quietly(mesh: Any, **options: Any) -> Tuple[sp.SphereMap, List[warning
 def one_mirror_plane() -> sp.Mesh:
     """The icosphere bent so that y = 0 is its only mirror plane (y is the
     middle axis, so no rule based on the axes' order alone finds it)."""
-    ico = sp.datasets.icosphere(3)
+    ico = sp.datasets.icosphere(subdivisions=3)
     x, y, z = ico.vertices.T
     V = np.stack([1.6 * x + 0.4 * z**2, y, 0.7 * z + 0.3 * x**2], axis=1)
     return sp.Mesh(V, ico.faces)
@@ -64,7 +64,7 @@ def one_mirror_plane() -> sp.Mesh:
 
 def three_bumps() -> sp.Mesh:
     """Clearly asymmetric: three bumps of different heights in general directions."""
-    ico = sp.datasets.icosphere(3)
+    ico = sp.datasets.icosphere(subdivisions=3)
     V = ico.vertices
     r = np.ones(len(V))
     for direction, height in [((0.8, 0.5, 0.3), 0.9), ((-0.2, 0.9, -0.4), 0.5),

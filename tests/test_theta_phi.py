@@ -87,7 +87,7 @@ def test_tetrahedron_needs_a_lengthened_path() -> None:
 
 
 def test_inward_mesh_is_reoriented_first() -> None:
-    mesh = sp.datasets.icosphere(2)
+    mesh = sp.datasets.icosphere(subdivisions=2)
     inward = sp.Mesh(mesh.vertices, mesh.faces[:, ::-1])
     m = sp.embed(inward, method="theta_phi")
     assert m.tp_valid and m.valid
@@ -107,7 +107,7 @@ def test_double_precision_limit_is_reported_not_hidden() -> None:
 
 
 def test_bad_options() -> None:
-    mesh = sp.datasets.icosphere(1)
+    mesh = sp.datasets.icosphere(subdivisions=1)
     with pytest.raises(sp.MeshError, match="poles"):
         sp.embed(mesh, method="theta_phi", poles="symmetric")
     with pytest.raises(sp.MeshError):

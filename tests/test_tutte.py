@@ -158,7 +158,7 @@ def test_user_polygon(square_grid: sp.Mesh) -> None:
 
 
 def test_non_disks_raise_topology_error(square_grid: sp.Mesh) -> None:
-    closed = sp.datasets.icosphere(1)
+    closed = sp.datasets.icosphere(subdivisions=1)
     with pytest.raises(sp.TopologyError) as err:
         sp.tutte(closed)
     assert err.value.report.closed

@@ -271,16 +271,50 @@ def write_summary(path: Path, rows: Sequence[Dict[str, Any]]) -> None:
 
 # --- the batch ----------------------------------------------------------------
 
-@dataclass
+@dataclass(repr=False)
 class BatchResult:
-    """What :func:`batch` did: ``rows`` (one per mesh, input order),
-    how many were ``skipped`` (already done), and the files it wrote."""
+    """What :func:`batch` did.
+
+    Its repr is one line of counts (``BatchResult(5 meshes: 4 certified, 1
+    failed; journal out/journal.jsonl)``); the rows are in ``rows`` and in
+    the summary file.
+
+    Attributes
+    ----------
+    rows : list of dict
+        One per mesh, in input order: the columns of ``summary.csv``
+        (:data:`spherify._batch.COLUMNS`).
+    skipped : int
+        Meshes already done by an earlier run with the same options (their
+        rows are among ``rows``).
+    journal : pathlib.Path
+        ``OUTDIR/journal.jsonl``, one JSON row per mesh.
+    summary : pathlib.Path
+        ``OUTDIR/summary.csv``.
+    interrupted : bool
+        Whether the batch was stopped (Ctrl-C) before the end.
+    counts : dict of str to int
+        ``meshes``, ``skipped``, ``certified`` and ``failed``.
+    """
     rows: List[Dict[str, Any]]
     skipped: int
     journal: Path
     summary: Path
     interrupted: bool = False
     counts: Dict[str, int] = field(default_factory=dict)
+
+    def __repr__(self) -> str:
+        certified = sum(_delivered(row) for row in self.rows)
+        failed = sum(row.get("status") != "done" for row in self.rows)
+        uncertified = len(self.rows) - certified - failed
+        words = [f"{certified} certified", f"{failed} failed"]
+        if uncertified:
+            words.append(f"{uncertified} not certified")
+        earlier = f"; {self.skipped} of them done by an earlier run" if self.skipped else ""
+        stopped = "; interrupted" if self.interrupted else ""
+        count = len(self.rows)
+        return (f"BatchResult({count} mesh{'' if count == 1 else 'es'}: {', '.join(words)}"
+                f"{earlier}{stopped}; journal {self.journal})")
 
     @property
     def all_certified(self) -> bool:

@@ -8,10 +8,10 @@
                                    semi-regular icosphere remesh, or an octahedral
                                    geometry image (OUT's .png, 16-bit) and its mesh;
                                    prints the distance to the input
-    spherify texture MESH -o OUT.obj [--projection cube|equirectangular|octahedral]
+    spherify texture MESH -o OUT.obj|OUT.glb [--projection cube|equirectangular|octahedral]
                                    [--pattern checkerboard]
                                    per-corner UVs, a baked procedural texture; writes
-                                   OUT.obj, OUT.mtl and OUT.png
+                                   OUT.obj, OUT.mtl and OUT.png, or one glTF OUT.glb
     spherify morph A B -o OUT [--frames K] [--align rotation] [--landmarks I:J ...]
                                    morph A into B (A's connectivity); writes K
                                    frames OUT_000 .. OUT_{K-1} with OUT's suffix
@@ -27,7 +27,7 @@ import argparse
 import time
 import warnings
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any, Callable, Optional
 
 import numpy as np
 
@@ -52,11 +52,17 @@ def certified(m: SphereMap) -> bool:
     return m.tp_valid if isinstance(m, ThetaPhiMap) else m.valid
 
 
+def bar(args: argparse.Namespace) -> Optional[bool]:
+    """``progress=`` for the library's calls: a bar on a terminal or with
+    ``--progress``."""
+    return True if shows_progress(args) else None
+
+
 def mapped(mesh: Mesh, args: argparse.Namespace) -> SphereMap:
     """The map the application works through, with the method and options given."""
     options = method_options_of(args)
     method = args.method or "progressive"
-    progress = True if shows_progress(args) else None
+    progress = bar(args)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", SpherifyWarning)  # the verdict is printed instead
         m = embed(mesh, method, progress=progress, **options)
@@ -83,7 +89,7 @@ def _cmd_harmonics(args: argparse.Namespace, load: Callable[[argparse.Namespace]
         print("refusing: the map is not a certified bijection")
         return 1
     start = time.perf_counter()
-    c = harmonics.fit(m, args.lmax, oversample=args.oversample)
+    c = harmonics.fit(m, args.lmax, oversample=args.oversample, progress=bar(args))
     fitted = time.perf_counter()
     filtered = c
     if args.lowpass is not None:
@@ -127,7 +133,7 @@ def _cmd_remesh(args: argparse.Namespace, load: Callable[[argparse.Namespace], M
         return 1
     start = time.perf_counter()
     if args.geometry_image is not None:
-        image = geometry_image(m, args.geometry_image)
+        image = geometry_image(m, args.geometry_image, progress=bar(args))
         mesh = from_geometry_image(image)
         own = SphereMap.from_points(mesh, from_geometry_image(
             octahedral_points(args.geometry_image)).vertices)
@@ -137,7 +143,7 @@ def _cmd_remesh(args: argparse.Namespace, load: Callable[[argparse.Namespace], M
                 f"{mesh.n_vertices} vertices, {size} bytes in {png} "
                 f"({size / mesh.n_vertices:.2f} bytes per vertex)")
     else:
-        own = remesh_map(m, level=args.level)
+        own = remesh_map(m, level=args.level, progress=bar(args))
         mesh = own.mesh
         what = f"icosphere level {args.level}: {mesh.n_vertices} vertices, {mesh.n_faces} faces"
     made = time.perf_counter()
@@ -176,7 +182,7 @@ def _cmd_morph(args: argparse.Namespace, load: Callable[[argparse.Namespace], Me
                 from None
     start = time.perf_counter()
     mo = morph(m_a, m_b, align=args.align, landmarks=landmarks,
-               normalize=not args.no_normalize, progress=shows_progress(args))
+               normalize=not args.no_normalize, progress=bar(args))
     aligned = time.perf_counter()
     al = mo.alignment
     extra = (f", landmark rms angle {al['landmark_residual']:.3g} rad"
@@ -194,8 +200,9 @@ def _cmd_morph(args: argparse.Namespace, load: Callable[[argparse.Namespace], Me
 
 def _cmd_texture(args: argparse.Namespace, load: Callable[[argparse.Namespace], Mesh]) -> int:
     out = output_path(args)
-    if out.suffix.lower() != ".obj":
-        raise SpherifyError(f"texture writes OBJ (with MTL and PNG): give OUT.obj, got {out}")
+    if out.suffix.lower() not in (".obj", ".glb"):
+        raise SpherifyError(f"texture writes OBJ (with MTL and PNG) or glTF: give OUT.obj or "
+                            f"OUT.glb, got {out}")
     if not 2 <= args.size <= ATLAS_HEIGHT_MAX:
         raise SpherifyError(f"--size must be in 2..{ATLAS_HEIGHT_MAX}, got {args.size}")
     m = mapped(load(args), args)
@@ -203,7 +210,7 @@ def _cmd_texture(args: argparse.Namespace, load: Callable[[argparse.Namespace], 
     t = texture.uv(m, args.projection)
     pattern = (datasets.checkerboard if args.pattern == "checkerboard"
                else datasets.lat_long_grid)
-    image = t.bake(pattern, args.size)
+    image = t.bake(pattern, args.size, progress=bar(args))
     made = time.perf_counter()
     e1, e2 = t.uv[:, 1] - t.uv[:, 0], t.uv[:, 2] - t.uv[:, 0]
     flipped = int(np.sum(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0] <= 0))
@@ -211,8 +218,12 @@ def _cmd_texture(args: argparse.Namespace, load: Callable[[argparse.Namespace], 
     print(f"texture: {args.projection}, atlas {image.shape[1]} x {image.shape[0]}; "
           f"{flipped} UV triangles not positive; texture stretch L2 {q['stretch_l2']:.3g} "
           f"(Linf {q['stretch_linf']:.3g}); {made - start:.3f} s")
-    texture.save_obj(m.mesh, out, t, image)
-    print(f"wrote {out}, {out.with_suffix('.mtl')} and {out.with_suffix('.png')}")
+    if out.suffix.lower() == ".glb":
+        save(m.mesh, out, uv=t, texture=image, sphere=m.points)
+        print(f"wrote {out} (mesh, normals, UVs, sphere points and the texture)")
+    else:
+        texture.save_obj(m.mesh, out, t, image)
+        print(f"wrote {out}, {out.with_suffix('.mtl')} and {out.with_suffix('.png')}")
     return 0 if flipped == 0 and certified(m) else 1
 
 
@@ -251,7 +262,8 @@ def add_commands(sub: Any, load: Callable[[argparse.Namespace], Mesh],
                         f"{DISTANCE_SAMPLES_MAX:,} (default: 100000)")
     p.set_defaults(func=lambda args: _cmd_remesh(args, load))
 
-    p = common("texture", "per-corner UVs and a baked texture, as OBJ + MTL (thesis 8.5)")
+    p = common("texture", "per-corner UVs and a baked texture, as OBJ + MTL + PNG or as one "
+               "glTF .glb (thesis 8.5)")
     p.add_argument("--projection", default="cube", choices=list(texture.PROJECTIONS),
                    help="how the sphere is unfolded into the texture atlas (default: cube)")
     p.add_argument("--pattern", default="checkerboard", choices=["checkerboard", "grid"],

@@ -152,7 +152,8 @@ def move_towards(
     progress: Optional[Callable[[int, int], object]] = None,
 ) -> CoreSphereMap: ...
 def harmonics_fit(
-    map: CoreSphereMap, lmax: int, oversample: int = 1
+    map: CoreSphereMap, lmax: int, oversample: int = 1,
+    progress: Optional[Callable[[int, int], object]] = None,
 ) -> Tuple[npt.NDArray[np.float64], Dict[str, Any]]: ...
 def harmonics_evaluate(
     coefficients: npt.NDArray[np.float64], points: npt.NDArray[np.float64]

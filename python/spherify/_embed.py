@@ -109,6 +109,29 @@ def embed(mesh: MeshLike, method: str = "progressive", *, progress: Any = None,
         rectangle is certified on shapes without long limbs; name it to use
         it and its options (``poles``, ``weights``, ``symmetry_eps``, ...):
         given to the default method, they raise :class:`MeshError` saying so.
+    progress : bool or callable
+        ``True`` draws a text progress bar on stderr; a callable receives
+        ``(done, total)``, with ``done`` increasing and ending at ``total``, at
+        most about 100 times, from a worker thread. What is counted:
+        sources for ``poles="graph"``, vertices inserted for the progressive
+        method (below), iterations of at most ``max_iter`` for relaxation,
+        Alexa and Gotsman (a run that converges early jumps to ``total``).
+        If it raises, the method stops and the exception propagates. Ctrl-C
+        stops it in any case. Default ``None``: silent.
+    landmarks : mapping or pair, optional
+        ``{vertex_id: (x, y, z)}`` or ``(vertex_ids (k,), points (k, 3))``:
+        after the method's map, each landmark is moved onto its target
+        direction exactly (its stored point is the normalised target)
+        through valid maps only, then the method's energy (isometric for
+        methods without one) is lowered with the landmarks held; see
+        ``crates/sphere/src/methods/progressive/landmarks.rs``. The map
+        records them (``m.landmarks``) and ``m.seconds`` gets a
+        ``"landmarks"`` stage. Ids out of range or repeated, targets not
+        finite or zero, two landmarks at one direction: :class:`MeshError`
+        naming them. A method whose map is not valid, or a set no map
+        realises (neighbours at opposite points, a face of three landmarks
+        upside down, a drag that stalls after its bounded work):
+        :class:`MapError` naming the landmarks.
     **options
         Passed to the method (for example ``energy=`` for ``"progressive"``,
         ``poles=`` for ``"theta_phi"``, ``center="kernel"`` for ``"radial"``,
@@ -116,10 +139,10 @@ def embed(mesh: MeshLike, method: str = "progressive", *, progress: Any = None,
         the method does not read raises :class:`MeshError`; it is never
         ignored.
 
-    Theta-phi options (``method="theta_phi"``)
-    ------------------------------------------
+    Other Parameters
+    ----------------
     poles : str or (int, int)
-        How to choose the poles and the cut path (thesis 6.2):
+        *Theta-phi.* How to choose the poles and the cut path (thesis 6.2):
 
         * ``"fast_graph"`` (default): two Dijkstra sweeps (6.2.3), O(N log N).
         * ``"graph"``: the exact graph diameter (6.2.2), Dijkstra from every
@@ -142,61 +165,22 @@ def embed(mesh: MeshLike, method: str = "progressive", *, progress: Any = None,
           the planes, scores, the choice and the reason.
         * ``(north, south)``: the caller's pair of vertex ids.
     symmetry_eps : float or None
-        ``poles="symmetry"``: the band half-width of eq. 6.20 in the mesh's
+        *Theta-phi.* ``poles="symmetry"``: the band half-width of eq. 6.20 in the mesh's
         units (the thesis used 0.3 for its rabbit, whose size it does not
         give). ``None`` (default): the smallest width that holds both ends of
         every edge the plane crosses, so each curve where the plane meets the
         surface is connected.
     symmetry_max_score : float
-        ``poles="symmetry"``: fall back when the best plane scores above this
+        *Theta-phi.* ``poles="symmetry"``: fall back when the best plane scores above this
         (in [0, 1]; default 0.05).
     weights : str
-        ``"uniform"``, ``"chord"`` (with ``rho``) or ``"mean_value"``.
+        *Theta-phi.* ``"uniform"``, ``"chord"`` (with ``rho``) or ``"mean_value"``.
     max_refinements : int
-        Most double-double refinement steps per embedding (default 8). It
+        *Theta-phi.* Most double-double refinement steps per embedding (default 8). It
         stops earlier once the rectangle is flip-free, or once a step changes
         no coordinate (every further step would give the same bits).
-    landmarks : mapping or pair, optional
-        ``{vertex_id: (x, y, z)}`` or ``(vertex_ids (k,), points (k, 3))``:
-        after the method's map, each landmark is moved onto its target
-        direction exactly (its stored point is the normalised target)
-        through valid maps only, then the method's energy (isometric for
-        methods without one) is lowered with the landmarks held; see
-        ``crates/sphere/src/methods/progressive/landmarks.rs``. The map
-        records them (``m.landmarks``) and ``m.seconds`` gets a
-        ``"landmarks"`` stage. Ids out of range or repeated, targets not
-        finite or zero, two landmarks at one direction: :class:`MeshError`
-        naming them. A method whose map is not valid, or a set no map
-        realises (neighbours at opposite points, a face of three landmarks
-        upside down, a drag that stalls after its bounded work):
-        :class:`MapError` naming the landmarks.
-    progress : bool or callable
-        ``poles="graph"`` (and the progressive method, below): ``True`` draws
-        a text progress bar on stderr; a callable receives ``(done, total)``
-        (here: sources), with ``done`` increasing and ending at ``total``, at
-        most about 100 times, from a worker thread. If it raises, the search
-        stops and the exception propagates. Ctrl-C stops the search in any
-        case. Default ``None``: silent.
-
-    Returns
-    -------
-    SphereMap
-        ``points`` (n, 3) on the unit sphere, and ``valid`` / ``flipped`` decided
-        by the exact tests of thesis 3.4; a :class:`ThetaPhiMap` for
-        ``method="theta_phi"``.
-
-    Progressive options (the default method)
-    ----------------------------------------
-    ``method="progressive"`` (thesis 9.3.3; Praun and Hoppe 2003) collapses
-    the mesh to a tetrahedron, maps that, and re-inserts the vertices one
-    level at a time, each at the centre of its ring's kernel, lowering a
-    distortion energy with flip-free moves between levels. Every step is
-    decided by exact predicates, so the map is a GC-embedding as stored, and
-    areas stay in proportion, so long limbs and spikes keep their triangles
-    far above double precision (``m.report.min_area_ratio``).
-
     energy : str
-        ``"isometric"`` (default; symmetric Dirichlet), ``"conformal"``
+        *Progressive.* ``"isometric"`` (default; symmetric Dirichlet), ``"conformal"``
         (MIPS with a barrier below an area ratio of 1e-5: an exactly
         conformal map of a limbed shape cannot be stored in doubles),
         ``"authalic"`` (area plus a small angle term, followed by global
@@ -204,19 +188,23 @@ def embed(mesh: MeshLike, method: str = "progressive", *, progress: Any = None,
         the end; ``max_iter`` and ``tol`` do not bound those) or
         ``"stretch"`` (Sander's L2 stretch, as Praun and Hoppe).
     max_iter : int
-        Sweeps of the final optimisation (default 5; 10 for ``"authalic"``, 50
+        *Progressive.* Sweeps of the final optimisation (default 5; 10 for ``"authalic"``, 50
         for ``"stretch"``, 100 for ``"conformal"``).
         Most of the work is done level by level on the way up, and each new
         vertex is moved once as it is inserted; measured on a 200k-vertex
         ``tentacles``, 10 final sweeps instead of 5 change the mean angle
         distortion by under 2 degrees and cost 1.5 times the time.
     tol : float
-        Stop when a sweep lowers the energy by less than this fraction
+        *Progressive.* Stop when a sweep lowers the energy by less than this fraction
         (default 1e-3; 1e-5 for ``"stretch"`` and ``"conformal"``, which keep
         improving in small steps).
-    progress : bool or callable
-        As for graph poles, counting the method's work from the hierarchy
-        to the final sweeps; if the callable raises, the method stops.
+
+    Returns
+    -------
+    SphereMap
+        ``points`` (n, 3) on the unit sphere, and ``valid`` / ``flipped`` decided
+        by the exact tests of thesis 3.4; a :class:`ThetaPhiMap` for
+        ``method="theta_phi"``.
 
     Raises
     ------
@@ -232,6 +220,18 @@ def embed(mesh: MeshLike, method: str = "progressive", *, progress: Any = None,
         method when a vertex finds no place in double precision even after
         its neighbourhood moved (``err.state["status"] == "insertion_failed"``;
         the message names the vertex).
+
+    Notes
+    -----
+    ``method="progressive"`` (thesis 9.3.3; Praun and Hoppe 2003) collapses
+    the mesh to a tetrahedron, maps that, and re-inserts the vertices one
+    level at a time, each at the centre of its ring's kernel, lowering a
+    distortion energy with flip-free moves between levels. Every step is
+    decided by exact predicates, so the map is a GC-embedding as stored, and
+    areas stay in proportion, so long limbs and spikes keep their triangles
+    far above double precision (``m.report.min_area_ratio``).
+    Its progress counts the method's work from the hierarchy to the final
+    sweeps.
     """
     mesh = as_mesh(mesh)
     if "initial" in options and options["initial"] is not None:

@@ -92,7 +92,8 @@ def writer_for(path: Path, format: Optional[str]) -> Optional[Writer]:
         writers: Dict[str, Writer] = {"npz": write_npz, "freesurfer": write_freesurfer,
                                       "gifti": write_gifti}
         if format not in writers:
-            raise MeshError(f"format must be None or one of {', '.join(FORMATS)}, got {format!r}")
+            raise MeshError(f"format must be None or one of {', '.join(FORMATS)}, glb, "
+                            f"got {format!r}")
         return writers[format]
     name = _name(path)
     if name.endswith(".gii"):
@@ -103,8 +104,9 @@ def writer_for(path: Path, format: Optional[str]) -> Optional[Writer]:
         return None
     if path.suffix.lower().lstrip(".") in FREESURFER_NAMES:
         return write_freesurfer
-    raise FormatError(f"{path}: cannot tell the format from the name; supported: {SUPPORTED}; "
-                      "or pass format='freesurfer' | 'gifti' | 'npz'", str(path))
+    raise FormatError(f"{path}: cannot tell the format from the name; supported: {SUPPORTED}, "
+                      "and .glb (glTF, written only); or pass format='freesurfer' | 'gifti' | "
+                      "'npz' | 'glb'", str(path))
 
 
 def is_freesurfer_name(path: Path) -> bool:

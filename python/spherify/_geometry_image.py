@@ -21,7 +21,7 @@ import os
 import struct
 import zlib
 from pathlib import Path
-from typing import Tuple, Union
+from typing import Any, Tuple, Union
 
 import numpy as np
 
@@ -31,6 +31,7 @@ from ._atomic import write_bytes_atomically
 from ._errors import FormatError, MeshError
 from ._files import file_errors, require_regular_file
 from ._mesh import Mesh
+from ._progress import to_surface_in_chunks
 from ._spheremap import SphereMap
 
 __all__ = ["from_geometry_image", "geometry_image", "load_geometry_image",
@@ -74,7 +75,7 @@ def octahedron_unfolded(u: np.ndarray, v: np.ndarray) -> np.ndarray:
     return p
 
 
-def geometry_image(m: SphereMap, size: int) -> np.ndarray:
+def geometry_image(m: SphereMap, size: int, *, progress: Any = None) -> np.ndarray:
     """The surface of ``m`` at every pixel of an octahedral image.
 
     Parameters
@@ -83,6 +84,9 @@ def geometry_image(m: SphereMap, size: int) -> np.ndarray:
         A certified map.
     size : int
         Odd, 3..4097 (:data:`spherify._limits.GEOMETRY_IMAGE_SIZE_MAX`).
+    progress : bool or callable, optional
+        ``True`` draws a bar on stderr, a callable receives ``(done, total)``
+        (points located so far), as for :func:`spherify.embed`.
 
     Returns
     -------
@@ -95,8 +99,9 @@ def geometry_image(m: SphereMap, size: int) -> np.ndarray:
         ``m`` is not a certified bijection.
     """
     p = octahedral_points(size)
-    _, _, xyz = m.to_surface(p.reshape(-1, 3))
-    return xyz.reshape(p.shape)
+    _, _, xyz = to_surface_in_chunks(m, p.reshape(-1, 3), progress, "geometry image")
+    image: np.ndarray = xyz.reshape(p.shape)
+    return image
 
 
 def _pixel_ids(n: int) -> np.ndarray:

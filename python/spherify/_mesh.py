@@ -9,7 +9,7 @@ from typing import Any, Dict, List, Literal, Optional, Tuple, Union, overload
 
 import numpy as np
 
-from . import _args, _core, _formats
+from . import _args, _core, _formats, _interop
 from ._files import file_errors
 from ._errors import FormatError, MeshError
 from ._report import MeshReport, SphereReport
@@ -46,8 +46,11 @@ class Mesh:
     ----------
     vertices : (n, 3) array_like of float
         Positions; any float or integer dtype, stored as float64. Or, with
-        ``faces`` left out, any object with ``vertices`` and ``faces`` arrays
-        (a ``trimesh.Trimesh``, for one).
+        ``faces`` left out, a mesh of another library: a ``trimesh.Trimesh``
+        (or any object with ``vertices`` and ``faces`` arrays), a
+        ``meshio.Mesh`` or a pyvista ``PolyData`` of triangles (see
+        :meth:`from_meshio`, :meth:`from_pyvista`). Every function that takes
+        a mesh (``sp.embed``, ``sp.check``, ...) takes these too.
     faces : (m, 3) array_like of int
         Vertex indices of each triangle, counter-clockwise seen from outside;
         any integer dtype, stored as int64.
@@ -71,13 +74,81 @@ class Mesh:
 
     def __init__(self, vertices: Any, faces: Any = None) -> None:
         if faces is None:
-            if not (hasattr(vertices, "vertices") and hasattr(vertices, "faces")):
-                raise MeshError("Mesh takes (vertices, faces), or one object with `vertices` "
-                                f"and `faces` arrays (such as a trimesh.Trimesh); got a "
+            arrays = _interop.arrays_of(vertices)
+            if arrays is None:
+                raise MeshError("Mesh takes (vertices, faces), or one mesh of another library "
+                                "(a trimesh.Trimesh, a meshio.Mesh, a pyvista.PolyData or any "
+                                f"object with `vertices` and `faces` arrays); got a "
                                 f"{type(vertices).__name__}")
-            vertices, faces = vertices.vertices, vertices.faces
+            vertices, faces = arrays
         core = _core.CoreMesh(_as_vertices(vertices), _as_faces(faces))
         self._set(core, [], {})
+
+    @classmethod
+    def from_trimesh(cls, mesh: Any) -> "Mesh":
+        """A Mesh from a ``trimesh.Trimesh``: its ``vertices`` and ``faces``,
+        copied as they are (what trimesh merged on loading stays merged).
+
+        Parameters
+        ----------
+        mesh : trimesh.Trimesh
+            Any object with ``vertices`` (n, 3) and ``faces`` (m, 3) arrays.
+
+        Returns
+        -------
+        Mesh
+        """
+        if not (hasattr(mesh, "vertices") and hasattr(mesh, "faces")):
+            raise MeshError(f"from_trimesh takes a trimesh.Trimesh, got a {type(mesh).__name__}")
+        return cls(mesh.vertices, mesh.faces)
+
+    @classmethod
+    def from_meshio(cls, mesh: Any) -> "Mesh":
+        """A Mesh from a ``meshio.Mesh`` (what ``meshio.read`` returns): its
+        points and its ``"triangle"`` cell blocks, in order.
+
+        Parameters
+        ----------
+        mesh : meshio.Mesh
+            Points (n, 3); cells of type ``"triangle"`` only.
+
+        Returns
+        -------
+        Mesh
+
+        Raises
+        ------
+        MeshError
+            Cells of another type (quads, lines, tetrahedra: named), points
+            that are not 3D, or no triangles at all.
+        """
+        if not _interop.is_meshio(mesh):
+            raise MeshError(f"from_meshio takes a meshio.Mesh, got a {type(mesh).__name__}")
+        return cls(*_interop.meshio_arrays(mesh))
+
+    @classmethod
+    def from_pyvista(cls, mesh: Any) -> "Mesh":
+        """A Mesh from a pyvista ``PolyData`` made of triangles.
+
+        Parameters
+        ----------
+        mesh : pyvista.PolyData
+            Triangles only (``.triangulate()`` first otherwise), no lines,
+            vertex cells or strips.
+
+        Returns
+        -------
+        Mesh
+
+        Raises
+        ------
+        MeshError
+            Another kind of data set, or cells that are not triangles.
+        """
+        if not _interop.is_pyvista(mesh):
+            raise MeshError(f"from_pyvista takes a pyvista.PolyData, got a "
+                            f"{type(mesh).__name__}")
+        return cls(*_interop.pyvista_arrays(mesh))
 
     @classmethod
     def _from_core(cls, core: Any, notes: List[str], attributes: Dict[str, np.ndarray]) -> "Mesh":
@@ -112,10 +183,12 @@ class Mesh:
 
     @property
     def n_vertices(self) -> int:
+        """The number of vertices, n."""
         return int(self._core.n_vertices)
 
     @property
     def n_faces(self) -> int:
+        """The number of faces, m."""
         return int(self._core.n_faces)
 
     def __repr__(self) -> str:
@@ -129,14 +202,67 @@ class Mesh:
 
     def to_trimesh(self) -> Any:
         """This mesh as a ``trimesh.Trimesh`` (``process=False``: the vertices
-        are neither merged nor reordered). Needs trimesh, which spherify does
-        not depend on; raises ImportError saying so when it is missing."""
-        try:
-            import trimesh
-        except ImportError:
-            raise ImportError("Mesh.to_trimesh needs trimesh: pip install trimesh") from None
-        return trimesh.Trimesh(vertices=np.array(self.vertices), faces=np.array(self.faces),
-                               process=False)
+        are neither merged nor reordered).
+
+        Returns
+        -------
+        trimesh.Trimesh
+
+        Raises
+        ------
+        ImportError
+            trimesh is not installed (spherify does not depend on it:
+            ``pip install "spherify[interop]"``).
+        """
+        return _interop.to_trimesh(self.vertices, self.faces)
+
+    def to_meshio(self, point_data: Optional[Dict[str, Any]] = None) -> Any:
+        """This mesh as a ``meshio.Mesh`` (one ``"triangle"`` block), for
+        ``meshio.write`` to any of its formats (VTK, VTU, XDMF, Gmsh, ...).
+
+        Parameters
+        ----------
+        point_data : dict of str to (n, ...) array_like, optional
+            Per-vertex arrays to attach (say ``{"sphere": m.points}``), beside
+            the mesh's own :attr:`attributes`.
+
+        Returns
+        -------
+        meshio.Mesh
+
+        Raises
+        ------
+        ImportError
+            meshio is not installed (``pip install "spherify[interop]"``).
+        MeshError
+            An array of ``point_data`` without one row per vertex.
+        """
+        data = _interop.point_data(self.attributes, point_data, self.n_vertices)
+        return _interop.to_meshio(self.vertices, self.faces, data)
+
+    def to_pyvista(self, point_data: Optional[Dict[str, Any]] = None) -> Any:
+        """This mesh as a pyvista ``PolyData`` of triangles, to plot or to
+        filter with VTK.
+
+        Parameters
+        ----------
+        point_data : dict of str to (n, ...) array_like, optional
+            Per-vertex arrays to attach (say ``{"sphere": m.points}``), beside
+            the mesh's own :attr:`attributes`.
+
+        Returns
+        -------
+        pyvista.PolyData
+
+        Raises
+        ------
+        ImportError
+            pyvista is not installed (``pip install "spherify[interop]"``).
+        MeshError
+            An array of ``point_data`` without one row per vertex.
+        """
+        data = _interop.point_data(self.attributes, point_data, self.n_vertices)
+        return _interop.to_pyvista(self.vertices, self.faces, data)
 
 
 def _restore_mesh(vertices: np.ndarray, faces: np.ndarray, notes: List[str],
@@ -159,10 +285,12 @@ def as_mesh(mesh: Any) -> Mesh:
         return mesh
     if isinstance(mesh, tuple) and len(mesh) == 2:
         return Mesh(*mesh)
-    if hasattr(mesh, "vertices") and hasattr(mesh, "faces"):
-        return Mesh(mesh)
-    raise MeshError("expected a spherify.Mesh, a (vertices, faces) pair or an object with "
-                    f"`vertices` and `faces` arrays, got {type(mesh).__name__}")
+    arrays = _interop.arrays_of(mesh)
+    if arrays is not None:
+        return Mesh(*arrays)
+    raise MeshError("expected a spherify.Mesh, a (vertices, faces) pair or a mesh of another "
+                    "library (trimesh, meshio, pyvista: an object with `vertices` and `faces` "
+                    f"arrays), got {type(mesh).__name__}")
 
 
 @file_errors
@@ -232,33 +360,52 @@ def save(mesh: MeshLike, path: PathLike, *, sphere: Any = None, uv: Any = None,
 
     Parameters
     ----------
+    mesh : Mesh or (V, F)
+        The mesh to write (or another library's mesh, as for :class:`Mesh`).
+    path : str or os.PathLike
+        Where to write it.
     sphere : (n, 3) array_like of float, optional
         Per-vertex sphere positions, stored as PLY properties
-        ``sphere_x sphere_y sphere_z`` (``.ply``) or an array ``sphere`` (``.npz``).
+        ``sphere_x sphere_y sphere_z`` (``.ply``), an array ``sphere``
+        (``.npz``) or the float32 attribute ``_SPHERE`` (``.glb``).
     uv : (n, 2) or (m, 3, 2) array_like of float, or a UVLayout, optional
         Per-vertex texture coordinates (``.ply`` as ``u v``, ``.obj`` as
-        ``vt``, ``.npz`` as ``uv``), or per face corner (``.obj`` only, one
-        ``vt`` per corner): ``sp.texture.uv(m)`` or its ``.uv``.
+        ``vt``, ``.npz`` as ``uv``, ``.glb`` as ``TEXCOORD_0``), or per face
+        corner (``.obj``, one ``vt`` per corner, and ``.glb``, a vertex per
+        distinct UV): ``sp.texture.uv(m)`` or its ``.uv``.
     texture : str, os.PathLike or (h, w, 3) array_like, optional
-        ``.obj`` only, with ``uv``: an MTL ``<stem>.mtl`` is written next to
-        the OBJ whose ``map_Kd`` is this image: a path (relative to the
-        current folder, referenced from the OBJ's folder, not copied) or an
-        RGB image in [0, 1] (written as ``<stem>.png``, e.g. from
-        ``UVLayout.bake``).
+        ``.obj`` and ``.glb``, with ``uv``. For ``.obj`` an MTL
+        ``<stem>.mtl`` is written next to the OBJ whose ``map_Kd`` is this
+        image: a path (relative to the current folder, referenced from the
+        OBJ's folder, not copied) or an RGB image in [0, 1] (written as
+        ``<stem>.png``, e.g. from ``UVLayout.bake``). A ``.glb`` holds the
+        image itself (an array as PNG, or a PNG or JPEG file's bytes) as its
+        material's base colour.
     ply_encoding : {"binary_little_endian", "binary_big_endian", "ascii"}
+        The PLY encoding.
     stl_binary : bool
-    format : {None, "npz", "freesurfer", "gifti"}
+        Binary STL (float32) rather than ascii.
+    format : {None, "npz", "freesurfer", "gifti", "glb"}
         None: by the name: ``.obj .off .ply .stl`` (the core), ``.npz`` (``V``
-        float64, ``F`` int64), ``.gii`` (GIfTI), or a FreeSurfer surface name
-        (``lh.pial``, ``lh.white``, ``lh.sphere``, ``.inflated``, ``.orig``,
-        ...). FreeSurfer and GIfTI store float32 coordinates (the values are
+        float64, ``F`` int64), ``.gii`` (GIfTI), ``.glb`` (glTF 2.0 binary:
+        positions, normals, uv and sphere points as float32, see
+        ``spherify._gltf``), or a FreeSurfer surface name (``lh.pial``,
+        ``lh.white``, ``lh.sphere``, ``.inflated``, ``.orig``, ...).
+        FreeSurfer and GIfTI store float32 coordinates (the values are
         rounded) and need nibabel.
 
+    Notes
+    -----
     The file is written under a temporary name and renamed into place, so an
     existing file is never left half-written.
     """
-    from . import texture as _texture  # here: texture imports this module
+    from . import _gltf, texture as _texture  # here: texture imports this module
 
+    if _gltf.is_glb(Path(_args.path(path)), format):
+        mesh = as_mesh(mesh)
+        _gltf.save_glb(mesh.vertices, mesh.faces, Path(_args.path(path)), sphere=sphere, uv=uv,
+                       texture=texture)
+        return
     if texture is not None or _texture._is_per_corner(uv):
         _texture._save_textured(as_mesh(mesh), Path(_args.path(path)), uv, texture, sphere,
                                format)

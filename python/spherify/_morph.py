@@ -27,6 +27,7 @@ import numpy as np
 from . import _align
 from ._errors import MeshError
 from ._mesh import Mesh
+from ._progress import to_surface_in_chunks
 from ._register import Correspondence, landmark_pairs, register
 from ._spheremap import SphereMap
 
@@ -184,7 +185,7 @@ def morph(m_a: SphereMap, m_b: SphereMap, *, align: str = "rotation",
         else:
             rotation = _align.kabsch(m_a.points[pairs[:, 0]], m_b.points[pairs[:, 1]])
         alignment.update(start=align, iterations=0)
-        _, _, end = m_b.to_surface(m_a.points @ rotation.T)
+        _, _, end = to_surface_in_chunks(m_b, m_a.points @ rotation.T, progress, "morph")
         points_a = m_a.points @ rotation.T
     else:
         correspondence = register(m_a, m_b, landmarks=pairs if len(pairs) else None,

@@ -151,7 +151,7 @@ def _sample_points(reference: SphereMap, level: Union[int, str]) -> Tuple[np.nda
     if isinstance(level, bool) or not isinstance(level, (int, np.integer)) or not 0 <= level <= 8:
         raise MeshError(f"level must be an icosphere level 0..8 or 'reference', got {level!r}")
     from .datasets import icosphere
-    grid = icosphere(int(level))
+    grid = icosphere(subdivisions=int(level))
     return grid.vertices, grid.faces
 
 

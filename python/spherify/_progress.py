@@ -55,3 +55,48 @@ def as_callback(progress: object, label: str) -> Optional[ProgressCallback]:
         return progress
     raise MeshError("progress must be True, False, None or a callable taking (done, total), "
                     f"got {type(progress).__name__}")
+
+
+#: Rows per call when a long ``to_surface`` is cut into pieces for its bar.
+CHUNK_ROWS = 20_000
+
+
+def to_surface_in_chunks(m: Any, points: Any, progress: object, label: str) -> Any:
+    """``m.to_surface(points)`` (the three arrays), in pieces of
+    :data:`CHUNK_ROWS` rows when ``progress`` asks for a bar or a callable,
+    which then receives ``(rows done, rows)`` after each piece. Point location
+    is row by row, so the pieces give the same arrays as one call; the first
+    piece also builds the map's locator, once."""
+    import numpy as np
+
+    callback = as_callback(progress, label)
+    if callback is None:
+        return m.to_surface(points)
+    rows = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+    total = len(rows)
+    parts = []
+    for start in range(0, total, CHUNK_ROWS):
+        parts.append(m.to_surface(rows[start:start + CHUNK_ROWS]))
+        callback(min(start + CHUNK_ROWS, total), total)
+    if not parts:
+        result = m.to_surface(rows)
+        callback(0, 0)
+        return result
+    return tuple(np.concatenate([part[k] for part in parts]) for k in range(3))
+
+
+def rows_in_chunks(function: Callable[[Any], Any], array: Any, progress: object,
+                   label: str, rows: int = 64) -> Any:
+    """``function(array)`` for an array of image rows, called ``rows`` rows at
+    a time when ``progress`` asks for it (``(rows done, rows)`` after each)."""
+    import numpy as np
+
+    callback = as_callback(progress, label)
+    if callback is None:
+        return function(array)
+    total = len(array)
+    parts = []
+    for start in range(0, total, rows):
+        parts.append(np.asarray(function(array[start:start + rows])))
+        callback(min(start + rows, total), total)
+    return np.concatenate(parts) if parts else function(array)

@@ -9,7 +9,7 @@ share the sphere.
 
 from __future__ import annotations
 
-from typing import Dict
+from typing import Any, Dict
 
 import numpy as np
 
@@ -17,6 +17,7 @@ from . import _args, datasets
 from ._limits import DISTANCE_SAMPLES_MAX, REMESH_LEVEL_MAX
 from ._errors import MeshError
 from ._mesh import Mesh
+from ._progress import to_surface_in_chunks
 from ._spheremap import SphereMap
 
 __all__ = ["remesh", "remesh_map", "surface_distance"]
@@ -31,10 +32,11 @@ def _level(level: object) -> int:
     return _args.integer(level, "level", 0, REMESH_LEVEL_MAX)
 
 
-def remesh_map(m: SphereMap, kind: str = "icosphere", *, level: int = 4) -> SphereMap:
+def remesh_map(m: SphereMap, kind: str = "icosphere", *, level: int = 4,
+               progress: Any = None) -> SphereMap:
     """The remeshed surface with its own map: the icosphere's vertices.
 
-    Each vertex of ``sp.datasets.icosphere(level)`` (a point of the unit
+    Each vertex of ``sp.datasets.icosphere(subdivisions=level)`` (a point of the unit
     sphere) is sent to the surface by ``m.to_surface``; the result keeps the
     icosphere's faces, and its map is certified in the core
     (:meth:`SphereMap.from_points` of the icosphere's own vertices, always
@@ -49,6 +51,14 @@ def remesh_map(m: SphereMap, kind: str = "icosphere", *, level: int = 4) -> Sphe
     level : int
         Subdivisions of the icosahedron, 0..9 (``10 * 4**level + 2`` vertices;
         the bound is :data:`spherify._limits.REMESH_LEVEL_MAX`).
+    progress : bool or callable, optional
+        ``True`` draws a bar on stderr, a callable receives ``(done, total)``
+        (points located so far), as for :func:`spherify.embed`.
+
+    Returns
+    -------
+    SphereMap
+        The remeshed surface (``.mesh``) and its map.
 
     Raises
     ------
@@ -59,15 +69,28 @@ def remesh_map(m: SphereMap, kind: str = "icosphere", *, level: int = 4) -> Sphe
     """
     if kind not in KINDS:
         raise MeshError(f"unknown remesh kind {kind!r}; available: {', '.join(KINDS)}")
-    ico = datasets.icosphere(_level(level))
-    _, _, xyz = m.to_surface(ico.vertices)
+    ico = datasets.icosphere(subdivisions=_level(level))
+    _, _, xyz = to_surface_in_chunks(m, ico.vertices, progress, "remesh")
     return SphereMap.from_points(Mesh(xyz, ico.faces), ico.vertices)
 
 
-def remesh(m: SphereMap, kind: str = "icosphere", *, level: int = 4) -> Mesh:
+def remesh(m: SphereMap, kind: str = "icosphere", *, level: int = 4,
+           progress: Any = None) -> Mesh:
     """A semi-regular mesh of ``m``'s surface (thesis 8.1): the connectivity
-    of ``sp.datasets.icosphere(level)``, each vertex at ``m.to_surface`` of the
+    of ``sp.datasets.icosphere(subdivisions=level)``, each vertex at ``m.to_surface`` of the
     icosphere's vertex. See :func:`remesh_map` (which also returns its map).
+
+    Parameters
+    ----------
+    m : SphereMap
+        A certified map (``valid``, or ``tp_valid`` for theta-phi).
+    kind : str
+        ``"icosphere"`` (the subdivided icosahedron of 8.1).
+    level : int
+        Subdivisions of the icosahedron, 0..10.
+    progress : bool or callable, optional
+        ``True`` draws a bar on stderr, a callable receives ``(done, total)``
+        (points located so far), as for :func:`spherify.embed`.
 
     Returns
     -------
@@ -75,7 +98,7 @@ def remesh(m: SphereMap, kind: str = "icosphere", *, level: int = 4) -> Mesh:
         ``vertices`` (10 * 4**level + 2, 3) float64, ``faces`` (20 * 4**level, 3),
         counter-clockwise seen from outside when ``m``'s surface is.
     """
-    return remesh_map(m, kind, level=level).mesh
+    return remesh_map(m, kind, level=level, progress=progress).mesh
 
 
 def surface_distance(a: SphereMap, b: SphereMap, *, samples: int = 100_000,

@@ -51,8 +51,12 @@ def _read_only(array: np.ndarray) -> np.ndarray:
 class SphereMap:
     """Points on the unit sphere, one per vertex, and the verdict on them.
 
-    Attributes (all read-only)
-    --------------------------
+    Every map also has ``to_sphere`` (the map h from surface points to the
+    sphere) and ``to_surface`` (its inverse), see below. All attributes are
+    read-only.
+
+    Attributes
+    ----------
     mesh : Mesh
         The (consistently, outward oriented) mesh the map belongs to: the
         input itself when it needed no reorientation.
@@ -84,9 +88,6 @@ class SphereMap:
     details : dict
         What the method computed besides the points (radial: ``center``,
         ``kernel_depth``, ``lp_pivots``; theta-phi: see :class:`ThetaPhiMap`).
-
-    Every map also has ``to_sphere`` (the map h from surface points to the
-    sphere) and ``to_surface`` (its inverse), see below.
     """
 
     def __init__(self, core: _core.CoreSphereMap, mesh: Mesh) -> None:
@@ -188,30 +189,40 @@ class SphereMap:
 
     @property
     def mesh(self) -> Mesh:
+        """The mesh the map belongs to, consistently outward oriented (the input itself when it
+        needed no reorientation)."""
         return self._mesh
 
     @property
     def points(self) -> np.ndarray:
+        """(n, 3) float64, read-only: one point on the unit sphere per input vertex, in the
+        input's order."""
         return self._points
 
     @property
     def method(self) -> str:
+        """The method that made the map (one of :func:`spherify.methods`), or ``"points"`` for
+        :meth:`from_points`."""
         return self._core.method
 
     @property
     def iterations(self) -> int:
+        """Iterations of an iterative method (refinement steps for theta-phi)."""
         return self._core.iterations
 
     @property
     def converged(self) -> bool:
+        """Whether the method reached its own stopping criterion."""
         return self._core.converged
 
     @property
     def status(self) -> str:
+        """``"converged"``, ``"direct"``, ``"max_iterations"`` or ``"collapsed"``."""
         return self._core.status
 
     @property
     def message(self) -> str:
+        """Why the method stopped, in words."""
         return self._core.message
 
     @property
@@ -224,6 +235,7 @@ class SphereMap:
 
     @property
     def notes(self) -> List[str]:
+        """What was done to the input on the way (e.g. faces reoriented)."""
         return list(self._notes)
 
     @property
@@ -237,6 +249,7 @@ class SphereMap:
 
     @property
     def report(self) -> SphereReport:
+        """The exact validity verdict of thesis 3.4 on :attr:`points`, computed in the core."""
         return self._report
 
     @property
@@ -401,8 +414,10 @@ class ThetaPhiMap(SphereMap):
     """A theta-phi map (thesis ch. 6): a :class:`SphereMap` with the poles,
     the cut and the rectangle it was made from.
 
-    Attributes (all read-only)
-    --------------------------
+    All attributes are read-only.
+
+    Attributes
+    ----------
     poles : (int, int)
         The north and south pole vertex ids (thesis 6.2).
     cut_path : (k + 2,) int64
@@ -467,6 +482,7 @@ class ThetaPhiMap(SphereMap):
 
     @property
     def poles(self) -> Tuple[int, int]:
+        """The north and south pole vertex ids (thesis 6.2)."""
         poles = self._core.poles
         if poles is None:
             raise AttributeError("the core map has no poles")
@@ -474,18 +490,24 @@ class ThetaPhiMap(SphereMap):
 
     @property
     def cut_path(self) -> np.ndarray:
+        """(k + 2,) int64: the path the mesh was cut open along, north pole to south pole."""
         return self._array("cut_path")
 
     @property
     def theta_phi(self) -> np.ndarray:
+        """(n + k, 2) float64: the embedding of :attr:`cut_mesh` in the rectangle [0, pi] x [0,
+        2 pi] (thesis 6.4)."""
         return self._array("theta_phi")
 
     @property
     def cut_original(self) -> np.ndarray:
+        """(n + k,) int64: the input vertex each vertex of :attr:`cut_mesh` stands for."""
         return self._array("cut_original")
 
     @property
     def tp_valid(self) -> bool:
+        """Whether the rectangle embedding has no flipped and no zero-area triangle under exact
+        predicates (the thesis's bijectivity guarantee)."""
         return bool(self._core.tp_valid)
 
     @property

@@ -78,7 +78,7 @@ def _vertex_areas(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
 def _grid_map(level: int) -> SphereMap:
     """The icosphere of ``level`` as its own certified sphere map (built once)."""
     from .datasets import icosphere
-    grid = icosphere(level)
+    grid = icosphere(subdivisions=level)
     return SphereMap.from_points(grid, grid.vertices)
 
 

@@ -31,6 +31,7 @@ import numpy.typing as npt
 from . import _args, _core
 from ._errors import MeshError
 from ._mesh import Mesh
+from ._progress import as_callback
 from ._spheremap import SphereMap, _float_rows
 
 __all__ = ["Harmonics", "fit"]
@@ -44,8 +45,10 @@ def _read_only(array: np.ndarray) -> np.ndarray:
 class Harmonics:
     """Real spherical-harmonic coefficients of a surface's x, y and z.
 
-    Attributes (read-only)
-    ----------------------
+    All attributes are read-only.
+
+    Attributes
+    ----------
     lmax : int
         The largest degree.
     coefficients : ((lmax + 1)**2, 3) float64
@@ -72,19 +75,23 @@ class Harmonics:
 
     @property
     def lmax(self) -> int:
+        """The largest degree."""
         return self._lmax
 
     @property
     def coefficients(self) -> np.ndarray:
+        """((lmax + 1)**2, 3) float64: row ``l**2 + l + m`` for degree ``l``, order ``m``."""
         return self._c
 
     @property
     def degrees(self) -> np.ndarray:
+        """((lmax + 1)**2,) int64: the degree of each row."""
         l = np.arange(self._lmax + 1)
         return _read_only(np.repeat(l, 2 * l + 1).astype(np.int64))
 
     @property
     def info(self) -> Dict[str, Any]:
+        """What :func:`fit` did: ``n_theta`` x ``n_phi`` samples, ``seconds``."""
         return dict(self._info)
 
     def evaluate(self, points: npt.ArrayLike) -> np.ndarray:
@@ -171,7 +178,7 @@ class Harmonics:
         return f"Harmonics(lmax={self._lmax})"
 
 
-def fit(m: SphereMap, lmax: int, *, oversample: int = 1) -> Harmonics:
+def fit(m: SphereMap, lmax: int, *, oversample: int = 1, progress: Any = None) -> Harmonics:
     """The real spherical-harmonic coefficients of ``m``'s surface up to ``lmax``.
 
     The surface is sampled through ``m.to_surface`` on a grid of the sphere,
@@ -192,6 +199,10 @@ def fit(m: SphereMap, lmax: int, *, oversample: int = 1) -> Harmonics:
         Largest degree, 0..2000.
     oversample : int, default 1
         1..8; the grid may hold at most 2**24 points.
+    progress : bool or callable, optional
+        ``True`` draws a bar on stderr, a callable receives ``(done, total)``
+        (rings sampled, then rings summed and orders transformed), as for
+        :func:`spherify.embed`. Worth it from a degree of a few hundred.
 
     Returns
     -------
@@ -208,7 +219,8 @@ def fit(m: SphereMap, lmax: int, *, oversample: int = 1) -> Harmonics:
         raise MeshError(f"fit needs a SphereMap, got {type(m).__name__}")
     lmax = _args.integer(lmax, "lmax", 0)
     oversample = _args.integer(oversample, "oversample", 1)
-    coefficients, info = _core.harmonics_fit(m._core, lmax, oversample)
+    coefficients, info = _core.harmonics_fit(m._core, lmax, oversample,
+                                             as_callback(progress, "harmonics"))
     info["seconds"] = dict(info["seconds"])
     return Harmonics(coefficients, info)
 

@@ -24,12 +24,30 @@ from ._mesh import MeshLike, as_mesh
 from ._quality import face_quality
 from ._spheremap import SphereMap, ThetaPhiMap
 
-__all__ = ["COLORS", "mesh", "rectangle", "sphere"]
+__all__ = ["COLORS", "UPS", "mesh", "rectangle", "sphere"]
 
 #: What :func:`sphere` can colour by: the per-face measures of
 #: :func:`spherify.face_quality`, and "flipped" (faces failing the exact test).
 COLORS = ("area", "angle", "conformal", "stretch", "flipped", "none")
 _LIGHT = np.array([0.3, 0.4, 0.85]) / np.linalg.norm([0.3, 0.4, 0.85])
+#: Which axis of the model is drawn upwards (``up=``): most models from scans
+#: and other tools (OBJ, glTF) are Y-up, spherify's generated shapes Z-up.
+UPS = ("z", "y", "x")
+# The rotations (cyclic permutations, so orientation is kept) that take each
+# ``up`` axis to matplotlib's vertical z: new (x, y, z) = old columns.
+_UP_COLUMNS = {"z": [0, 1, 2], "y": [2, 0, 1], "x": [1, 2, 0]}
+
+
+def _check_up(up: str) -> None:
+    if up not in _UP_COLUMNS:
+        raise MeshError(f"up must be one of {', '.join(UPS)}, got {up!r}")
+
+
+def _upright(V: np.ndarray, up: str) -> np.ndarray:
+    """``V`` turned so that its ``up`` axis is drawn upwards."""
+    _check_up(up)
+    turned: np.ndarray = V[:, _UP_COLUMNS[up]]
+    return turned
 
 
 def _pyplot() -> Any:
@@ -88,17 +106,42 @@ def _finish(fig: Any, path: Optional[Union[str, Path]]) -> Any:
 def mesh(surface: MeshLike, *, values: Any = None, colors: Any = None, cmap: str = "viridis",
          limits: Optional[Tuple[float, float]] = None, title: Optional[str] = None,
          view: Tuple[float, float] = (20, -60), edges: bool = False, ax: Any = None,
-         path: Optional[Union[str, Path]] = None) -> Any:
-    """A shaded picture of a mesh, optionally coloured by per-face ``values``
-    ((m,) float, through ``cmap`` over ``limits``, default their range; NaN
-    drawn at the low end) or per-face ``colors`` ((m, 3) RGB in [0, 1]).
-    ``ax``: a 3D axis to draw into (default: a new figure).
+         path: Optional[Union[str, Path]] = None, up: str = "z") -> Any:
+    """A shaded picture of a mesh, optionally coloured per face.
+
+    Parameters
+    ----------
+    surface : Mesh or (V, F)
+        The mesh (or another library's mesh, as for :class:`spherify.Mesh`).
+    values : (m,) array_like of float, optional
+        Per-face values drawn through ``cmap`` over ``limits`` (default their
+        range; NaN drawn at the low end).
+    colors : (m, 3) array_like of float, optional
+        Per-face RGB in [0, 1], instead of ``values``.
+    cmap : str
+        A matplotlib colour map name.
+    limits : (float, float), optional
+        The range of ``values`` the colour map spans.
+    title : str, optional
+        The axis title (default: the mesh's repr).
+    view : (float, float)
+        Elevation and azimuth of the camera, in degrees.
+    edges : bool
+        Draw the triangle edges.
+    ax : matplotlib 3D axis, optional
+        An axis to draw into (default: a new figure).
+    path : str or pathlib.Path, optional
+        Also write the picture as PNG there, and close the figure.
+    up : {"z", "y", "x"}
+        The model's axis drawn upwards: ``"y"`` for the many models that are
+        Y-up (scans, OBJ and glTF files), which ``"z"`` shows lying down.
 
     Returns
     -------
     matplotlib.figure.Figure
     """
     surface = as_mesh(surface)
+    vertices = _upright(surface.vertices, up)
     plt = _pyplot()
     if ax is None:
         fig = plt.figure(figsize=(5, 5))
@@ -119,7 +162,7 @@ def mesh(surface: MeshLike, *, values: Any = None, colors: Any = None, cmap: str
         rgb = np.asarray(colors, dtype=np.float64)
         if rgb.ndim != 2 or rgb.shape[0] != surface.n_faces or rgb.shape[1] not in (3, 4):
             raise MeshError(f"colors must be (m, 3) RGB per face, got shape {rgb.shape}")
-    mappable = _draw(ax, surface.vertices, surface.faces, vals, cmap, limits, view, edges, rgb)
+    mappable = _draw(ax, vertices, surface.faces, vals, cmap, limits, view, edges, rgb)
     if mappable is not None:
         fig.colorbar(mappable, ax=ax, shrink=0.6)
     ax.set_title(title if title is not None else repr(surface), fontsize=9)
@@ -127,19 +170,30 @@ def mesh(surface: MeshLike, *, values: Any = None, colors: Any = None, cmap: str
 
 
 def sphere(m: SphereMap, *, color: str = "area", view: Tuple[float, float] = (20, -60),
-           edges: bool = False, path: Optional[Union[str, Path]] = None) -> Any:
+           edges: bool = False, path: Optional[Union[str, Path]] = None,
+           up: str = "z") -> Any:
     """The map on the sphere beside the surface, both coloured by how the map
     distorts each face, so one sees where it stretches.
 
     Parameters
     ----------
     m : SphereMap
+        The map to draw.
     color : str
         ``"area"`` (log of the face's area share on the sphere over its
         share on the mesh: red grows, blue shrinks), ``"angle"`` (largest
         angle change, degrees), ``"conformal"`` (sigma1 / sigma2),
         ``"stretch"`` (Sander et al.), ``"flipped"`` (faces failing the exact
         orientation test of 3.4 in red), or ``"none"``.
+    view : (float, float)
+        Elevation and azimuth of the camera, in degrees.
+    edges : bool
+        Draw the triangle edges.
+    path : str or pathlib.Path, optional
+        Also write the picture as PNG there, and close the figure.
+    up : {"z", "y", "x"}
+        The model's axis drawn upwards (``"y"`` for Y-up models); the sphere
+        is turned the same way.
 
     Returns
     -------
@@ -147,6 +201,7 @@ def sphere(m: SphereMap, *, color: str = "area", view: Tuple[float, float] = (20
     """
     if color not in COLORS:
         raise MeshError(f"unknown color {color!r}; available: {', '.join(COLORS)}")
+    _check_up(up)
     plt = _pyplot()
     values: Optional[np.ndarray] = None
     cmap, limits, label = "viridis", None, color
@@ -168,7 +223,7 @@ def sphere(m: SphereMap, *, color: str = "area", view: Tuple[float, float] = (20
                                     (m.points, f"sphere ({m.method}, "
                                                f"{'valid' if m.valid else 'not valid'})")]):
         ax = fig.add_subplot(1, 2, k + 1, projection="3d")
-        mappable = _draw(ax, V, m.mesh.faces, values, cmap, limits, view, edges)
+        mappable = _draw(ax, _upright(V, up), m.mesh.faces, values, cmap, limits, view, edges)
         ax.set_title(title, fontsize=9)
     if mappable is not None:
         fig.colorbar(mappable, ax=fig.axes, shrink=0.6, label=label)
@@ -177,8 +232,20 @@ def sphere(m: SphereMap, *, color: str = "area", view: Tuple[float, float] = (20
 
 def rectangle(m: SphereMap, *, ax: Any = None, path: Optional[Union[str, Path]] = None) -> Any:
     """A theta-phi map's cut mesh in the rectangle [0, pi] x [0, 2 pi]
-    (thesis 6.4), with the triangles that are not certified in red. ``ax``:
-    an axis to draw into (default: a new figure).
+    (thesis 6.4), with the triangles that are not certified in red.
+
+    Parameters
+    ----------
+    m : ThetaPhiMap
+        A map made by ``method="theta_phi"``.
+    ax : matplotlib axis, optional
+        An axis to draw into (default: a new figure).
+    path : str or pathlib.Path, optional
+        Also write the picture as PNG there, and close the figure.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
 
     Raises
     ------

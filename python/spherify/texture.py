@@ -64,11 +64,13 @@ from ._files import file_errors
 from ._geometry_image import _chunk, octahedron_unfolded
 from ._limits import ATLAS_HEIGHT_MAX
 from ._mesh import Mesh
+from ._progress import rows_in_chunks
 from ._quality import quality
 from ._spheremap import SphereMap
 
 __all__ = ["PROJECTIONS", "UVLayout", "save_obj", "uv", "write_png"]
 
+#: The projections of :func:`uv`, the default first (see the module doc).
 PROJECTIONS = ("cube", "equirectangular", "octahedral")
 PathLike = Union[str, "os.PathLike[str]"]
 
@@ -116,8 +118,10 @@ def _rotation_to_north(p: np.ndarray) -> np.ndarray:
 class UVLayout:
     """Per-corner texture coordinates of a mesh and the atlas they point into.
 
-    Attributes (read-only)
-    ----------------------
+    All attributes are read-only.
+
+    Attributes
+    ----------
     projection : str
     uv : (m, 3, 2) float64
         Corner k of face f at ``uv[f, k]``, in [0, 1]^2, v upwards (OBJ).
@@ -140,14 +144,17 @@ class UVLayout:
 
     @property
     def projection(self) -> str:
+        """The projection's name (:data:`PROJECTIONS`)."""
         return self._projection
 
     @property
     def uv(self) -> np.ndarray:
+        """(m, 3, 2) float64: corner k of face f at ``uv[f, k]``, v upwards."""
         return self._uv
 
     @property
     def params(self) -> Dict[str, Any]:
+        """The projection's parameters (see the class docstring)."""
         return dict(self._params)
 
     def directions(self, height: int, width: int) -> np.ndarray:
@@ -191,22 +198,42 @@ class UVLayout:
         return unit
 
     def bake(self, texture: Callable[[np.ndarray], np.ndarray], height: int,
-             width: Optional[int] = None) -> np.ndarray:
-        """The atlas image: ``texture(directions)`` (for example
-        ``sp.datasets.checkerboard``) at every pixel. ``width`` defaults to
-        ``1.5 height`` for the cube atlas, ``2 height`` for equirectangular
-        and ``height`` for octahedral. Returns (height, width, 3) float64.
+             width: Optional[int] = None, *, progress: Any = None) -> np.ndarray:
+        """The atlas image: ``texture(directions)`` at every pixel.
 
-        ``height`` is an integer in 1..4096 and ``width`` in 1..8192
-        (:data:`spherify._limits.ATLAS_HEIGHT_MAX`: the largest atlas fits
-        in 4 GB with its directions); anything else is a MeshError before
-        anything is allocated. The texture's values must be finite."""
+        Parameters
+        ----------
+        texture : callable
+            Takes (..., 3) unit vectors and returns (..., 3) RGB in [0, 1]
+            (for example ``sp.datasets.checkerboard``).
+        height : int
+            Rows of the atlas, 1..4096 (:data:`spherify._limits.ATLAS_HEIGHT_MAX`:
+            the largest atlas fits in 4 GB with its directions).
+        width : int, optional
+            Columns, 1..8192; default ``1.5 height`` for the cube atlas,
+            ``2 height`` for equirectangular and ``height`` for octahedral.
+        progress : bool or callable, optional
+            ``True`` draws a bar on stderr, a callable receives ``(done,
+            total)`` rows; ``texture`` is then called on 64 rows at a time.
+
+        Returns
+        -------
+        (height, width, 3) float64
+
+        Raises
+        ------
+        MeshError
+            ``height`` or ``width`` not an integer in its range (before
+            anything is allocated).
+        """
         height = _args.integer(height, "height", 1, ATLAS_HEIGHT_MAX)
         if width is None:
             aspect = {"cube": 1.5, "equirectangular": 2.0}.get(self._projection, 1.0)
             width = int(round(height * aspect))
         width = _args.integer(width, "width", 1, 2 * ATLAS_HEIGHT_MAX)
-        image: np.ndarray = np.asarray(texture(self.directions(height, width)), dtype=np.float64)
+        directions = self.directions(height, width)
+        image: np.ndarray = np.asarray(rows_in_chunks(texture, directions, progress, "bake"),
+                                       dtype=np.float64)
         return image
 
     def sample(self, image: np.ndarray, face_ids: npt.ArrayLike, bary: npt.ArrayLike) -> np.ndarray:
@@ -464,11 +491,25 @@ def uv(m: SphereMap, projection: str = "cube") -> UVLayout:
     return _equirectangular(points, faces)
 
 
-@file_errors
-def write_png(image: npt.ArrayLike, path: PathLike) -> None:
-    """An (h, w, 3) RGB image with values in [0, 1] as an 8-bit PNG, written
-    atomically. A value that is not finite is refused (``MeshError``, with
-    how many): written as black, it would hide whatever made it."""
+def png_bytes(image: npt.ArrayLike) -> bytes:
+    """An (h, w, 3) RGB image with values in [0, 1] encoded as an 8-bit PNG.
+
+    Parameters
+    ----------
+    image : (h, w, 3) array_like of float
+        Values in [0, 1] (clipped); every value must be finite.
+
+    Returns
+    -------
+    bytes
+        The PNG file's bytes.
+
+    Raises
+    ------
+    MeshError
+        A wrong shape, or values that are not finite (with how many):
+        written as black, they would hide whatever made them.
+    """
     a = np.asarray(image, dtype=np.float64)
     if a.ndim != 3 or a.shape[2] != 3:
         raise MeshError(f"an image must have shape (h, w, 3), got {a.shape}")
@@ -478,10 +519,16 @@ def write_png(image: npt.ArrayLike, path: PathLike) -> None:
                         "finite; a texture must be numbers in [0, 1]")
     q = np.rint(np.clip(a, 0, 1) * 255).astype(np.uint8)
     rows = b"".join(b"\x00" + q[i].tobytes() for i in range(q.shape[0]))
-    data = (b"\x89PNG\r\n\x1a\n"
+    return (b"\x89PNG\r\n\x1a\n"
             + _chunk(b"IHDR", struct.pack(">IIBBBBB", q.shape[1], q.shape[0], 8, 2, 0, 0, 0))
             + _chunk(b"IDAT", zlib.compress(rows, 6)) + _chunk(b"IEND", b""))
-    write_bytes_atomically(Path(path), data)
+
+
+@file_errors
+def write_png(image: npt.ArrayLike, path: PathLike) -> None:
+    """An (h, w, 3) RGB image with values in [0, 1] as an 8-bit PNG
+    (:func:`png_bytes`), written atomically."""
+    write_bytes_atomically(Path(path), png_bytes(image))
 
 
 @file_errors

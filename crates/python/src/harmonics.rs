@@ -10,23 +10,26 @@ use crate::convert::{rows, to_numpy};
 use crate::errors::harmonics_error;
 use crate::sphere_map::CoreSphereMap;
 
-/// harmonics_fit(map, lmax, oversample=1) -> (coefficients ((lmax+1)^2, 3) float64, info dict).
+/// harmonics_fit(map, lmax, oversample=1, progress=None) -> (coefficients ((lmax+1)^2, 3)
+/// float64, info dict).
 ///
 /// MapError when the map is not a certified bijection; MeshError for bad
 /// parameters. The GIL is released for the sampling and the transform, and
 /// Ctrl-C stops both.
 #[pyfunction]
-#[pyo3(signature = (map, lmax, oversample=1))]
+#[pyo3(signature = (map, lmax, oversample=1, progress=None))]
 pub fn harmonics_fit<'py>(
     py: Python<'py>,
     map: &CoreSphereMap,
     lmax: usize,
     oversample: usize,
+    progress: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<(Bound<'py, PyArray2<f64>>, Bound<'py, PyDict>)> {
     let point_map = map.point_map(py)?;
-    // Through progress::run so that Ctrl-C stops a transform of high degree.
+    // Through progress::run so that Ctrl-C stops a transform of high degree,
+    // and `progress` (a callable or None) hears of the rings and orders done.
     let (coefficients, info) =
-        crate::progress::run(py, None, |go_on| fit_with(point_map, lmax, oversample, go_on))?
+        crate::progress::run(py, progress, |go_on| fit_with(point_map, lmax, oversample, go_on))?
             .map_err(harmonics_error)?;
     let d = PyDict::new(py);
     d.set_item("n_theta", info.n_theta)?;

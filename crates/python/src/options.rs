@@ -179,7 +179,7 @@ impl<'py> Options<'py> {
     pub fn string(&self, name: &'static str, default: &str) -> PyResult<String> {
         let Some(value) = self.take(name)? else { return Ok(default.to_string()) };
         match value.cast::<PyString>() {
-            Ok(s) => Ok(s.to_str()?.to_string()),
+            Ok(s) => Ok(s.to_cow()?.into_owned()),
             Err(_) => Err(self.bad(name, "a string", &value)),
         }
     }

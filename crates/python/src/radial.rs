@@ -16,7 +16,7 @@ const EXPECTED: &str =
 /// 1-D array); anything else is a MeshError.
 fn center_choice(center: &Bound<'_, PyAny>) -> PyResult<Center> {
     if let Ok(name) = center.cast::<PyString>() {
-        return match name.to_str()? {
+        return match name.to_cow()?.as_ref() {
             "kernel" => Ok(Center::Kernel),
             "centroid" => Ok(Center::Centroid),
             other => Err(mesh_error(format!("{EXPECTED}, got {other:?}"))),

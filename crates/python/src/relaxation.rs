@@ -28,7 +28,7 @@ pub fn initial(options: &Options<'_>) -> PyResult<Initial> {
         (None, None) => Ok(Initial::Centroid),
         (Some(c), None) => {
             if let Ok(name) = c.cast::<PyString>() {
-                return match name.to_str()? {
+                return match name.to_cow()?.as_ref() {
                     "centroid" => Ok(Initial::Centroid),
                     other => Err(mesh_error(format!("{EXPECTED}, got {other:?}"))),
                 };

@@ -23,7 +23,6 @@ from .._mesh import Mesh
 from ._helix import helix_tube
 from ._pairs import DeformedCopy, deformed_copy
 from ._spheres import bumpy_blob, ellipsoid, icosphere
-from ._spheres import sphere as _sphere
 from ._tentacles import tentacles
 from ._textures import checkerboard, lat_long_grid
 from ._urchin import urchin
@@ -31,9 +30,9 @@ from ._urchin import urchin
 __all__ = ["DeformedCopy", "bumpy_blob", "checkerboard", "deformed_copy", "ellipsoid", "helix_tube", "icosphere", "lat_long_grid",
            "make", "names", "tentacles", "urchin"]
 
-# make's shapes, simplest first; "icosphere" takes a vertex count here
+# make's shapes, simplest first
 _SHAPES: Dict[str, Callable[..., Mesh]] = {
-    "icosphere": _sphere,
+    "icosphere": icosphere,
     "ellipsoid": ellipsoid,
     "bumpy_blob": bumpy_blob,
     "helix_tube": helix_tube,
@@ -60,9 +59,9 @@ def make(name: str, n_vertices: int, **kwargs: Any) -> Mesh:
     name : str
         One of :func:`names`.
     n_vertices : int
-        Target vertex count. ``"icosphere"`` takes the geodesic unit sphere of the
-        nearest frequency ``nu`` (``10 nu**2 + 2`` vertices; equal to
-        ``icosphere(k)`` when ``nu = 2**k``); the others pass it on.
+        Target vertex count, passed on to the shape (``"icosphere"``: the
+        geodesic unit sphere of the nearest frequency ``nu``, ``10 nu**2 + 2``
+        vertices).
     **kwargs
         The shape's other keyword arguments.
 

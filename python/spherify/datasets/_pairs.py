@@ -117,7 +117,7 @@ def deformed_copy(sphere_map: "SphereMap", *, level: int = 5, bend: float = 0.06
     if not (np.isfinite(scale) and scale > 0):
         raise MeshError(f"scale must be a finite number > 0, got {scale!r}")
     rng = np.random.default_rng(seed)
-    grid = icosphere(level)
+    grid = icosphere(subdivisions=level)
     _, _, on_a = sphere_map.to_surface(grid.vertices)
     # Where A's vertices fall among the icosphere's triangles: B's own map
     # of the undeformed resampling is the icosphere itself.

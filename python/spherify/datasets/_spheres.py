@@ -3,7 +3,7 @@ the bumpy blob."""
 
 from __future__ import annotations
 
-from typing import Sequence
+from typing import Optional, Sequence
 
 import numpy as np
 
@@ -17,40 +17,47 @@ from ._vectors import unit
 
 
 @shape
-def icosphere(subdivisions: int = 3) -> Mesh:
-    """The unit icosphere: an icosahedron with each face cut into ``4**k`` triangles.
+def icosphere(n_vertices: Optional[int] = None, *, subdivisions: Optional[int] = None) -> Mesh:
+    """The geodesic unit sphere: about ``n_vertices`` vertices, like every other
+    shape, or exactly the icosahedron subdivided ``subdivisions`` times.
 
     Parameters
     ----------
-    subdivisions : int, default 3
-        ``k`` in 0..10.
+    n_vertices : int, optional
+        Target vertex count (at least 1): the geodesic sphere of the nearest
+        frequency ``nu``, ``10 nu**2 + 2`` vertices. With neither argument,
+        642 vertices (``subdivisions=3``).
+    subdivisions : int, optional, keyword only
+        ``k`` in 0..10 instead of ``n_vertices``: the frequency ``2**k``,
+        ``10 * 4**k + 2`` vertices, the connectivity of ``k`` rounds of
+        midpoint subdivision of the icosahedron.
 
     Returns
     -------
     Mesh
-        ``vertices`` (10 * 4**k + 2, 3) float64, all on the unit sphere;
-        ``faces`` (20 * 4**k, 3) int64. Smallest triangle angle about 50 degrees.
+        ``vertices`` (10 nu**2 + 2, 3) float64, all on the unit sphere;
+        ``faces`` (20 nu**2, 3) int64. Smallest triangle angle about 50 degrees.
 
     Raises
     ------
     MeshError
-        ``subdivisions`` is not an integer in 0..10.
+        Both arguments given, ``n_vertices`` below 1, or ``subdivisions`` not
+        an integer in 0..10.
 
     Notes
     -----
-    Each face is cut by a flat lattice of frequency ``2**k`` and its points are
-    projected onto the sphere (a class-I geodesic sphere); the connectivity is that
-    of ``k`` rounds of midpoint subdivision. Cost O(4**k).
+    Each face of the icosahedron is cut by a flat lattice of frequency ``nu``
+    and its points are projected onto the sphere (a class-I geodesic sphere).
+    Cost O(n).
     """
-    k = integer(subdivisions, "subdivisions", 0)
+    if n_vertices is not None and subdivisions is not None:
+        raise MeshError("icosphere takes n_vertices or subdivisions, not both")
+    if n_vertices is not None:
+        return Mesh(*geodesic(nearest_frequency(integer(n_vertices, "n_vertices", 1))))
+    k = 3 if subdivisions is None else integer(subdivisions, "subdivisions", 0)
     if k > 10:
         raise MeshError(f"subdivisions must be at most 10 (10 * 4**10 + 2 vertices), got {k}")
     return Mesh(*geodesic(2 ** k))
-
-
-def sphere(n_vertices: int) -> Mesh:
-    """The geodesic unit sphere nearest ``n_vertices`` vertices (``make("icosphere", n)``)."""
-    return Mesh(*geodesic(nearest_frequency(integer(n_vertices, "n_vertices", 1))))
 
 
 @shape

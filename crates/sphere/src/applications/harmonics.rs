@@ -21,7 +21,7 @@
 pub mod gauss_legendre;
 pub mod legendre;
 
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
 use rayon::prelude::*;
 
@@ -73,6 +73,18 @@ impl<'a> Poll<'a> {
             return false;
         }
         let go_on = (self.progress)(0, 0);
+        if !go_on {
+            self.stopped.store(true, Ordering::Relaxed);
+        }
+        go_on
+    }
+
+    /// Reports `(done, total)`; a `false` answer stops the work as a poll's.
+    fn report(&self, done: usize, total: usize) -> bool {
+        if self.stopped.load(Ordering::Relaxed) {
+            return false;
+        }
+        let go_on = (self.progress)(done, total);
         if !go_on {
             self.stopped.store(true, Ordering::Relaxed);
         }
@@ -170,7 +182,27 @@ impl Grid {
         values: &[[f64; 3]],
         progress: &(dyn Fn(usize, usize) -> bool + Sync),
     ) -> Result<Vec<[f64; 3]>, HarmonicsError> {
+        self.analyse_counted(values, progress, 0, 0)
+    }
+
+    /// [`Grid::analyse_with`] that also reports its work to `progress`: each
+    /// ring summed and each order done is one unit, counted from `before`
+    /// out of `total` (nothing is reported when `total` is 0).
+    fn analyse_counted(
+        &self,
+        values: &[[f64; 3]],
+        progress: &(dyn Fn(usize, usize) -> bool + Sync),
+        before: usize,
+        total: usize,
+    ) -> Result<Vec<[f64; 3]>, HarmonicsError> {
         let poll = Poll::new(progress);
+        let done = AtomicUsize::new(before);
+        let count = || {
+            let now = done.fetch_add(1, Ordering::Relaxed) + 1;
+            if total > 0 {
+                poll.report(now, total);
+            }
+        };
         let (lmax, n_phi) = (self.lmax, self.n_phi);
         let (cos_phi, sin_phi) = self.trig_table();
         // Per ring and order: sum_k f(phi_k) cos(m phi_k) and sin(m phi_k);
@@ -193,8 +225,9 @@ impl Grid {
                         }
                         (c, s)
                     })
-                    .collect()
+                    .collect::<Vec<_>>()
             })
+            .inspect(|_| count())
             .collect();
         let rings = poll.result(rings)?;
         let legendre = Legendre::new(lmax);
@@ -224,6 +257,7 @@ impl Grid {
                 }
                 (cos_part, sin_part)
             })
+            .inspect(|_| count())
             .collect();
         let orders = poll.result(orders)?;
         let mut coefficients = vec![[0.0; 3]; (lmax + 1) * (lmax + 1)];
@@ -273,7 +307,9 @@ pub fn fit(
 
 /// [`fit`], polling `progress(0, 0)` while it samples and transforms and
 /// stopping with [`HarmonicsError::Cancelled`] (or the point map's
-/// `Cancelled`) when it says so.
+/// `Cancelled`) when it says so. It also reports `(done, total)`: the rings
+/// sampled (in pieces of about a twentieth of the grid), then the rings
+/// summed and the orders transformed, `2 n_theta + lmax + 1` units in all.
 pub fn fit_with(
     map: &PointMap,
     lmax: usize,
@@ -286,9 +322,19 @@ pub fn fit_with(
     let started = std::time::Instant::now();
     let grid = Grid::new(lmax, oversample)?;
     let points = grid.points();
-    let xyz = map.to_surface_with(&points, progress)?.xyz;
+    let n_theta = grid.x.len();
+    let total = 2 * n_theta + lmax + 1;
+    // Point location is point by point: pieces give the same samples.
+    let rings_per_piece = n_theta.div_ceil(20);
+    let mut xyz = Vec::with_capacity(points.len());
+    for (k, piece) in points.chunks(rings_per_piece * grid.n_phi).enumerate() {
+        xyz.extend(map.to_surface_with(piece, progress)?.xyz);
+        if !progress(((k + 1) * rings_per_piece).min(n_theta), total) {
+            return Err(HarmonicsError::Cancelled);
+        }
+    }
     let sampled = started.elapsed().as_secs_f64();
-    let coefficients = grid.analyse_with(&xyz, progress)?;
+    let coefficients = grid.analyse_counted(&xyz, progress, n_theta, total)?;
     let seconds =
         vec![("sample", sampled), ("transform", started.elapsed().as_secs_f64() - sampled)];
     Ok((coefficients, FitInfo { n_theta: grid.x.len(), n_phi: grid.n_phi, seconds }))

@@ -85,7 +85,7 @@ pub fn alexa(mesh: &GenusZeroMesh, params: &AlexaParams) -> Result<SphereEmbeddi
     alexa_with_progress(mesh, params, &|_, _| true)
 }
 
-/// [`alexa`], polling `progress(0, 0)` once per iteration: `false` stops it
+/// [`alexa`], reporting `progress(iterations, max_iter)` once per iteration: `false` stops it
 /// with [`SphereError::Cancelled`] (Ctrl-C in Python).
 pub fn alexa_with_progress(
     mesh: &GenusZeroMesh,

@@ -181,8 +181,9 @@ pub fn gotsman(
     gotsman_with_progress(mesh, params, &|_, _| true)
 }
 
-/// [`gotsman`], polling `progress(0, 0)` before every Newton step and every
-/// trust-region trial: `false` stops it with [`SphereError::Cancelled`]
+/// [`gotsman`], reporting `progress(steps, max_iter)` before every Newton step
+/// (and `(max_iter, max_iter)` at the end) and polling `progress(0, 0)` before
+/// every trust-region trial: `false` stops it with [`SphereError::Cancelled`]
 /// (Ctrl-C in Python). The sparse factorisation inside one step is not
 /// interrupted.
 pub fn gotsman_with_progress(
@@ -282,7 +283,9 @@ fn newton(
         if iterations >= params.max_iter || stalled {
             break Status::MaxIterations;
         }
-        if !progress(0, 0) {
+        // Reports the Newton steps taken of at most `max_iter` (issue 24: a
+        // bar for the iterative methods); the end reports `max_iter` below.
+        if !progress(iterations, params.max_iter) {
             return Err(cancelled(iterations));
         }
         iterations += 1;
@@ -329,6 +332,9 @@ fn newton(
             }
         }
     };
+    // The run is over, however it ended: a bar is drawn to its end. What
+    // the callable answers no longer matters.
+    progress(params.max_iter, params.max_iter);
     let solve_part = solve_seconds;
     Ok(Run {
         residual: max_abs(&f),

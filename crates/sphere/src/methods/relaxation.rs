@@ -90,8 +90,9 @@ pub fn relaxation(
     relaxation_with_progress(mesh, params, &|_, _| true)
 }
 
-/// [`relaxation`], polling `progress(0, 0)` once per iteration: `false` stops
-/// it with [`SphereError::Cancelled`] (Ctrl-C in Python).
+/// [`relaxation`], reporting `progress(iterations, max_iter)` once per
+/// iteration: `false` stops it with [`SphereError::Cancelled`] (Ctrl-C in
+/// Python).
 pub fn relaxation_with_progress(
     mesh: &GenusZeroMesh,
     params: &RelaxationParams,

@@ -164,8 +164,9 @@ fn max_iter_message(method: &str, r: usize, n_faces: usize, report: &SphereRepor
 /// vertex `i` from the previous iterate (a Jacobi step). Tests for collapse
 /// after every iteration (O(N), fused with the sweep), for validity every
 /// `check_every` iterations, when the moves fall below `tol`, and at the end.
-/// Polls `progress(0, 0)` before every iteration (one sweep, milliseconds even
-/// at 10^6 vertices) and stops with [`SphereError::Cancelled`] on `false`.
+/// Calls `progress(iterations, max_iter)` before every iteration (one sweep,
+/// milliseconds even at 10^6 vertices), stops with [`SphereError::Cancelled`]
+/// on `false`, and reports `(max_iter, max_iter)` once it has ended.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn iterate<F>(
     faces: &[[u32; 3]],
@@ -186,7 +187,9 @@ where
     let mut r = 0usize;
     let mut settled_checked = false;
     let (status, message) = loop {
-        if !progress(0, 0) {
+        // Reports the iterations done of at most `max_iter` (issue 24: a bar
+        // for the iterative methods); the end reports `max_iter` below.
+        if !progress(r, controls.max_iter) {
             return Err(SphereError::Cancelled {
                 stage: method,
                 done: r,
@@ -234,6 +237,9 @@ where
             settled_checked = false;
         }
     };
+    // The run is over, however it ended: a bar is drawn to its end. What
+    // the callable answers no longer matters.
+    progress(controls.max_iter, controls.max_iter);
     let embedding = SphereEmbedding {
         points,
         iterations: r,
