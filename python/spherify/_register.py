@@ -316,7 +316,8 @@ def register(m_a: SphereMap, m_b: SphereMap, *, landmarks: Any = None,
     Correspondence
         Cost: a few dozen ``to_surface`` calls on 2000 points for the
         rotation and the Möbius fit; for the warp, 20 steps each of one
-        ``to_surface`` of A's vertices and one round of flip-free moves.
+        ``to_surface`` of at most 8000 of A's vertices and one round of flip-free
+        moves of all.
 
     Raises
     ------
