@@ -141,13 +141,16 @@ def test_applications_report_the_points_they_locate(monkeypatch: pytest.MonkeyPa
         return calls
 
     for run, total in [
-        (lambda p: sp.morph(m, target, progress=p), m.mesh.n_vertices),
         (lambda p: sp.remesh(m, level=3, progress=p), 642),
         (lambda p: sp.geometry_image(m, 33, progress=p), 33 * 33),
     ]:
         calls = counted(run)
         assert len(calls) > 1 and calls[-1] == (total, total)
         assert [d for d, _ in calls] == sorted({d for d, _ in calls})
+    # A morph reports its registration's stages (sp.register), ending at the total.
+    calls = counted(lambda p: sp.morph(m, target, align="warp", progress=p))
+    assert len(calls) > 2 and calls[-1][0] == calls[-1][1]
+    assert [d for d, _ in calls] == sorted(d for d, _ in calls)
     # the same arrays as in one piece
     assert (sp.morph(m, target, progress=lambda d, t: None).end
             == sp.morph(m, target).end).all()
