@@ -231,3 +231,18 @@ def test_the_command_line_registers_and_corresponds(tmp_path: Path,
         "mean.ply", "population.npz", "shape_000.ply", "shape_001.ply"]
     assert sp.load(folder / "mean.ply").n_vertices == 162
     assert cli.main(["correspond", str(tmp_path / "a.obj"), "-o", str(folder)]) == 2
+
+
+def test_the_correspondence_commands_show_their_defaults(capsys: pytest.CaptureFixture[str]
+                                                         ) -> None:
+    from spherify import cli
+    for command, flags in [("register", ["--transform"]),
+                           ("correspond", ["--transform", "--level", "--reference"])]:
+        with pytest.raises(SystemExit) as exit_:
+            cli.main([command, "--help"])
+        assert exit_.value.code == 0
+        text = capsys.readouterr().out
+        assert "issue" not in text and "_cli" not in text
+        for flag in flags:
+            block = text.split(f"  {flag} ", 1)[1].split("\n  -", 1)[0]
+            assert "default:" in block, (command, flag, block)

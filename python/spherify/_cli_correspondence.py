@@ -136,7 +136,7 @@ def _level(word: str) -> int:
 def add_commands(sub: Any, load: Callable[[argparse.Namespace], Mesh],
                  save_npz: Callable[..., None]) -> None:
     """Registers ``register`` and ``correspond`` on ``sub``."""
-    text = "where every vertex of A lands on B, through certified maps (issue: correspondence)"
+    text = "where every vertex of A lands on B, through their certified sphere maps"
     p: argparse.ArgumentParser = sub.add_parser("register", help=text, description=text)
     add_input_flags(p, "mesh file A")
     p.add_argument("target", nargs="?", help="mesh file B")
