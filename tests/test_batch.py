@@ -400,7 +400,7 @@ def test_a_timeout_holds_on_a_dask_local_cluster(tmp_path: Path) -> None:
     distributed = pytest.importorskip("distributed")
     slow_inputs(tmp_path / "in")
     with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True,
-                                  dashboard_address=None) as cluster, \
+                                  dashboard_address=":0") as cluster, \
             distributed.Client(cluster) as client:
         start = time.monotonic()
         result = sp.batch(tmp_path / "in", tmp_path / "out", executor=client, timeout=4.0,
@@ -470,7 +470,7 @@ def test_dask_local_cluster_gives_the_same_outputs(tmp_path: Path) -> None:
     make_inputs(tmp_path / "in", 4)
     local = sp.batch(tmp_path / "in", tmp_path / "local", workers=2)
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                                  dashboard_address=None) as cluster, \
+                                  dashboard_address=":0") as cluster, \
             distributed.Client(cluster) as client:
         dask = sp.batch(tmp_path / "in", tmp_path / "dask", executor=client)
     assert outputs(tmp_path / "local") == outputs(tmp_path / "dask")
