@@ -47,15 +47,6 @@ def corpus(small: bool, only: List[str]) -> List[Tuple[str, sp.Mesh]]:
     return out
 
 
-def farthest_points(vertices: np.ndarray, k: int) -> np.ndarray:
-    """k vertices, each the farthest (in space) from those already chosen."""
-    chosen = [0]
-    distance = np.linalg.norm(vertices - vertices[0], axis=1)
-    for _ in range(k - 1):
-        chosen.append(int(np.argmax(distance)))
-        distance = np.minimum(distance, np.linalg.norm(vertices - vertices[chosen[-1]], axis=1))
-    return np.array(chosen, dtype=np.int64)
-
 
 def errors(c: sp.Correspondence, copy: sp.datasets.DeformedCopy) -> np.ndarray:
     diagonal = float(np.linalg.norm(np.ptp(copy.mesh.vertices, axis=0)))
@@ -73,7 +64,7 @@ def run_mesh(name: str, mesh: sp.Mesh, landmarks: int) -> Dict[str, object]:
                               "map_both": mapping}
     runs = [(t, None) for t in TRANSFORMS]
     if landmarks:
-        ids = farthest_points(mesh.vertices, landmarks)
+        ids = sp.datasets.farthest_points(mesh.vertices, landmarks)
         corners = copy.mesh.faces[copy.truth_faces[ids]]
         nearest = corners[np.arange(len(ids)), np.argmax(copy.truth_bary[ids], axis=1)]
         runs.append(("warp+landmarks", np.stack([ids, nearest], axis=1)))

@@ -32,15 +32,6 @@ import spherify as sp
 ROOT = Path(__file__).resolve().parents[2] / "shared" / "meshes"
 
 
-def spread(points: np.ndarray, k: int) -> np.ndarray:
-    chosen = [0]
-    near = np.arccos(np.clip(points @ points[0], -1, 1))
-    while len(chosen) < k:
-        nxt = int(np.argmax(near))
-        chosen.append(nxt)
-        near = np.minimum(near, np.arccos(np.clip(points @ points[nxt], -1, 1)))
-    return np.array(chosen, dtype=np.int64)
-
 
 def targets_for(points: np.ndarray, degrees: float, seed: int) -> np.ndarray:
     rng = np.random.default_rng(seed)
@@ -84,7 +75,7 @@ def main() -> int:
         plain = sp.embed(mesh)
         plain_s = time.perf_counter() - started
         for k in args.k:
-            ids = spread(plain.points, k)
+            ids = sp.datasets.farthest_points(plain.points, k)
             targets = (swirled(plain.points[ids], args.degrees, seed=k) if args.mode == "swirl"
                        else targets_for(plain.points[ids], args.degrees, seed=k))
             started = time.perf_counter()

@@ -19,14 +19,6 @@ import numpy as np
 import spherify as sp
 
 
-def farthest_points(vertices: np.ndarray, k: int) -> np.ndarray:
-    chosen = [0]
-    distance = np.linalg.norm(vertices - vertices[0], axis=1)
-    for _ in range(k - 1):
-        chosen.append(int(np.argmax(distance)))
-        distance = np.minimum(distance, np.linalg.norm(vertices - vertices[chosen[-1]], axis=1))
-    return np.array(chosen)
-
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
@@ -42,7 +34,7 @@ def main() -> None:
     diagonal = np.linalg.norm(np.ptp(copy.mesh.vertices, axis=0))
 
     # Landmark pairs: A's vertices far apart, each with B's vertex nearest its true image.
-    ids = farthest_points(a.vertices, args.landmarks)
+    ids = sp.datasets.farthest_points(a.vertices, args.landmarks)
     corners = copy.mesh.faces[copy.truth_faces[ids]]
     on_b = corners[np.arange(len(ids)), np.argmax(copy.truth_bary[ids], axis=1)]
     pairs = np.stack([ids, on_b], axis=1)

@@ -25,16 +25,6 @@ from spherify._landmarks import move_towards
 FLOOR = 1e-12
 
 
-def spread(points: np.ndarray, k: int) -> np.ndarray:
-    """Farthest-point sampling on the map, from vertex 0."""
-    chosen = [0]
-    near = np.arccos(np.clip(points @ points[0], -1, 1))
-    while len(chosen) < k:
-        nxt = int(np.argmax(near))
-        chosen.append(nxt)
-        near = np.minimum(near, np.arccos(np.clip(points @ points[nxt], -1, 1)))
-    return np.array(chosen, dtype=np.int64)
-
 
 def turned(points: np.ndarray, degrees: np.ndarray, seed: int) -> np.ndarray:
     """Each point turned by its angle in a random tangent direction."""
@@ -70,7 +60,7 @@ def landmarks_of(m: sp.SphereMap, k: int, degrees: float, seed: int = 0
     """k landmarks spread over the map, each moved up to ``degrees`` in its
     own random direction (landmarks that may cross each other's paths when
     they are closer than the moves)."""
-    ids = spread(m.points, k)
+    ids = sp.datasets.farthest_points(m.points, k)
     rng = np.random.default_rng(seed)
     return ids, turned(m.points[ids], rng.uniform(0, degrees, k), seed)
 
@@ -91,7 +81,7 @@ def tentacles() -> sp.SphereMap:
 @pytest.mark.parametrize("k", [3, 8, 32, 64])
 def test_landmarks_swirled_up_to_45_degrees_are_exact_on_a_valid_map(
         tentacles: sp.SphereMap, k: int) -> None:
-    ids = spread(tentacles.points, k)
+    ids = sp.datasets.farthest_points(tentacles.points, k)
     targets = swirled(tentacles.points[ids], 45.0, seed=k)
     m = sp.embed(tentacles.mesh, landmarks=(ids, targets))
     assert_pinned(m, ids, targets)
@@ -167,7 +157,7 @@ def test_impossible_sets_and_invalid_maps_are_map_errors(tentacles: sp.SphereMap
 def test_move_towards_keeps_the_map_valid_and_the_fixed_points(tentacles: sp.SphereMap) -> None:
     n = len(tentacles.points)
     targets = swirled(tentacles.points, 10.0, 3)
-    fixed = spread(tentacles.points, 8)
+    fixed = sp.datasets.farthest_points(tentacles.points, 8)
     m = move_towards(tentacles, targets, fixed=fixed)
     assert m.valid and m.margin >= FLOOR
     assert np.array_equal(m.points[fixed], tentacles.points[fixed])

@@ -29,14 +29,6 @@ def pair(blob: sp.SphereMap) -> "tuple[sp.datasets.DeformedCopy, sp.SphereMap]":
     return copy, sp.embed(copy.mesh)
 
 
-def farthest_points(vertices: np.ndarray, k: int) -> np.ndarray:
-    chosen = [0]
-    distance = np.linalg.norm(vertices - vertices[0], axis=1)
-    for _ in range(k - 1):
-        chosen.append(int(np.argmax(distance)))
-        distance = np.minimum(distance, np.linalg.norm(vertices - vertices[chosen[-1]], axis=1))
-    return np.array(chosen)
-
 
 def true_pairs(copy: sp.datasets.DeformedCopy, ids: np.ndarray) -> np.ndarray:
     """Each of A's ``ids`` with B's vertex nearest its true image."""
@@ -93,7 +85,7 @@ def test_a_turned_copy_is_registered_exactly(blob: sp.SphereMap) -> None:
 def test_each_transform_improves_and_landmarks_meet_exactly(
         pair: "tuple[sp.datasets.DeformedCopy, sp.SphereMap]", blob: sp.SphereMap) -> None:
     copy, m_b = pair
-    pairs = true_pairs(copy, farthest_points(blob.mesh.vertices, 8))
+    pairs = true_pairs(copy, sp.datasets.farthest_points(blob.mesh.vertices, 8))
     with warnings.catch_warnings():
         warnings.simplefilter("error", sp.SpherifyWarning)  # no thin triangles either
         results = {t: sp.register(blob, m_b, transform=t) for t in ("rotation", "moebius", "warp")}
@@ -246,3 +238,19 @@ def test_the_correspondence_commands_show_their_defaults(capsys: pytest.CaptureF
         for flag in flags:
             block = text.split(f"  {flag} ", 1)[1].split("\n  -", 1)[0]
             assert "default:" in block, (command, flag, block)
+
+
+def test_farthest_points_spreads_and_checks_its_arguments() -> None:
+    grid = sp.datasets.icosphere(subdivisions=2).vertices
+    ids = sp.datasets.farthest_points(grid, 12)
+    assert ids[0] == 0 and len(set(ids.tolist())) == 12
+    # Greedy farthest points: no two chosen are closer than the farthest any
+    # point is from the chosen set (each was chosen at that distance or more).
+    p = grid[ids]
+    pairwise = np.linalg.norm(p[:, None] - p[None], axis=2) + 10 * np.eye(12)
+    cover = np.linalg.norm(grid[:, None] - p[None], axis=2).min(axis=1).max()
+    assert pairwise.min() >= cover - 1e-12
+    with pytest.raises(sp.MeshError, match="k must be"):
+        sp.datasets.farthest_points(grid, len(grid) + 1)
+    with pytest.raises(sp.MeshError, match="points must be"):
+        sp.datasets.farthest_points(np.zeros((3, 2)), 1)

@@ -22,12 +22,13 @@ from .._errors import MeshError
 from .._mesh import Mesh
 from ._helix import helix_tube
 from ._pairs import DeformedCopy, deformed_copy
+from ._sampling import farthest_points
 from ._spheres import bumpy_blob, ellipsoid, icosphere
 from ._tentacles import tentacles
 from ._textures import checkerboard, lat_long_grid
 from ._urchin import urchin
 
-__all__ = ["DeformedCopy", "bumpy_blob", "checkerboard", "deformed_copy", "ellipsoid", "helix_tube", "icosphere", "lat_long_grid",
+__all__ = ["DeformedCopy", "bumpy_blob", "checkerboard", "deformed_copy", "ellipsoid", "farthest_points", "helix_tube", "icosphere", "lat_long_grid",
            "make", "names", "tentacles", "urchin"]
 
 # make's shapes, simplest first
