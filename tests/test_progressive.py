@@ -19,7 +19,7 @@ import _meshgen as mg
 import spherify as sp
 from _exact import exact_verdict
 
-ENERGIES = ["isometric", "conformal", "authalic", "stretch"]
+ENERGIES = ["balanced", "isometric", "conformal", "authalic", "stretch"]
 FLOOR = 1e-12
 
 

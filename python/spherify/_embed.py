@@ -101,7 +101,7 @@ def embed(mesh: MeshLike, method: str = "progressive", *, progress: Any = None,
         outward are reoriented first (noted in ``SphereMap.notes``).
     method : str
         One of :func:`methods`; see each method's options in the README. The
-        default, ``"progressive"`` with the isometric energy (thesis 9.3.3),
+        default, ``"progressive"`` with the balanced energy (thesis 9.3.3),
         is a certified GC-embedding of every genus-0 mesh with low
         distortion, long limbs and spikes included; its options are below.
         ``"theta_phi"`` (thesis ch. 6) is the fastest (about 2.5 times faster
@@ -180,7 +180,10 @@ def embed(mesh: MeshLike, method: str = "progressive", *, progress: Any = None,
         stops earlier once the rectangle is flip-free, or once a step changes
         no coordinate (every further step would give the same bits).
     energy : str
-        *Progressive.* ``"isometric"`` (default; symmetric Dirichlet), ``"conformal"``
+        *Progressive.* ``"balanced"`` (default; Sander's L2 stretch plus a tenth of
+        det J + 1 / det J, so that faces neither shrink nor swell: stretch
+        and area distortion near or below Praun and Hoppe's, issue 22),
+        ``"isometric"`` (symmetric Dirichlet, the default before), ``"conformal"``
         (MIPS with a barrier below an area ratio of 1e-5: an exactly
         conformal map of a limbed shape cannot be stored in doubles),
         ``"authalic"`` (area plus a small angle term, followed by global
@@ -188,15 +191,17 @@ def embed(mesh: MeshLike, method: str = "progressive", *, progress: Any = None,
         the end; ``max_iter`` and ``tol`` do not bound those) or
         ``"stretch"`` (Sander's L2 stretch, as Praun and Hoppe).
     max_iter : int
-        *Progressive.* Sweeps of the final optimisation (default 5; 10 for ``"authalic"``, 50
-        for ``"stretch"``, 100 for ``"conformal"``).
+        *Progressive.* Sweeps of the final optimisation (default 20 for ``"balanced"``, 5 for
+        ``"isometric"``, 10 for ``"authalic"``, 50 for ``"stretch"``, 100 for
+        ``"conformal"``).
         Most of the work is done level by level on the way up, and each new
         vertex is moved once as it is inserted; measured on a 200k-vertex
         ``tentacles``, 10 final sweeps instead of 5 change the mean angle
         distortion by under 2 degrees and cost 1.5 times the time.
     tol : float
         *Progressive.* Stop when a sweep lowers the energy by less than this fraction
-        (default 1e-3; 1e-5 for ``"stretch"`` and ``"conformal"``, which keep
+        (default 1e-4 for ``"balanced"``, 1e-3 for ``"isometric"`` and
+        ``"authalic"``, 1e-5 for ``"stretch"`` and ``"conformal"``, which keep
         improving in small steps).
 
     Returns

@@ -1,11 +1,11 @@
 """The ``spherify`` command line.
 
-    spherify map MESH -o OUT [--method progressive] [--energy isometric]
+    spherify map MESH -o OUT [--method progressive] [--energy balanced]
     spherify map MESH -o OUT --method theta_phi [--poles fast_graph] [--weights uniform]
                                    map a mesh onto the sphere, print the certificate,
                                    write OUT (the sphere as a mesh; a FreeSurfer name
                                    such as lh.sphere gets radius 100) and OUT's .npz.
-                                   The default, progressive with the isometric energy,
+                                   The default, progressive with the balanced energy,
                                    gives a certified low-distortion map of every mesh;
                                    theta_phi is the fastest and the thesis's own
                                    bijection h (see README, "Which method when").

@@ -43,7 +43,7 @@
 //!     where a vertex is re-inserted, and the conformal energy's certified start.
 //!   * [`methods::progressive::flip_free`]: vertex moves that keep every face positive (9.3.2).
 //!   * [`methods::progressive::improve`]: those moves started from any valid map (9.3.2).
-//!   * [`methods::progressive::distortion_energy`]: the isometric, conformal, authalic and stretch energies.
+//!   * [`methods::progressive::distortion_energy`]: the balanced (default), isometric, conformal, authalic and stretch energies.
 //!   * [`methods::progressive::authalic_newton`]: global Gauss-Newton steps towards equal areas.
 //!   * [`methods::progressive::conformal_start`]: a certified global conformal map, the conformal energy's start.
 //!   * [`methods::progressive::mobius_centring`]: the Möbius transformation that balances a map's area.

@@ -65,7 +65,12 @@ pub fn from_conformal_start(
         return Err(cancelled(n));
     }
     let rings = rings_of(mesh);
-    let problem = Problem { energy: params.energy, surface: mesh.positions(), area_floor: floor };
+    let problem = Problem {
+        energy: params.energy,
+        surface: mesh.positions(),
+        area_floor: floor,
+        represented: None,
+    };
     let stars = problem.stars(&rings);
     let smallest = smallest_area_ratio(&problem, &stars, &start.points);
     if smallest.is_nan() || smallest < CONFORMAL_AREA_FLOOR {

@@ -30,6 +30,12 @@ pub struct Problem<'a> {
     /// Surface triangles smaller than this count as this large (see
     /// [`Reference::new`]).
     pub area_floor: f64,
+    /// On a coarse level, per vertex: the area of the finest surface that
+    /// the vertex stands for over the area of its own star at this level
+    /// (see [`represented_area`]). A face's reference triangle is scaled by
+    /// the mean over its corners, so that a face aims at the share of the
+    /// sphere its part of the finest surface needs. `None`: the mesh itself.
+    pub represented: Option<&'a [f64]>,
 }
 
 /// Every vertex's ring and the surface reference of each face around it,
@@ -80,7 +86,11 @@ const SAFE_FRACTION: f64 = 0.8;
 impl Problem<'_> {
     fn reference(&self, i: u32, a: u32, b: u32) -> Reference {
         let s = self.surface;
-        Reference::new(s[i as usize], s[a as usize], s[b as usize], self.area_floor)
+        let r = Reference::new(s[i as usize], s[a as usize], s[b as usize], self.area_floor);
+        match self.represented {
+            Some(rho) => r.scaled((rho[i as usize] + rho[a as usize] + rho[b as usize]) / 3.0),
+            None => r,
+        }
     }
 
     /// The references of the faces around `i`, in ring order.

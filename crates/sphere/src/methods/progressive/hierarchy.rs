@@ -40,6 +40,72 @@ pub struct Hierarchy {
     pub rounds: Vec<std::ops::Range<usize>>,
 }
 
+/// Bounds of [`Hierarchy::represented_area`]'s ratio: a coarse face aims at
+/// most a hundred times more or less sphere than its own surface area.
+const REPRESENTED_BOUNDS: (f64, f64) = (1e-2, 1e2);
+
+impl Hierarchy {
+    /// For every vertex alive after the first `done` collapses (whose rings
+    /// are `rings`): the area of the finest surface it stands for over the
+    /// area of its star at that level (a third of its faces' areas); 1 for
+    /// removed vertices. Each vertex starts with a third of the area of its
+    /// faces on the finest mesh, and a collapse hands what `u` stands for to
+    /// the vertices of its ring in equal shares: a limb of many small faces
+    /// that the hierarchy has folded into a few large ones still asks for
+    /// its whole area on the coarse levels. O(n + collapsed ring sizes).
+    pub fn represented_area(
+        &self,
+        done: usize,
+        rings: &[Vec<u32>],
+        surface: &[[f64; 3]],
+        faces: &[[u32; 3]],
+    ) -> Vec<f64> {
+        let n = rings.len();
+        let mut mass = vec![0.0; n];
+        for &[a, b, c] in faces {
+            let third =
+                triangle_area(surface[a as usize], surface[b as usize], surface[c as usize]) / 3.0;
+            for v in [a, b, c] {
+                mass[v as usize] += third;
+            }
+        }
+        for c in &self.collapses[..done] {
+            let share = mass[c.u as usize] / c.ring.len() as f64;
+            mass[c.u as usize] = 0.0;
+            for &r in &c.ring {
+                mass[r as usize] += share;
+            }
+        }
+        rings
+            .par_iter()
+            .enumerate()
+            .map(|(i, ring)| {
+                let m = ring.len();
+                if m == 0 {
+                    return 1.0;
+                }
+                let p = surface[i];
+                let star: f64 = (0..m)
+                    .map(|j| {
+                        triangle_area(
+                            p,
+                            surface[ring[j] as usize],
+                            surface[ring[(j + 1) % m] as usize],
+                        )
+                    })
+                    .sum::<f64>()
+                    / 3.0;
+                let ratio = mass[i] / star;
+                if ratio.is_finite() && ratio > 0.0 {
+                    ratio.clamp(REPRESENTED_BOUNDS.0, REPRESENTED_BOUNDS.1)
+                } else {
+                    1.0
+                }
+            })
+            .collect()
+    }
+}
+
 /// A symmetric 4x4 quadric, upper triangle by rows.
 type Quadric = [f64; 10];
 

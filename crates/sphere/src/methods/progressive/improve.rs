@@ -57,8 +57,12 @@ pub fn improve(
     }
     let started = Instant::now();
     let rings = crate::methods::progressive::rings_of(mesh);
-    let problem =
-        Problem { energy: params.energy, surface: mesh.positions(), area_floor: area_floor(mesh) };
+    let problem = Problem {
+        energy: params.energy,
+        surface: mesh.positions(),
+        area_floor: area_floor(mesh),
+        represented: None,
+    };
     let mut points = points.to_vec();
     let total = params.max_iter.max(1);
     let end = problem

@@ -23,7 +23,13 @@ fn every_energy_gives_a_valid_map_on_round_and_limbed_shapes() {
         ("helix", helix(8, 120, 0.15, 2.0, 0.8)),
     ];
     for (name, shape) in shapes {
-        for energy in [Energy::Isometric, Energy::Conformal, Energy::Authalic, Energy::Stretch] {
+        for energy in [
+            Energy::Isometric,
+            Energy::Conformal,
+            Energy::Authalic,
+            Energy::Stretch,
+            Energy::Balanced,
+        ] {
             let (mesh, e) = map(shape.clone(), energy);
             let report = check_sphere(mesh.faces(), &e.points);
             assert!(report.valid, "{name} {energy:?}: {report:?}");
@@ -95,8 +101,12 @@ fn improve_lowers_the_energy_of_a_theta_phi_map_and_keeps_it_valid() {
     let params = ImproveParams::default();
     let improved = improve_embedding(&mesh, &start, &params, &|_, _| true).unwrap();
     assert!(improved.certificate.valid);
-    let problem =
-        Problem { energy: params.energy, surface: mesh.positions(), area_floor: area_floor(&mesh) };
+    let problem = Problem {
+        energy: params.energy,
+        surface: mesh.positions(),
+        area_floor: area_floor(&mesh),
+        represented: None,
+    };
     let stars = problem.stars(&rings_of(&mesh));
     let energy = |p: &[[f64; 3]]| problem.total_energy(problem.area_scale(&stars, p), &stars, p);
     assert!(energy(&improved.result.points) < 0.9 * energy(&start.result.points));
