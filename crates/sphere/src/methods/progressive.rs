@@ -117,7 +117,9 @@ impl ProgressiveParams {
             Energy::Stretch | Energy::CoarseStretch => {
                 ProgressiveParams { energy, max_iter: 50, tolerance: 1e-5 }
             }
-            Energy::Balanced => ProgressiveParams { energy, max_iter: 20, tolerance: 1e-4 },
+            Energy::Balanced | Energy::CoarseBalanced => {
+                ProgressiveParams { energy, max_iter: 20, tolerance: 1e-4 }
+            }
             Energy::Conformal => ProgressiveParams { energy, max_iter: 100, tolerance: 1e-5 },
             Energy::Authalic => ProgressiveParams { energy, max_iter: 10, tolerance: 1e-3 },
             Energy::Isometric => ProgressiveParams { energy, max_iter: 5, tolerance: 1e-3 },
