@@ -377,8 +377,12 @@ pub fn pin_landmarks(
 
     let rings = rings_of(mesh);
     let held = landmarks.mask(n);
-    let problem =
-        Problem { energy: params.energy, surface: mesh.positions(), area_floor: area_floor(mesh) };
+    let problem = Problem {
+        energy: params.energy,
+        surface: mesh.positions(),
+        area_floor: area_floor(mesh),
+        represented: None,
+    };
     let mut relax = |points: &mut [[f64; 3]]| {
         problem
             .optimise_holding(&rings, points, FLOW_SWEEPS, 0.0, Some(&held), &|_| !go_on())

@@ -170,6 +170,7 @@ pub fn move_towards(
             energy: params.energy,
             surface: mesh.positions(),
             area_floor: area_floor(mesh),
+            represented: None,
         };
         let end = problem
             .optimise_holding(&rings, &mut points, params.energy_sweeps, 0.0, Some(&held), &|_| {

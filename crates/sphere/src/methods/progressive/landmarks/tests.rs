@@ -178,6 +178,7 @@ fn holding_nothing_is_optimise_move_for_move() {
         energy: Energy::Isometric,
         surface: mesh.positions(),
         area_floor: area_floor(&mesh),
+        represented: None,
     };
     let (mut a, mut b) = (points.clone(), points.clone());
     problem.optimise(&rings, &mut a, 5, 0.0, &|_| false).unwrap();
