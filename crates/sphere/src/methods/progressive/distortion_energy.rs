@@ -291,6 +291,45 @@ pub fn face_energy_hessian(
     (area_s * f, grad, hess)
 }
 
+/// [`face_energy`] and its gradients with respect to all three corners
+/// (`p0`, `p1`, `p2`, in that order), and the density's derivative f_a, the
+/// weight of the face's Dirichlet term a (which the preconditioner of
+/// [`crate::methods::progressive::lbfgs`] is built from). With q1 = p1 - p0,
+/// q2 = p2 - p0: da/dp1 = 2 (g11 q1 - g01 q2) / (k det G), da/dp2 = 2 (g00 q2
+/// - g01 q1) / (k det G), da/dp0 = -(da/dp1 + da/dp2); d is linear in each
+/// corner, dd/dp0 = (p1 x p2) / (2 A), and so on cyclically. Infinite energy
+/// (and zero gradients) where the face is not positive.
+pub fn face_energy_gradients(
+    energy: Energy,
+    r: &Reference,
+    k: f64,
+    p0: [f64; 3],
+    p1: [f64; 3],
+    p2: [f64; 3],
+) -> (f64, [[f64; 3]; 3], f64) {
+    let (q1, q2) = (sub(p1, p0), sub(p2, p0));
+    let [g00, g01, g11] = r.gram;
+    let kdet = k * (g00 * g11 - g01 * g01);
+    let a = (dot(q1, q1) * g11 - 2.0 * dot(q1, q2) * g01 + dot(q2, q2) * g00) / kdet;
+    let area_s = k * r.area;
+    let d = 0.5 * det3(p0, p1, p2) / area_s;
+    let (f, f_a, f_d) = energy.density(a, d);
+    if !f.is_finite() {
+        return (f64::INFINITY, [[0.0; 3]; 3], 0.0);
+    }
+    let da1 = [0, 1, 2].map(|i| 2.0 * (q1[i] * g11 - q2[i] * g01) / kdet);
+    let da2 = [0, 1, 2].map(|i| 2.0 * (q2[i] * g00 - q1[i] * g01) / kdet);
+    let da0 = [0, 1, 2].map(|i| -(da1[i] + da2[i]));
+    let dd = [cross(p1, p2), cross(p2, p0), cross(p0, p1)];
+    let half = 0.5 / area_s;
+    let grads = [da0, da1, da2]
+        .iter()
+        .zip(dd)
+        .map(|(da, dd)| [0, 1, 2].map(|i| area_s * (f_a * da[i] + f_d * half * dd[i])))
+        .collect::<Vec<_>>();
+    (area_s * f, [grads[0], grads[1], grads[2]], f_a)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -350,6 +389,32 @@ mod tests {
                     "{e:?} {i}: {numeric} vs {}",
                     g[i]
                 );
+            }
+        }
+    }
+
+    #[test]
+    fn the_gradients_of_all_corners_are_the_derivatives_of_the_energy() {
+        let r = Reference::new([0.0, 0.0, 0.0], [1.0, 0.1, 0.0], [0.3, 0.8, 0.2], 1e-12);
+        let p = [[0.9, 0.1, 0.2], [0.1, 0.95, 0.1], [0.15, 0.2, 0.95]];
+        for e in ALL {
+            let (f, g, _) = face_energy_gradients(e, &r, 0.7, p[0], p[1], p[2]);
+            assert!((f - face_energy(e, &r, 0.7, p[0], p[1], p[2])).abs() < 1e-12 * f.abs());
+            for c in 0..3 {
+                for i in 0..3 {
+                    let h = 1e-6;
+                    let (mut plus, mut minus) = (p, p);
+                    plus[c][i] += h;
+                    minus[c][i] -= h;
+                    let numeric = (face_energy(e, &r, 0.7, plus[0], plus[1], plus[2])
+                        - face_energy(e, &r, 0.7, minus[0], minus[1], minus[2]))
+                        / (2.0 * h);
+                    assert!(
+                        (numeric - g[c][i]).abs() < 1e-5 * (1.0 + g[c][i].abs()),
+                        "{e:?} corner {c} {i}: {numeric} vs {}",
+                        g[c][i]
+                    );
+                }
             }
         }
     }
