@@ -180,9 +180,11 @@ def embed(mesh: MeshLike, method: str = "progressive", *, progress: Any = None,
         stops earlier once the rectangle is flip-free, or once a step changes
         no coordinate (every further step would give the same bits).
     energy : str
-        *Progressive.* ``"balanced"`` (default; Sander's L2 stretch plus a tenth of
-        det J + 1 / det J, so that faces neither shrink nor swell: stretch
-        and area distortion near or below Praun and Hoppe's, issue 22),
+        *Progressive.* ``"balanced"`` (default; Sander's L2 stretch plus 0.15
+        (det J + 1 / det J), so that faces neither shrink nor swell: stretch
+        and area distortion near or below Praun and Hoppe's, issue 22; like
+        ``"stretch"``, followed by global L-BFGS steps on the coarse levels
+        and at the end, which ``max_iter`` and ``tol`` do not bound),
         ``"isometric"`` (symmetric Dirichlet, the default before), ``"conformal"``
         (MIPS with a barrier below an area ratio of 1e-5: an exactly
         conformal map of a limbed shape cannot be stored in doubles),
