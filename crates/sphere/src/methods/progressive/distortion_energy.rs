@@ -300,10 +300,10 @@ pub fn face_energy_hessian(
 /// (`p0`, `p1`, `p2`, in that order), and the density's derivative f_a, the
 /// weight of the face's Dirichlet term a (which the preconditioner of
 /// [`crate::methods::progressive::lbfgs`] is built from). With q1 = p1 - p0,
-/// q2 = p2 - p0: da/dp1 = 2 (g11 q1 - g01 q2) / (k det G), da/dp2 = 2 (g00 q2
-/// - g01 q1) / (k det G), da/dp0 = -(da/dp1 + da/dp2); d is linear in each
-/// corner, dd/dp0 = (p1 x p2) / (2 A), and so on cyclically. Infinite energy
-/// (and zero gradients) where the face is not positive.
+/// q2 = p2 - p0: da/dp1 = 2 (g11 q1 - g01 q2) / (k det G), da/dp2 =
+/// 2 (g00 q2 - g01 q1) / (k det G), da/dp0 = -(da/dp1 + da/dp2); d is linear
+/// in each corner, dd/dp0 = (p1 x p2) / (2 A), and so on cyclically.
+/// Infinite energy (and zero gradients) where the face is not positive.
 pub fn face_energy_gradients(
     energy: Energy,
     r: &Reference,

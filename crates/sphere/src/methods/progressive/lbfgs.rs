@@ -116,6 +116,10 @@ struct Faces {
     incidence: Vec<u32>,
 }
 
+/// A curvature pair of L-BFGS: the step s, the change of gradient y, and
+/// 1 / (s . y).
+type Pair = (Vec<[f64; 3]>, Vec<[f64; 3]>, f64);
+
 /// What one evaluation of the gradient gives.
 struct Evaluation {
     energy: f64,
@@ -432,7 +436,7 @@ pub fn lbfgs(
         return Ok(run);
     };
     // (s, y, 1 / s.y), oldest first.
-    let mut memory: VecDeque<(Vec<[f64; 3]>, Vec<[f64; 3]>, f64)> = VecDeque::new();
+    let mut memory: VecDeque<Pair> = VecDeque::new();
     let mut gamma = 1.0;
     let mut since_factor = 0;
     while run.iterations < params.max_iter {
