@@ -96,7 +96,7 @@ pub struct LbfgsRun {
     /// The last iteration lowered the energy by less than the tolerance.
     pub converged: bool,
     /// The certificate failed at the end and the points went back to the
-    /// start (never seen so far; kept as the guarantee).
+    /// start (not seen in the runs measured; kept as the guarantee).
     pub fell_back: bool,
     /// Seconds spent factorising the preconditioner.
     pub factor_seconds: f64,
