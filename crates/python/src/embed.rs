@@ -196,15 +196,10 @@ pub fn improve(
             let pin = crate::landmarks::pin_params_for(params.energy);
             embedding = pin_embedding(&mesh, &embedding, &landmarks, &pin, report)?;
         }
-        Ok::<_, SphereError>((mesh, embedding))
+        Ok::<_, SphereError>(embedding)
     })?;
-    let (mesh, embedding) = result.map_err(|e| sphere_error(py, e))?;
-    Ok(CoreSphereMap::new(
-        mesh.shared_mesh(),
-        sphere_map.caller_mesh(),
-        embedding,
-        sphere_map.reoriented(),
-    ))
+    let embedding = result.map_err(|e| sphere_error(py, e))?;
+    Ok(sphere_map.with_embedding(embedding))
 }
 
 /// from_points(mesh, points (n, 3) float64) -> CoreSphereMap.
