@@ -15,8 +15,9 @@ from ._embed import listed, method_options, methods, methods_taking
 from ._errors import MeshError, SpherifyError
 from .datasets._checks import making_bytes, mesh_bytes
 
-#: Sizes of generated shapes the command line accepts (a 10^7-vertex shape
-#: takes some 6 to 30 GB to map, by method; see check_memory_first).
+#: Sizes of generated shapes the command line accepts (mapping a 10^7-vertex
+#: shape takes some 8 GB with the default method and more with most others;
+#: check_memory_first refuses what cannot fit before the shape is made).
 N_VERTICES = (4, 10_000_000)
 
 class UsageError(SpherifyError):
@@ -64,7 +65,7 @@ def check_memory_first(args: argparse.Namespace, method: str, options: Dict[str,
         return  # a bad option: embed says so, where it always has
     mapping = mesh_bytes(n) + embedding
     need = max(making_bytes(args.dataset, n), mapping)
-    _core.check_memory(f"spherify map --dataset {args.dataset} --n-vertices {n}", n, need)
+    _core.check_memory(f"spherify map --dataset {args.dataset} --method {method}", n, need)
 
 
 def shows_progress(args: argparse.Namespace) -> bool:

@@ -269,15 +269,16 @@ fn grouped(n: u64) -> String {
     out
 }
 
-/// Bytes for people: "6.2 GB", "640 MB" (powers of 1000, one decimal).
+/// Bytes for people, in the units of `ulimit -v` and of "a 4 GB limit"
+/// (`4 << 30`): "9.7 GiB", "640 MiB".
 fn human(bytes: u64) -> String {
     let b = bytes as f64;
-    if b >= 1e9 {
-        format!("{:.1} GB", b / 1e9)
-    } else if b >= 1e6 {
-        format!("{:.0} MB", b / 1e6)
+    if b >= (1u64 << 30) as f64 {
+        format!("{:.1} GiB", b / (1u64 << 30) as f64)
+    } else if b >= (1u64 << 20) as f64 {
+        format!("{:.0} MiB", b / (1u64 << 20) as f64)
     } else {
-        format!("{:.0} kB", b / 1e3)
+        format!("{:.0} KiB", b / 1024.0)
     }
 }
 
