@@ -15,6 +15,8 @@
 //!   choices: the one table the bindings, the API, the batch and the CLI read.
 //! * [`embedding`]: [`SphereEmbedding`], the points and account every method returns.
 //! * [`error`]: [`SphereError`], how a method fails.
+//! * [`memory_budget`]: the memory policy: each call's estimate checked against what the
+//!   process can still get before it starts, and fallible allocation of the large buffers.
 //!
 //! [`methods`], one file or folder per family:
 //! * [`methods::radial`]: radial projection from a point, the vertex mean or the kernel (3.5, eq. 3.17-3.18).
@@ -73,6 +75,7 @@ pub mod embed;
 pub mod embedding;
 pub mod error;
 pub mod genus_zero;
+pub mod memory_budget;
 pub mod method_options;
 pub mod methods;
 pub mod point_map;

@@ -48,6 +48,7 @@ use spherify_mesh::vec3::triangle_area;
 use crate::embedding::{normalize, SphereEmbedding, Status};
 use crate::error::SphereError;
 use crate::genus_zero::GenusZeroMesh;
+use crate::memory_budget::filled;
 use crate::methods::progressive::authalic_newton::{
     authalic_newton, authalic_newton_rings, AuthalicSteps,
 };
@@ -154,7 +155,7 @@ pub fn progressive(
     }
 
     let started = Instant::now();
-    let mut rings = RingMesh::from_faces(n, mesh.faces());
+    let mut rings = RingMesh::from_faces(n, mesh.faces())?;
     // progress(0, 0) only asks whether to go on; the other calls report.
     let go_on = || progress(0, 0);
     let hierarchy = hierarchy::decimate(&mut rings, positions, &mut |removed| {
@@ -164,7 +165,7 @@ pub fn progressive(
     seconds.push(("hierarchy", started.elapsed().as_secs_f64()));
 
     let started = Instant::now();
-    let mut points = vec![[0.0; 3]; n];
+    let mut points = filled(n, [0.0; 3], "the progressive method's points")?;
     place_tetrahedron(&rings, &mut points);
     let problem =
         Problem { energy: params.energy, surface: positions, area_floor: area_floor(mesh) };
@@ -377,8 +378,12 @@ pub(crate) fn area_floor(mesh: &GenusZeroMesh) -> f64 {
 }
 
 /// The neighbour lists of `mesh`, counter-clockwise seen from outside.
-pub(crate) fn rings_of(mesh: &GenusZeroMesh) -> Vec<Vec<u32>> {
-    RingMesh::from_faces(mesh.n_vertices(), mesh.faces()).rings
+///
+/// # Errors
+/// [`ResourceError::Allocation`](crate::memory_budget::ResourceError) when the
+/// system refuses their memory.
+pub(crate) fn rings_of(mesh: &GenusZeroMesh) -> Result<Vec<Vec<u32>>, SphereError> {
+    Ok(RingMesh::from_faces(mesh.n_vertices(), mesh.faces())?.rings)
 }
 
 fn insert(rings: &mut RingMesh, points: &mut [[f64; 3]], c: &Collapse, q: [f64; 3]) {
