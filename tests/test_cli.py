@@ -153,7 +153,7 @@ def test_map_writes_the_sphere_and_the_npz(tmp_path: Path, capsys: pytest.Captur
     assert data["poles"].shape == (2,) and data["cut_path"][0] == data["poles"][0]
 
 
-def test_map_defaults_to_the_progressive_balanced_map(tmp_path: Path,
+def test_map_defaults_to_the_progressive_isometric_map(tmp_path: Path,
                                                        capsys: pytest.CaptureFixture[str]) -> None:
     out = tmp_path / "sphere.ply"
     code = cli.main(["map", "--dataset", "helix_tube", "--n-vertices", "500", "-o", str(out)])
@@ -162,7 +162,7 @@ def test_map_defaults_to_the_progressive_balanced_map(tmp_path: Path,
     assert "method: progressive" in text and "GC-embedding (minor-arc edges): valid, 0 faces" in text
     assert "theta-phi" not in text and "poles:" not in text
     mesh = sp.datasets.make("helix_tube", 500)
-    want = sp.embed(mesh, "progressive", energy="balanced")
+    want = sp.embed(mesh, "progressive", energy="isometric")
     data = np.load(tmp_path / "sphere.npz")
     assert {"faces", "points", "sphere_sha256"} <= set(data.files)
     assert "mesh_sha256" not in data.files  # a generated shape has no file to hash

@@ -90,6 +90,7 @@ def run_limited(names: List[str]) -> List[str]:
     return done.stdout.split("\n")[:-1]
 
 
+@pytest.mark.slow
 @pytest.mark.timeout(600)
 def test_the_largest_remesh_and_geometry_image_fit_in_4_gb() -> None:
     assert run_limited(["remesh", "geometry_image"]) == ["remesh ok", "geometry_image ok"]

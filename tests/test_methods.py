@@ -251,11 +251,11 @@ def test_unknown_option_raises_mesh_error(method: str) -> None:
         sp.embed(shape("icosphere1"), method, no_such_option=1)
 
 
-def test_the_default_method_is_progressive_balanced() -> None:
+def test_the_default_method_is_progressive_isometric() -> None:
     mesh = shape("icosphere1")
     m = sp.embed(mesh)
     assert m.method == "progressive" and not isinstance(m, sp.ThetaPhiMap)
-    named = sp.embed(mesh, "progressive", energy="balanced")
+    named = sp.embed(mesh, "progressive", energy="isometric")
     np.testing.assert_array_equal(m.points, named.points)
 
 

@@ -10,7 +10,7 @@ from typing import List
 from . import datasets, harmonics, plot, texture
 from ._core import __version__
 from ._errors import (ConvergenceError, FileError, FormatError, MapError, MeshError,
-                      SpherifyError, SpherifyWarning, TopologyError)
+                      ResourceError, SpherifyError, SpherifyWarning, TopologyError)
 from ._mesh import Mesh, check, check_sphere, dijkstra, load, orient, save, shortest_path, weld
 from ._report import MeshReport, SphereReport
 from ._spheremap import SphereMap, ThetaPhiMap
@@ -39,6 +39,7 @@ __all__ = [
     "MeshReport",
     "Morph",
     "Population",
+    "ResourceError",
     "SphereMap",
     "SphereReport",
     "SurfacePoints",

@@ -10,12 +10,14 @@ import argparse
 import sys
 from typing import Any, Dict, List, Tuple
 
-from . import datasets
+from . import _core, datasets
 from ._embed import listed, method_options, methods, methods_taking
-from ._errors import SpherifyError
+from ._errors import MeshError, SpherifyError
+from .datasets._checks import making_bytes, mesh_bytes
 
-#: Sizes of generated shapes the command line accepts (a 10^7-vertex shape
-#: takes some 10 GB to map).
+#: Sizes of generated shapes the command line accepts (mapping a 10^7-vertex
+#: shape takes some 8 GB with the default method and more with most others;
+#: check_memory_first refuses what cannot fit before the shape is made).
 N_VERTICES = (4, 10_000_000)
 
 class UsageError(SpherifyError):
@@ -44,6 +46,26 @@ def add_input_flags(p: argparse.ArgumentParser, what: str = "mesh file") -> None
     p.add_argument("--weld", action="store_true",
                    help="first merge vertices at exactly the same position (a seam the "
                         "exporter split; the report of such an open mesh suggests it)")
+
+
+def check_memory_first(args: argparse.Namespace, method: str, options: Dict[str, Any],
+                       landmarks: bool = False) -> None:
+    """For a generated shape, a map that cannot fit in memory is refused
+    before the shape is made (ResourceError, exit status 1): making 10^7
+    vertices takes seconds and gigabytes of its own. The need is the larger
+    of making the shape and holding it while ``embed`` runs, whose estimate
+    is the core's (``crates/sphere/src/memory_budget.rs``); the check is
+    the core's too."""
+    if not args.dataset or args.mesh:
+        return
+    n = args.n_vertices
+    try:
+        embedding = _core.embed_need(method, dict(options), n, 2 * n - 4, landmarks)
+    except MeshError:
+        return  # a bad option: embed says so, where it always has
+    mapping = mesh_bytes(n) + embedding
+    need = max(making_bytes(args.dataset, n), mapping)
+    _core.check_memory(f"spherify map --dataset {args.dataset} --method {method}", n, need)
 
 
 def shows_progress(args: argparse.Namespace) -> bool:

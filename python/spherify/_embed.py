@@ -101,7 +101,7 @@ def embed(mesh: MeshLike, method: str = "progressive", *, progress: Any = None,
         outward are reoriented first (noted in ``SphereMap.notes``).
     method : str
         One of :func:`methods`; see each method's options in the README. The
-        default, ``"progressive"`` with the balanced energy (thesis 9.3.3),
+        default, ``"progressive"`` with the isometric energy (thesis 9.3.3),
         is a certified GC-embedding of every genus-0 mesh with low
         distortion, long limbs and spikes included; its options are below.
         ``"theta_phi"`` (thesis ch. 6) is the fastest (about 2.5 times faster
@@ -180,12 +180,13 @@ def embed(mesh: MeshLike, method: str = "progressive", *, progress: Any = None,
         stops earlier once the rectangle is flip-free, or once a step changes
         no coordinate (every further step would give the same bits).
     energy : str
-        *Progressive.* ``"balanced"`` (default; Sander's L2 stretch plus 0.15
-        (det J + 1 / det J), so that faces neither shrink nor swell: stretch
-        and area distortion near or below Praun and Hoppe's, issue 22; like
-        ``"stretch"``, followed by global L-BFGS steps on the coarse levels
-        and at the end, which ``max_iter`` and ``tol`` do not bound),
-        ``"isometric"`` (symmetric Dirichlet, the default before), ``"conformal"``
+        *Progressive.* ``"isometric"`` (default; symmetric Dirichlet, the
+        fastest), ``"balanced"`` (the best quality: Sander's L2 stretch plus
+        0.15 (det J + 1 / det J), so that faces neither shrink nor swell;
+        stretch and area distortion at or below Praun and Hoppe's on most
+        meshes, issue 22; like ``"stretch"``, followed by global L-BFGS steps
+        on the coarse levels and at the end, which ``max_iter`` and ``tol``
+        do not bound; 3-12 times the isometric energy's time), ``"conformal"``
         (MIPS with a barrier below an area ratio of 1e-5: an exactly
         conformal map of a limbed shape cannot be stored in doubles),
         ``"authalic"`` (area plus a small angle term, followed by global
@@ -193,8 +194,8 @@ def embed(mesh: MeshLike, method: str = "progressive", *, progress: Any = None,
         the end; ``max_iter`` and ``tol`` do not bound those) or
         ``"stretch"`` (Sander's L2 stretch, as Praun and Hoppe).
     max_iter : int
-        *Progressive.* Sweeps of the final optimisation (default 20 for ``"balanced"``, 5 for
-        ``"isometric"``, 10 for ``"authalic"``, 50 for ``"stretch"``, 100 for
+        *Progressive.* Sweeps of the final optimisation (default 5 for ``"isometric"``, 20 for
+        ``"balanced"``, 10 for ``"authalic"``, 50 for ``"stretch"``, 100 for
         ``"conformal"``).
         Most of the work is done level by level on the way up, and each new
         vertex is moved once as it is inserted; measured on a 200k-vertex

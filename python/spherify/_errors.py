@@ -57,6 +57,25 @@ class MapError(SpherifyError, ValueError):
     where the preimage of a sphere point is not defined."""
 
 
+class ResourceError(SpherifyError, MemoryError):
+    """The call does not fit in the memory this process can have. Also a
+    :class:`MemoryError`. Raised before the work starts when the call's
+    estimate (``crates/sphere/src/memory_budget.rs``: measured bytes per
+    vertex of each method and energy, with a margin) is more than the address
+    space left under the process's ``RLIMIT_AS`` or the machine's available
+    memory, and when an allocation of one of the core's large buffers fails.
+    The message names the call, the vertex count, the bytes needed and the
+    bytes available; ``bytes`` holds the bytes asked for and ``available``
+    what was available (None for a failed allocation). The command line
+    exits with status 1."""
+
+    def __init__(self, message: str, bytes: Optional[int] = None,
+                 available: Optional[int] = None) -> None:
+        super().__init__(message)
+        self.bytes = bytes
+        self.available = available
+
+
 class FileError(SpherifyError, OSError):
     """The operating system refused a file: missing, a folder, no permission,
     a full disk. Also an :class:`OSError`, and each instance is also the

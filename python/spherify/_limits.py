@@ -15,6 +15,12 @@ that works, not a range that aborts.
 | ``UVLayout.bake`` / ``texture --size`` height | 4096 | a 4096 x 6144 cube atlas, 600 MB |
 | ``morph --frames`` | 1000 | 1000 files |
 | ``surface_distance`` ``samples`` / ``remesh --samples`` | 10,000,000 | a few seconds per million, in chunks |
+
+The size of a mesh has no fixed bound: what a map of it needs depends on the
+method and on what the process can get. Its estimate is checked before the
+map starts (``crates/sphere/src/memory_budget.rs``, docs/reliability.md,
+"Memory"), and one that cannot fit is a :class:`ResourceError` naming the call,
+the vertex count and the bytes (exit status 1 on the command line).
 """
 
 from __future__ import annotations

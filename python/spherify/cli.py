@@ -1,11 +1,11 @@
 """The ``spherify`` command line.
 
-    spherify map MESH -o OUT [--method progressive] [--energy balanced]
+    spherify map MESH -o OUT [--method progressive] [--energy isometric]
     spherify map MESH -o OUT --method theta_phi [--poles fast_graph] [--weights uniform]
                                    map a mesh onto the sphere, print the certificate,
                                    write OUT (the sphere as a mesh; a FreeSurfer name
                                    such as lh.sphere gets radius 100) and OUT's .npz.
-                                   The default, progressive with the balanced energy,
+                                   The default, progressive with the isometric energy,
                                    gives a certified low-distortion map of every mesh;
                                    theta_phi is the fastest and the thesis's own
                                    bijection h (see README, "Which method when").
@@ -33,8 +33,9 @@
 
 Every command takes ``--dataset NAME [--n-vertices N]`` instead of MESH to
 use a generated shape. Exit status: 0 for success (a valid mesh; a certified
-map), 1 when the mesh has problems or the map could not be certified, 2 for
-unreadable input or bad arguments.
+map), 1 when the mesh has problems, the map could not be certified or the job
+does not fit in memory (``ResourceError``), 2 for unreadable input or bad
+arguments.
 """
 
 from __future__ import annotations
@@ -52,9 +53,10 @@ import numpy as np
 
 from . import _args, _cli_apps, _cli_correspondence, _core, _files, _formats, datasets
 from ._cli_options import (UsageError, add_input_flags, add_method_flags, add_progress_flag,
-                           method_options_of, shows_progress)
+                           check_memory_first, method_options_of, shows_progress)
 from ._embed import embed, methods
-from ._errors import MapError, MeshError, SpherifyError, SpherifyWarning, TopologyError
+from ._errors import (MapError, MeshError, ResourceError, SpherifyError, SpherifyWarning,
+                      TopologyError)
 from ._landmarks import read_landmarks
 from ._mesh import Mesh, check, check_sphere, load, orient, save, weld
 from ._persist import record
@@ -249,6 +251,7 @@ def _cmd_map(args: argparse.Namespace) -> int:
                          "hash in OUT's .npz, so OUT must be a regular file")
     start = time.perf_counter()
     landmarks = None if args.landmarks is None else read_landmarks(args.landmarks)
+    check_memory_first(args, method, options, landmarks is not None)
     mesh = _load(args)
     loaded = time.perf_counter()
     report = check(mesh)
@@ -364,7 +367,8 @@ takes --method and the method's options (spherify map --help lists them, with
 the methods that take each and their defaults).
 
 exit status: 0 success (a valid mesh; a certified map), 1 when the mesh has
-problems or a map could not be certified, 2 for bad arguments or unreadable input.
+problems, a map could not be certified or the job does not fit in memory, 2 for
+bad arguments or unreadable input.
 """
 
 EPILOG = """\
@@ -420,9 +424,11 @@ def main(argv: Optional[List[str]] = None) -> int:
         if threads is not None:
             set_num_threads(threads)
         return int(args.func(args))
-    except TopologyError as err:
-        # A mesh that cannot be done (not manifold, not genus 0): 1, as map
-        # and check say it; 2 is for bad arguments and unreadable inputs.
+    except (TopologyError, ResourceError) as err:
+        # A mesh that cannot be done (not manifold, not genus 0), or a job
+        # within the documented sizes that does not fit in this process's
+        # memory: 1, as map and check say it; 2 is for bad arguments and
+        # unreadable inputs.
         print(f"spherify: error: {err}", file=sys.stderr)
         return 1
     except (SpherifyError, OSError) as err:

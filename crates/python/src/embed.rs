@@ -11,6 +11,7 @@ use pyo3::types::{PyDict, PyList};
 use spherify_mesh::io::PlyEncoding;
 use spherify_sparse::weights::Weights;
 use spherify_sparse::SolverKind;
+use spherify_sphere::memory_budget;
 use spherify_sphere::method_options::{OptionDefault, OptionKind, OptionValue};
 use spherify_sphere::methods::theta_phi::{PoleChoice, ThetaPhiParams};
 use spherify_sphere::point_map::from_points::from_points as core_from_points;
@@ -102,7 +103,9 @@ pub fn method_options(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
     Ok(table)
 }
 
-fn method(name: MethodName, options: &Options<'_>) -> PyResult<Method> {
+/// The core's `Method` for `name` with the options given (read by the file
+/// named after the method).
+pub(crate) fn method(name: MethodName, options: &Options<'_>) -> PyResult<Method> {
     match name {
         MethodName::Radial => crate::radial::method(options),
         MethodName::Relaxation => crate::relaxation::relaxation(options),
@@ -148,6 +151,8 @@ pub fn embed(
     let shared = Arc::clone(&mesh.mesh);
     // Detachable: Ctrl-C inside one long factorisation answers at once.
     let result = crate::progress::run_detachable(py, progress, move |report| {
+        let (n, f) = (shared.n_vertices(), shared.n_faces());
+        memory_budget::check(&memory_budget::embed_need(&method, n, f, given.is_some()))?;
         let mesh = GenusZeroMesh::new(shared).map_err(SphereError::from)?;
         // Landmarks are checked before the method runs: a bad set costs nothing.
         let landmarks =
@@ -188,6 +193,8 @@ pub fn improve(
     let shared = sphere_map.shared_mesh();
     let start = sphere_map.embedding().clone();
     let result = crate::progress::run_detachable(py, progress, move |report| {
+        let (n, f) = (shared.n_vertices(), shared.n_faces());
+        memory_budget::check(&memory_budget::improve_need(&params, n, f))?;
         let mesh = GenusZeroMesh::new(shared).map_err(SphereError::from)?;
         let landmarks =
             given.as_ref().map(|g| crate::landmarks::landmarks(&mesh, g)).transpose()?;
@@ -196,15 +203,10 @@ pub fn improve(
             let pin = crate::landmarks::pin_params_for(params.energy);
             embedding = pin_embedding(&mesh, &embedding, &landmarks, &pin, report)?;
         }
-        Ok::<_, SphereError>((mesh, embedding))
+        Ok::<_, SphereError>(embedding)
     })?;
-    let (mesh, embedding) = result.map_err(|e| sphere_error(py, e))?;
-    Ok(CoreSphereMap::new(
-        mesh.shared_mesh(),
-        sphere_map.caller_mesh(),
-        embedding,
-        sphere_map.reoriented(),
-    ))
+    let embedding = result.map_err(|e| sphere_error(py, e))?;
+    Ok(sphere_map.with_embedding(embedding))
 }
 
 /// from_points(mesh, points (n, 3) float64) -> CoreSphereMap.
@@ -222,6 +224,9 @@ pub fn from_points(
     let caller = Arc::clone(&mesh.mesh);
     let shared = Arc::clone(&mesh.mesh);
     let result = crate::pool::detach(py, || {
+        let need =
+            memory_budget::certify_need("from_points", shared.n_vertices(), shared.n_faces());
+        memory_budget::check(&need)?;
         let mesh = GenusZeroMesh::new(shared).map_err(SphereError::from)?;
         let embedding = core_from_points(&mesh, &points)?;
         Ok::<_, SphereError>((mesh, embedding))

@@ -1,8 +1,8 @@
 //! Core errors -> the Python exceptions of DESIGN.md: the one module that
 //! maps errors. The exception classes are defined in `spherify/_errors.py`
 //! (they inherit from both `SpherifyError` and the matching builtin,
-//! `ValueError`, `RuntimeError` or `OSError`, which a class made in Rust
-//! cannot) and declared here once with PyO3's `import_exception!`.
+//! `ValueError`, `RuntimeError`, `OSError` or `MemoryError`, which a class
+//! made in Rust cannot) and declared here once with PyO3's `import_exception!`.
 
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -11,6 +11,7 @@ use spherify_sparse::tutte::TutteError;
 use spherify_sparse::SparseError;
 use spherify_sphere::applications::harmonics::HarmonicsError;
 use spherify_sphere::applications::metrics::QualityError;
+use spherify_sphere::memory_budget::ResourceError;
 use spherify_sphere::point_map::PointMapError;
 use spherify_sphere::{SphereEmbedding, SphereError};
 
@@ -25,6 +26,7 @@ pub mod class {
     pyo3::import_exception!(spherify._errors, ConvergenceError);
     pyo3::import_exception!(spherify._errors, MapError);
     pyo3::import_exception!(spherify._errors, FileError);
+    pyo3::import_exception!(spherify._errors, ResourceError);
 }
 
 /// A bad argument or bad data: `MeshError(message)`.
@@ -36,6 +38,12 @@ pub fn mesh_error(message: impl Into<String>) -> PyErr {
 /// thread could be started, a call from inside a progress callable).
 pub fn spherify_error(message: impl Into<String>) -> PyErr {
     class::SpherifyError::new_err(message.into())
+}
+
+/// A call that does not fit in memory (`spherify_sphere::memory_budget`):
+/// `ResourceError(message, bytes, available)`, also a `MemoryError`.
+pub fn resource_error(err: ResourceError) -> PyErr {
+    class::ResourceError::new_err((err.to_string(), err.bytes(), err.available()))
 }
 
 /// A name the core does not know (a weight, an encoding, a method).
@@ -134,6 +142,7 @@ pub fn sphere_error(py: Python<'_>, err: SphereError) -> PyErr {
             convergence_error(py, err.to_string(), points, *iterations, None, status.name())
         }
         SphereError::Solve(s) => sparse_error(py, s),
+        SphereError::Resource(r) => resource_error(r),
         SphereError::InvalidStart { .. } | SphereError::LandmarkConflict { .. } => {
             class::MapError::new_err(err.to_string())
         }
@@ -163,6 +172,9 @@ pub fn sparse_error(py: Python<'_>, err: SparseError) -> PyErr {
             };
             let message = err.to_string();
             convergence_error(py, message, points, iterations, Some(residual), "max_iterations")
+        }
+        SparseError::OutOfMemory { what, bytes } => {
+            resource_error(ResourceError::Allocation { what, bytes })
         }
         other => mesh_error(other.to_string()),
     }

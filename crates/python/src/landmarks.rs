@@ -90,13 +90,8 @@ pub fn move_towards(
         let mesh = GenusZeroMesh::new(shared).map_err(SphereError::from)?;
         let embedding =
             move_towards_embedding(&mesh, &start, &targets, &weights, &fixed, &params, report)?;
-        Ok::<_, SphereError>((mesh, embedding))
+        Ok::<_, SphereError>(embedding)
     })?;
-    let (mesh, embedding) = result.map_err(|e| sphere_error(py, e))?;
-    Ok(CoreSphereMap::new(
-        mesh.shared_mesh(),
-        sphere_map.caller_mesh(),
-        embedding,
-        sphere_map.reoriented(),
-    ))
+    let embedding = result.map_err(|e| sphere_error(py, e))?;
+    Ok(sphere_map.with_embedding(embedding))
 }

@@ -18,9 +18,9 @@ pub fn energy(options: &Options<'_>, default: Energy) -> PyResult<Energy> {
     })
 }
 
-/// `energy` ("balanced"), `max_iter` (final sweeps; 20 for "balanced", 5 for "isometric", 10
+/// `energy` ("isometric"), `max_iter` (final sweeps; 5 for "isometric", 20 for "balanced", 10
 /// for "authalic", 50 for "stretch", 100 for "conformal"), `tol` (stop when a sweep lowers the
-/// energy by less than this fraction; 1e-4 for "balanced", 1e-3, or 1e-5 for "stretch" and
+/// energy by less than this fraction; 1e-3, 1e-4 for "balanced", or 1e-5 for "stretch" and
 /// "conformal").
 pub fn method(options: &Options<'_>) -> PyResult<Method> {
     let energy = energy(options, ProgressiveParams::default().energy)?;

@@ -7,6 +7,7 @@ use std::sync::Arc;
 
 use numpy::PyReadonlyArrayDyn;
 use pyo3::prelude::*;
+use spherify_sphere::memory_budget;
 use spherify_sphere::point_map::restore::{
     restore, status_from_name, RestoreError, StoredMap, StoredThetaPhi,
 };
@@ -88,6 +89,9 @@ pub fn restore_map(
     let caller = Arc::clone(&mesh.mesh);
     let shared = Arc::clone(&mesh.mesh);
     let restored = crate::pool::detach(py, || {
+        let need =
+            memory_budget::certify_need("restoring a map", shared.n_vertices(), shared.n_faces());
+        memory_budget::check(&need).map_err(|e| Failed::Mesh(e.into()))?;
         let mesh = GenusZeroMesh::new(shared).map_err(|e| Failed::Mesh(e.into()))?;
         let embedding = restore(&mesh, stored).map_err(Failed::Parts)?;
         Ok((mesh, embedding))

@@ -43,9 +43,16 @@ impl CoreSphereMap {
         CoreSphereMap { mesh, caller, embedding, reoriented_faces, point_map: OnceLock::new() }
     }
 
-    /// The mesh as the caller gave it, shared.
-    pub fn caller_mesh(&self) -> Arc<Mesh> {
-        Arc::clone(&self.caller)
+    /// A map of the same meshes with other points (improved, pinned or moved
+    /// from this one's): the caller's corner order and the count of turned
+    /// faces carry over; the certificate is `embedding`'s own.
+    pub fn with_embedding(&self, embedding: Embedding) -> CoreSphereMap {
+        CoreSphereMap::new(
+            Arc::clone(&self.mesh),
+            Arc::clone(&self.caller),
+            embedding,
+            self.reoriented_faces,
+        )
     }
 
     /// The oriented mesh, shared.
@@ -56,11 +63,6 @@ impl CoreSphereMap {
     /// The core's result, certificate included (read-only).
     pub fn embedding(&self) -> &Embedding {
         &self.embedding
-    }
-
-    /// Faces the core turned to orient the input.
-    pub fn reoriented(&self) -> usize {
-        self.reoriented_faces
     }
 
     /// Built with the GIL released, outside the `OnceLock`: a thread that

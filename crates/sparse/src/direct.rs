@@ -118,7 +118,10 @@ fn failed(what: &str, e: impl std::fmt::Debug) -> SparseError {
 
 /// Scratch memory for faer, or a typed error when it cannot be had.
 fn scratch(req: StackReq) -> Result<MemBuffer, SparseError> {
-    MemBuffer::try_new(req).map_err(|e| failed("allocating scratch", e))
+    MemBuffer::try_new(req).map_err(|_| SparseError::OutOfMemory {
+        what: "the direct solver's scratch",
+        bytes: req.size_bytes() as u64,
+    })
 }
 
 /// A Cholesky factor: faer's symbolic structure and the values of `L`.
@@ -294,9 +297,10 @@ fn numeric_llt<I: Index>(
         release_free_memory();
     }
     let mut values = Vec::new();
-    values
-        .try_reserve_exact(symbolic.len_val())
-        .map_err(|e| failed("allocating the Cholesky factor", e))?;
+    values.try_reserve_exact(symbolic.len_val()).map_err(|_| SparseError::OutOfMemory {
+        what: "the Cholesky factor",
+        bytes: (symbolic.len_val() as u64).saturating_mul(8),
+    })?;
     values.resize(symbolic.len_val(), 0.0);
     let par = factor_par();
     let mut mem = scratch(symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()))?;

@@ -43,10 +43,14 @@ pub enum SparseError {
     /// solution came out non-finite).
     #[error("the matrix is singular ({detail})")]
     Singular { detail: String },
-    /// The direct solver failed for a reason other than the matrix (for
-    /// instance an allocation the factorisation could not make).
+    /// The direct solver failed for a reason other than the matrix or memory.
     #[error("the direct solver failed: {detail}")]
     Factorization { detail: String },
+    /// An allocation the solver needs (the Cholesky factor's values, faer's
+    /// scratch) was refused by the system: `bytes` were asked for `what`.
+    /// The bindings raise it as `spherify.ResourceError`.
+    #[error("could not allocate {bytes} bytes for {what}: the system refused the memory")]
+    OutOfMemory { what: &'static str, bytes: u64 },
     /// An iterative solver used up its iterations. `iterations` and `residual`
     /// (the relative residual `|b - A x| / |b|`) are the worst over the
     /// right-hand sides; `last` holds the last iterate of each right-hand side,

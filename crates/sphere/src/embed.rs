@@ -239,12 +239,7 @@ pub fn improve_embedding(
     params: &ImproveParams,
     progress: &(dyn Fn(usize, usize) -> bool + Sync),
 ) -> Result<Embedding, SphereError> {
-    if !start.certificate.valid {
-        return Err(SphereError::InvalidStart {
-            flipped: start.certificate.flipped_faces.len(),
-            degree: start.certificate.covering_degree,
-        });
-    }
+    require_valid_start(start)?;
     let mut result = improve(mesh, &start.result.points, params, progress)?;
     result.message = format!("improved from {}: {}", start.method, result.message);
     let improved = Embedding::certified(mesh, MethodName::Improve, result, Details::None);
@@ -283,12 +278,7 @@ pub fn pin_embedding(
     params: &PinParams,
     progress: &(dyn Fn(usize, usize) -> bool + Sync),
 ) -> Result<Embedding, SphereError> {
-    if !start.certificate.valid {
-        return Err(SphereError::InvalidStart {
-            flipped: start.certificate.flipped_faces.len(),
-            degree: start.certificate.covering_degree,
-        });
-    }
+    require_valid_start(start)?;
     let (pinned, _) = pin_landmarks(mesh, &start.result.points, landmarks, params, progress)?;
     let mut result = start.result.clone();
     result.seconds.retain(|(stage, _)| *stage != "certify");
@@ -300,6 +290,19 @@ pub fn pin_embedding(
         other => (start.method, other.clone()),
     };
     Ok(Embedding::certified(mesh, method, result, details))
+}
+
+/// `Ok` when `start` is a certified GC-embedding: improving or pinning moves
+/// its points with flip-free steps, which keep a valid map valid but cannot
+/// make an invalid one valid.
+fn require_valid_start(start: &Embedding) -> Result<(), SphereError> {
+    if start.certificate.valid {
+        return Ok(());
+    }
+    Err(SphereError::InvalidStart {
+        flipped: start.certificate.flipped_faces.len(),
+        degree: start.certificate.covering_degree,
+    })
 }
 
 /// [`move_towards`] from `start`'s points, certified as a plain GC-embedding

@@ -4,6 +4,7 @@ use spherify_mesh::TopologyError;
 use spherify_sparse::SparseError;
 
 use crate::embedding::SphereEmbedding;
+use crate::memory_budget::ResourceError;
 
 /// Why a spherical method could not produce points at all.
 #[derive(Debug, Clone, thiserror::Error)]
@@ -50,6 +51,11 @@ pub enum SphereError {
     /// landmarks upside down), or a drag that stalled after its bounded work.
     #[error("landmarks {} cannot all be pinned to their targets: {reason}", list_ids(ids))]
     LandmarkConflict { ids: Vec<usize>, reason: String },
+    /// The call does not fit in the memory the process can have
+    /// ([`crate::memory_budget`]): refused before it started, or an
+    /// allocation of one of its large buffers failed.
+    #[error(transparent)]
+    Resource(#[from] ResourceError),
     /// A progress callback asked a long stage to stop.
     #[error("{stage} stopped by the progress callback after {done} of {total} steps")]
     Cancelled { stage: &'static str, done: usize, total: usize },

@@ -15,6 +15,8 @@
 //!   choices: the one table the bindings, the API, the batch and the CLI read.
 //! * [`embedding`]: [`SphereEmbedding`], the points and account every method returns.
 //! * [`error`]: [`SphereError`], how a method fails.
+//! * [`memory_budget`]: the memory policy: each call's estimate checked against what the
+//!   process can still get before it starts, and fallible allocation of the large buffers.
 //!
 //! [`methods`], one file or folder per family:
 //! * [`methods::radial`]: radial projection from a point, the vertex mean or the kernel (3.5, eq. 3.17-3.18).
@@ -43,7 +45,7 @@
 //!     where a vertex is re-inserted, and the conformal energy's certified start.
 //!   * [`methods::progressive::flip_free`]: vertex moves that keep every face positive (9.3.2).
 //!   * [`methods::progressive::improve`]: those moves started from any valid map (9.3.2).
-//!   * [`methods::progressive::distortion_energy`]: the balanced (default), isometric, conformal, authalic and stretch energies.
+//!   * [`methods::progressive::distortion_energy`]: the isometric (default), balanced, conformal, authalic and stretch energies.
 //!   * [`methods::progressive::authalic_newton`]: global Gauss-Newton steps towards equal areas.
 //!   * [`methods::progressive::conformal_start`]: a certified global conformal map, the conformal energy's start.
 //!   * [`methods::progressive::mobius_centring`]: the Möbius transformation that balances a map's area.
@@ -73,6 +75,7 @@ pub mod embed;
 pub mod embedding;
 pub mod error;
 pub mod genus_zero;
+pub mod memory_budget;
 pub mod method_options;
 pub mod methods;
 pub mod point_map;

@@ -8,8 +8,7 @@ import numpy as np
 
 from .._errors import MeshError
 from .._mesh import Mesh
-from .._args import integer
-from ._checks import as_positive
+from ._checks import as_positive, shape_size
 from ._guarantees import shape
 from ._tubes import (MAX_STRETCH, MIN_AROUND, ROW, cap_count, check_clearance, pick_edge,
                      ring_positions, ring_size, ring_steps, tube)
@@ -56,7 +55,7 @@ def helix_tube(n_vertices: int = 5000, turns: float = 3.0, radius: float = 1.0,
     the mesh does not twist); each end is a hemisphere of shrinking rings closed
     by a 3-6 triangle fan. Cost O(n).
     """
-    n = integer(n_vertices, "n_vertices", 1)
+    n = shape_size(n_vertices, "helix_tube")
     turns, R, r, pitch = (as_positive(k, v) for k, v in [
         ("turns", turns), ("radius", radius), ("tube_radius", tube_radius), ("pitch", pitch)])
     b = pitch / (2 * math.pi)            # rise per radian

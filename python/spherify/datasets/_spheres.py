@@ -10,7 +10,7 @@ import numpy as np
 from .._errors import MeshError
 from .._mesh import Mesh
 from .._args import integer
-from ._checks import as_positive
+from ._checks import as_positive, shape_size
 from ._geodesic import geodesic, nearest_frequency
 from ._guarantees import shape
 from ._vectors import unit
@@ -53,10 +53,11 @@ def icosphere(n_vertices: Optional[int] = None, *, subdivisions: Optional[int] =
     if n_vertices is not None and subdivisions is not None:
         raise MeshError("icosphere takes n_vertices or subdivisions, not both")
     if n_vertices is not None:
-        return Mesh(*geodesic(nearest_frequency(integer(n_vertices, "n_vertices", 1))))
+        return Mesh(*geodesic(nearest_frequency(shape_size(n_vertices, "icosphere"))))
     k = 3 if subdivisions is None else integer(subdivisions, "subdivisions", 0)
     if k > 10:
         raise MeshError(f"subdivisions must be at most 10 (10 * 4**10 + 2 vertices), got {k}")
+    shape_size(10 * 4**k + 2, "icosphere")
     return Mesh(*geodesic(2 ** k))
 
 
@@ -88,7 +89,7 @@ def ellipsoid(n_vertices: int = 2000, axes: Sequence[float] = (1.0, 0.6, 0.4)) -
     -----
     A geodesic unit sphere scaled by ``axes``. Cost O(n).
     """
-    n = integer(n_vertices, "n_vertices", 1)
+    n = shape_size(n_vertices, "ellipsoid")
     if len(axes) != 3:
         raise MeshError(f"axes must hold three semi-axis lengths, got {axes!r}")
     scale = np.array([as_positive("axes", x) for x in axes])
@@ -132,7 +133,7 @@ def bumpy_blob(n_vertices: int = 5000, bumps: int = 12, amplitude: float = 0.25,
     every triangle facing the origin, so the result is embedded and every ray
     from the origin crosses it once. Cost O(n * bumps).
     """
-    n = integer(n_vertices, "n_vertices", 1)
+    n = shape_size(n_vertices, "bumpy_blob")
     n_bumps = integer(bumps, "bumps", 0)
     height = as_positive("amplitude", amplitude, allow_zero=True)
     V, F = geodesic(nearest_frequency(n))

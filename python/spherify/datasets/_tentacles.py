@@ -11,7 +11,7 @@ from .._errors import MeshError
 from .._mesh import Mesh
 from ._arms import ArmRings, arm_separation, attach_arms, plan_arms
 from .._args import integer
-from ._checks import as_positive
+from ._checks import as_positive, shape_size
 from ._guarantees import shape
 from ._tubes import TAPER, check_clearance, ring_positions
 from ._vectors import Floats, unit
@@ -62,7 +62,7 @@ def tentacles(n_vertices: int = 20000, arms: int = 8, arm_length: float = 4.0,
     rotation-minimising frame (the plane normal); the body and joins are built
     as for :func:`urchin`. Cost O(n).
     """
-    n = integer(n_vertices, "n_vertices", 1)
+    n = shape_size(n_vertices, "tentacles")
     arms = integer(arms, "arms", 1)
     length = as_positive("arm_length", arm_length)
     r = as_positive("arm_radius", arm_radius)

@@ -11,7 +11,7 @@ from .._errors import MeshError
 from .._mesh import Mesh
 from ._arms import ROOM, ArmRings, arm_separation, attach_arms, plan_arms, spread_directions
 from .._args import integer
-from ._checks import as_positive
+from ._checks import as_positive, shape_size
 from ._guarantees import shape
 from ._tubes import TAPER, ring_positions
 from ._vectors import perpendicular
@@ -64,7 +64,7 @@ def urchin(n_vertices: int = 20000, spikes: int = 32, spike_length: float = 2.0,
     the hole's loop is zipped to the first ring of the spike's tube. Cost O(n)
     plus O(spikes**2).
     """
-    n = integer(n_vertices, "n_vertices", 1)
+    n = shape_size(n_vertices, "urchin")
     spikes = integer(spikes, "spikes", 1)
     length = as_positive("spike_length", spike_length)
     r = as_positive("spike_radius", spike_radius)

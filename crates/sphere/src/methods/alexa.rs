@@ -151,6 +151,7 @@ pub fn alexa_with_progress(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::methods::test_support::{assert_converged_and_valid, initial_points};
     use crate::certificate::validity::check_sphere;
     use crate::embedding::Status;
     use spherify_mesh::solids::{
@@ -163,18 +164,6 @@ mod tests {
         super::alexa(&GenusZeroMesh::new(mesh.clone())?, params)
     }
 
-    fn initial_points(mesh: &Mesh, initial: &Initial) -> Result<Vec<[f64; 3]>, SphereError> {
-        crate::methods::initial::initial_points(&GenusZeroMesh::new(mesh.clone())?, initial)
-    }
-
-    fn assert_valid(mesh: &Mesh, e: &SphereEmbedding) {
-        assert_eq!(e.status, Status::Converged, "{}", e.message);
-        assert!(check_sphere(mesh.faces(), &e.points).valid, "{}", e.message);
-        for p in &e.points {
-            assert!(((p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt() - 1.0).abs() < 1e-12);
-        }
-    }
-
     #[test]
     fn perturbed_octahedron_becomes_valid() {
         let (mesh, start) = perturbed_octahedron();
@@ -184,7 +173,7 @@ mod tests {
             &AlexaParams { initial: Initial::Points(start), check_every: 1, ..Default::default() },
         )
         .unwrap();
-        assert_valid(&mesh, &e);
+        assert_converged_and_valid(&mesh, &e);
         assert!(e.iterations >= 1);
     }
 
@@ -210,7 +199,7 @@ mod tests {
             let params =
                 AlexaParams { step, initial: Initial::Points(start.clone()), ..Default::default() };
             let e = alexa(&mesh, &params).unwrap();
-            assert_valid(&mesh, &e);
+            assert_converged_and_valid(&mesh, &e);
             assert!(e.iterations > 0 && e.iterations <= params.max_iter);
         }
     }
@@ -221,14 +210,14 @@ mod tests {
         let initial = Initial::Center([0.0, 0.0, 1.4]);
         assert!(!check_sphere(mesh.faces(), &initial_points(&mesh, &initial).unwrap()).valid);
         let e = alexa(&mesh, &AlexaParams { initial, ..Default::default() }).unwrap();
-        assert_valid(&mesh, &e);
+        assert_converged_and_valid(&mesh, &e);
         assert!(e.iterations > 0);
     }
 
     #[test]
     fn straight_capsule_unfolds() {
         let mesh = capsule(8, 60, 60.0);
-        assert_valid(&mesh, &alexa(&mesh, &AlexaParams::default()).unwrap());
+        assert_converged_and_valid(&mesh, &alexa(&mesh, &AlexaParams::default()).unwrap());
     }
 
     #[test]

@@ -8,5 +8,7 @@ pub mod progressive;
 pub mod radial;
 pub mod relaxation;
 pub mod relaxation_loop;
+#[cfg(test)]
+pub(crate) mod test_support;
 pub mod theta_phi;
 pub mod weight_matrix;

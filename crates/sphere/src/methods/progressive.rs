@@ -53,6 +53,7 @@ use spherify_mesh::vec3::triangle_area;
 use crate::embedding::{normalize, SphereEmbedding, Status};
 use crate::error::SphereError;
 use crate::genus_zero::GenusZeroMesh;
+use crate::memory_budget::filled;
 use crate::methods::progressive::authalic_newton::{
     authalic_newton, authalic_newton_rings, AuthalicSteps,
 };
@@ -113,7 +114,7 @@ pub struct ProgressiveParams {
 
 impl Default for ProgressiveParams {
     fn default() -> Self {
-        ProgressiveParams::for_energy(Energy::Balanced)
+        ProgressiveParams::for_energy(Energy::Isometric)
     }
 }
 
@@ -127,8 +128,9 @@ impl ProgressiveParams {
     /// people choose them for the last bit of sampling quality or angle: fifty
     /// and a hundred sweeps to 1e-5 (measured on the corpus: octopus 2.646 ->
     /// 2.599, spot 1.185 -> 1.177 in L2 stretch; spot 5.7 -> 3.8 and hand
-    /// 14.3 -> 11.8 degrees of mean angle distortion). Balanced (the
-    /// default): twenty to 1e-4, as final sweeps are what bring its stretch
+    /// 14.3 -> 11.8 degrees of mean angle distortion). Balanced (the best
+    /// quality; not the default, as its global steps take 3-12 times the
+    /// isometric energy's time at 200k vertices): twenty to 1e-4, as final sweeps are what bring its stretch
     /// to SphereParam's (measured on ten corpus meshes, five sweeps to 1e-3
     /// against these twenty: stretch worse than SphereParam's on 10 and 6,
     /// area on 8 and 5; sword 2.732 and 2.696, octopus 2.816 and 2.613).
@@ -181,7 +183,7 @@ pub fn progressive(
     }
 
     let started = Instant::now();
-    let mut rings = RingMesh::from_faces(n, mesh.faces());
+    let mut rings = RingMesh::from_faces(n, mesh.faces())?;
     // progress(0, 0) only asks whether to go on; the other calls report.
     let go_on = || progress(0, 0);
     let hierarchy = hierarchy::decimate(&mut rings, positions, &mut |removed| {
@@ -191,7 +193,7 @@ pub fn progressive(
     seconds.push(("hierarchy", started.elapsed().as_secs_f64()));
 
     let started = Instant::now();
-    let mut points = vec![[0.0; 3]; n];
+    let mut points = filled(n, [0.0; 3], "the progressive method's points")?;
     place_tetrahedron(&rings, &mut points);
     let problem = Problem {
         energy: params.energy,
@@ -487,8 +489,12 @@ pub(crate) fn area_floor(mesh: &GenusZeroMesh) -> f64 {
 }
 
 /// The neighbour lists of `mesh`, counter-clockwise seen from outside.
-pub(crate) fn rings_of(mesh: &GenusZeroMesh) -> Vec<Vec<u32>> {
-    RingMesh::from_faces(mesh.n_vertices(), mesh.faces()).rings
+///
+/// # Errors
+/// [`ResourceError::Allocation`](crate::memory_budget::ResourceError) when the
+/// system refuses their memory.
+pub(crate) fn rings_of(mesh: &GenusZeroMesh) -> Result<Vec<Vec<u32>>, SphereError> {
+    Ok(RingMesh::from_faces(mesh.n_vertices(), mesh.faces())?.rings)
 }
 
 fn insert(rings: &mut RingMesh, points: &mut [[f64; 3]], c: &Collapse, q: [f64; 3]) {

@@ -139,6 +139,7 @@ pub fn relaxation_with_progress(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::methods::test_support::{assert_converged_and_valid, initial_points};
     use crate::certificate::validity::check_sphere;
     use crate::embedding::Status;
     use crate::methods::relaxation_loop::{enclosing_cap, point_sum};
@@ -153,16 +154,8 @@ mod tests {
         super::relaxation(&GenusZeroMesh::new(mesh.clone())?, params)
     }
 
-    fn initial_points(mesh: &Mesh, initial: &Initial) -> Result<Vec<[f64; 3]>, SphereError> {
-        crate::methods::initial::initial_points(&GenusZeroMesh::new(mesh.clone())?, initial)
-    }
-
     fn assert_valid(mesh: &Mesh, e: &SphereEmbedding) {
-        assert_eq!(e.status, Status::Converged, "{}", e.message);
-        assert!(check_sphere(mesh.faces(), &e.points).valid, "{}", e.message);
-        for p in &e.points {
-            assert!(((p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt() - 1.0).abs() < 1e-12);
-        }
+        assert_converged_and_valid(mesh, e);
         assert_eq!(e.seconds.iter().map(|s| s.0).collect::<Vec<_>>(), vec!["setup", "iterate"]);
     }
 

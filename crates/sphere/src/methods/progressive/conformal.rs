@@ -64,7 +64,7 @@ pub fn from_conformal_start(
     if !(progress(0, 0) && progress(n, total)) {
         return Err(cancelled(n));
     }
-    let rings = rings_of(mesh);
+    let rings = rings_of(mesh)?;
     let problem = Problem {
         energy: params.energy,
         surface: mesh.positions(),

@@ -56,7 +56,7 @@ pub fn improve(
         });
     }
     let started = Instant::now();
-    let rings = crate::methods::progressive::rings_of(mesh);
+    let rings = crate::methods::progressive::rings_of(mesh)?;
     let problem = Problem {
         energy: params.energy,
         surface: mesh.positions(),

@@ -375,7 +375,7 @@ pub fn pin_landmarks(
         sweeps: 0,
     };
 
-    let rings = rings_of(mesh);
+    let rings = rings_of(mesh)?;
     let held = landmarks.mask(n);
     let problem = Problem {
         energy: params.energy,

@@ -118,7 +118,7 @@ pub fn move_towards(
     let started = Instant::now();
     let total = params.passes + params.energy_sweeps;
     let cancelled = |done: usize| SphereError::Cancelled { stage: "move_towards", done, total };
-    let rings = rings_of(mesh);
+    let rings = rings_of(mesh)?;
     let classes = colour_classes(&rings);
     // No drag takes a face below this fraction of the mean det at the start.
     let mean_det = mesh

@@ -6,6 +6,8 @@
 //! so the faces around `i` are `(i, r[j], r[j + 1])` with the mesh's own
 //! orientation. A removed vertex keeps an empty list.
 
+use crate::memory_budget::{filled, reserved, ResourceError};
+
 /// A half-edge collapse `u -> v`: `u` is removed and its faces become a fan
 /// around `v`. `ring` is `u`'s ring at that moment, rotated to start at `v`.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -24,10 +26,14 @@ pub struct RingMesh {
 
 impl RingMesh {
     /// Builds the rings of a closed, consistently oriented manifold mesh (what
-    /// [`crate::GenusZeroMesh`] guarantees).
-    pub fn from_faces(n_vertices: usize, faces: &[[u32; 3]]) -> RingMesh {
+    /// [`crate::GenusZeroMesh`] guarantees). Its large buffers are allocated
+    /// fallibly ([`crate::memory_budget`]).
+    ///
+    /// # Errors
+    /// [`ResourceError::Allocation`] when the system refuses their memory.
+    pub fn from_faces(n_vertices: usize, faces: &[[u32; 3]]) -> Result<RingMesh, ResourceError> {
         // For vertex a, face (a, b, c) says "c follows b" in a's ring.
-        let mut counts = vec![0u32; n_vertices + 1];
+        let mut counts = filled(n_vertices + 1, 0u32, "the progressive method's ring offsets")?;
         for f in faces {
             for &a in f {
                 counts[a as usize + 1] += 1;
@@ -36,32 +42,33 @@ impl RingMesh {
         for i in 0..n_vertices {
             counts[i + 1] += counts[i];
         }
-        let mut fill = counts.clone();
-        let mut pairs = vec![[0u32; 2]; faces.len() * 3];
+        let mut fill = filled(n_vertices + 1, 0u32, "the progressive method's ring offsets")?;
+        fill.copy_from_slice(&counts);
+        let mut pairs =
+            filled(faces.len() * 3, [0u32; 2], "the progressive method's ring corners")?;
         for &[a, b, c] in faces {
             for (x, y, z) in [(a, b, c), (b, c, a), (c, a, b)] {
                 pairs[fill[x as usize] as usize] = [y, z];
                 fill[x as usize] += 1;
             }
         }
-        let rings = (0..n_vertices)
-            .map(|i| {
-                let own = &pairs[counts[i] as usize..counts[i + 1] as usize];
-                let mut ring = Vec::with_capacity(own.len());
-                if let Some(&[first, _]) = own.first() {
-                    let mut current = first;
-                    for _ in 0..own.len() {
-                        ring.push(current);
-                        match own.iter().find(|p| p[0] == current) {
-                            Some(p) => current = p[1],
-                            None => break,
-                        }
+        let mut rings = reserved(n_vertices, "the progressive method's rings")?;
+        rings.extend((0..n_vertices).map(|i| {
+            let own = &pairs[counts[i] as usize..counts[i + 1] as usize];
+            let mut ring = Vec::with_capacity(own.len());
+            if let Some(&[first, _]) = own.first() {
+                let mut current = first;
+                for _ in 0..own.len() {
+                    ring.push(current);
+                    match own.iter().find(|p| p[0] == current) {
+                        Some(p) => current = p[1],
+                        None => break,
                     }
                 }
-                ring
-            })
-            .collect();
-        RingMesh { rings, n_alive: n_vertices }
+            }
+            ring
+        }));
+        Ok(RingMesh { rings, n_alive: n_vertices })
     }
 
     pub fn is_alive(&self, v: u32) -> bool {
@@ -195,7 +202,7 @@ mod tests {
     #[test]
     fn rings_give_back_the_faces_and_collapses_undo_exactly() {
         let mesh = icosphere(2);
-        let mut rm = RingMesh::from_faces(mesh.positions().len(), mesh.faces());
+        let mut rm = RingMesh::from_faces(mesh.positions().len(), mesh.faces()).unwrap();
         assert_eq!(sorted_faces(&rm), canonical(mesh.faces()));
         let mut done = Vec::new();
         let mut snapshots = vec![sorted_faces(&rm)];

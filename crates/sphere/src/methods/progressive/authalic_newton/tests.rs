@@ -109,7 +109,7 @@ fn a_level_of_rings_is_the_same_problem_numbered_densely() {
     let floor = area_floor(&mesh);
     let mut direct = points.clone();
     authalic_newton(mesh.faces(), mesh.positions(), floor, &mut direct, 5, &|| false).unwrap();
-    let rings = crate::methods::progressive::rings_of(&mesh);
+    let rings = crate::methods::progressive::rings_of(&mesh).unwrap();
     let mut padded_rings = vec![Vec::new()];
     padded_rings.extend(rings.iter().map(|r| r.iter().map(|&v| v + 1).collect::<Vec<u32>>()));
     let mut padded_surface = vec![[9.0; 3]];

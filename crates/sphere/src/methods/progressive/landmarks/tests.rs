@@ -123,7 +123,7 @@ fn a_crossing_that_no_map_realises_stops_with_the_landmarks_named() {
     // and the vertex itself asked to leave its ring for the far side: no
     // valid map has it there, and the drag must say so in bounded work.
     let (mesh, points) = mapped(icosphere(2));
-    let rings = rings_of(&mesh);
+    let rings = rings_of(&mesh).unwrap();
     let v = 0u32;
     let mut ids: Vec<i64> = rings[v as usize].iter().map(|&r| r as i64).collect();
     let mut targets: Vec<[f64; 3]> =
@@ -173,7 +173,7 @@ fn pinning_stops_when_the_callback_says_so() {
 #[test]
 fn holding_nothing_is_optimise_move_for_move() {
     let (mesh, points) = mapped(bumpy(2));
-    let rings = rings_of(&mesh);
+    let rings = rings_of(&mesh).unwrap();
     let problem = Problem {
         energy: Energy::Isometric,
         surface: mesh.positions(),

@@ -26,7 +26,7 @@ fn global_steps_lower_the_energy_and_keep_a_certified_map() {
                 area_floor: area_floor(&mesh),
                 represented: None,
             };
-            let rings = rings_of(&mesh);
+            let rings = rings_of(&mesh).unwrap();
             let params = LbfgsParams { max_iter: 50, tolerance: 1e-9 };
             let run = lbfgs(&problem, &rings, &mut points, &params, &|| false).unwrap();
             assert!(!run.fell_back, "{energy:?}: {run:?}");
@@ -47,7 +47,7 @@ fn the_same_bits_on_one_and_on_two_threads() {
         area_floor: area_floor(&mesh),
         represented: None,
     };
-    let rings = rings_of(&mesh);
+    let rings = rings_of(&mesh).unwrap();
     let run = |threads: usize| {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
         pool.install(|| {
@@ -70,6 +70,6 @@ fn a_stop_request_is_heard() {
         represented: None,
     };
     let params = LbfgsParams { max_iter: 50, tolerance: 0.0 };
-    let stopped = lbfgs(&problem, &rings_of(&mesh), &mut points, &params, &|| true);
+    let stopped = lbfgs(&problem, &rings_of(&mesh).unwrap(), &mut points, &params, &|| true);
     assert_eq!(stopped, Err(Stopped));
 }
