@@ -233,6 +233,32 @@ impl Reference {
     }
 }
 
+/// What every face term is built from (with G = `r.gram`): the edges
+/// q1 = p1 - p0 and q2 = p2 - p0, k det G, the Dirichlet term
+/// a = |J|_F^2 = (|q1|^2 g11 - 2 q1.q2 g01 + |q2|^2 g00) / (k det G), the
+/// face's surface area scaled by k and d = det J (the image's area,
+/// det[p0, p1, p2] / 2, over that scaled area).
+struct FaceTerms {
+    q1: [f64; 3],
+    q2: [f64; 3],
+    kdet: f64,
+    a: f64,
+    area_s: f64,
+    d: f64,
+}
+
+impl FaceTerms {
+    fn new(r: &Reference, k: f64, p0: [f64; 3], p1: [f64; 3], p2: [f64; 3]) -> FaceTerms {
+        let (q1, q2) = (sub(p1, p0), sub(p2, p0));
+        let [g00, g01, g11] = r.gram;
+        let kdet = k * (g00 * g11 - g01 * g01);
+        let a = (dot(q1, q1) * g11 - 2.0 * dot(q1, q2) * g01 + dot(q2, q2) * g00) / kdet;
+        let area_s = k * r.area;
+        let d = 0.5 * det3(p0, p1, p2) / area_s;
+        FaceTerms { q1, q2, kdet, a, area_s, d }
+    }
+}
+
 /// Energy of one face whose image corners are `p0, p1, p2` (the surface seen
 /// from the corner of `p0`), with the surface scaled by `k` in area.
 pub fn face_energy(
@@ -243,13 +269,8 @@ pub fn face_energy(
     p1: [f64; 3],
     p2: [f64; 3],
 ) -> f64 {
-    let (q1, q2) = (sub(p1, p0), sub(p2, p0));
-    let [g00, g01, g11] = r.gram;
-    let det_g = g00 * g11 - g01 * g01;
-    let a = (dot(q1, q1) * g11 - 2.0 * dot(q1, q2) * g01 + dot(q2, q2) * g00) / (k * det_g);
-    let area_s = k * r.area;
-    let d = 0.5 * det3(p0, p1, p2) / area_s;
-    area_s * energy.density(a, d).0
+    let t = FaceTerms::new(r, k, p0, p1, p2);
+    t.area_s * energy.density(t.a, t.d).0
 }
 
 /// [`face_energy`], its gradient and its 3x3 Hessian with respect to `p0`: a is
@@ -263,12 +284,8 @@ pub fn face_energy_hessian(
     p1: [f64; 3],
     p2: [f64; 3],
 ) -> (f64, [f64; 3], [[f64; 3]; 3]) {
-    let (q1, q2) = (sub(p1, p0), sub(p2, p0));
+    let FaceTerms { q1, q2, kdet, a, area_s, d } = FaceTerms::new(r, k, p0, p1, p2);
     let [g00, g01, g11] = r.gram;
-    let kdet = k * (g00 * g11 - g01 * g01);
-    let a = (dot(q1, q1) * g11 - 2.0 * dot(q1, q2) * g01 + dot(q2, q2) * g00) / kdet;
-    let area_s = k * r.area;
-    let d = 0.5 * det3(p0, p1, p2) / area_s;
     let (f, f_a, f_d) = energy.density(a, d);
     if !f.is_finite() {
         return (f64::INFINITY, [0.0; 3], [[0.0; 3]; 3]);
@@ -312,12 +329,8 @@ pub fn face_energy_gradients(
     p1: [f64; 3],
     p2: [f64; 3],
 ) -> (f64, [[f64; 3]; 3], f64) {
-    let (q1, q2) = (sub(p1, p0), sub(p2, p0));
+    let FaceTerms { q1, q2, kdet, a, area_s, d } = FaceTerms::new(r, k, p0, p1, p2);
     let [g00, g01, g11] = r.gram;
-    let kdet = k * (g00 * g11 - g01 * g01);
-    let a = (dot(q1, q1) * g11 - 2.0 * dot(q1, q2) * g01 + dot(q2, q2) * g00) / kdet;
-    let area_s = k * r.area;
-    let d = 0.5 * det3(p0, p1, p2) / area_s;
     let (f, f_a, f_d) = energy.density(a, d);
     if !f.is_finite() {
         return (f64::INFINITY, [[0.0; 3]; 3], 0.0);
