@@ -127,6 +127,9 @@ struct Evaluation {
     gradient: Vec<[f64; 3]>,
     /// Each vertex's g . p (the radial part of the gradient).
     radial: Vec<f64>,
+    /// Each face's f_a, the weight of its Dirichlet term, which the
+    /// preconditioner is built from at these same points.
+    dirichlet_weight: Vec<f64>,
 }
 
 impl Faces {
@@ -204,15 +207,14 @@ impl Faces {
     }
 
     fn evaluate(&self, energy: Energy, k: f64, points: &[[f64; 3]]) -> Evaluation {
-        let per_face: Vec<(f64, [[f64; 3]; 3])> = self
+        let per_face: Vec<(f64, [[f64; 3]; 3], f64)> = self
             .corners
             .par_iter()
             .zip(self.refs.par_iter())
             .with_min_len(1024)
             .map(|(&[a, b, c], r)| {
                 let [pa, pb, pc] = [a, b, c].map(|v| points[v as usize]);
-                let (e, g, _) = face_energy_gradients(energy, r, k, pa, pb, pc);
-                (e, g)
+                face_energy_gradients(energy, r, k, pa, pb, pc)
             })
             .collect();
         let per_chunk: Vec<f64> =
@@ -231,29 +233,26 @@ impl Faces {
                 (sub(g, scale(p, radial)), radial)
             })
             .unzip();
-        Evaluation { energy, gradient, radial }
+        let dirichlet_weight = per_face.iter().map(|x| x.2).collect();
+        Evaluation { energy, gradient, radial, dirichlet_weight }
     }
 
     /// K: the Dirichlet terms' Hessian, weighted per face by area * f_a at
-    /// `points`, plus each vertex's curvature term max(-(g . p), 0) and a
-    /// small shift; the same matrix for x, y and z.
+    /// the points `eval` was taken at, plus each vertex's curvature term
+    /// max(-(g . p), 0) and a small shift; the same matrix for x, y and z.
     fn preconditioner(
         &self,
-        energy: Energy,
         k: f64,
-        points: &[[f64; 3]],
-        radial: &[f64],
+        eval: &Evaluation,
     ) -> Result<(CsrMatrix, Factorization), SparseError> {
-        let n = points.len();
+        let (n, radial) = (eval.radial.len(), &eval.radial);
         // Per face: the off-diagonal entries of (0, 1), (0, 2), (1, 2).
         let off: Vec<[f64; 3]> = self
-            .corners
+            .refs
             .par_iter()
-            .zip(self.refs.par_iter())
+            .zip(eval.dirichlet_weight.par_iter())
             .with_min_len(1024)
-            .map(|(&[a, b, c], r)| {
-                let [pa, pb, pc] = [a, b, c].map(|v| points[v as usize]);
-                let (_, _, f_a) = face_energy_gradients(energy, r, k, pa, pb, pc);
+            .map(|(r, &f_a)| {
                 let [g00, g01, g11] = r.gram;
                 let w = 2.0 * k * r.area * f_a / (k * (g00 * g11 - g01 * g01));
                 [w * (g01 - g11), w * (g01 - g00), -w * g01]
@@ -426,13 +425,13 @@ pub fn lbfgs(
     }
     let start_points = points.to_vec();
     let moving: Vec<bool> = rings.iter().map(|r| !r.is_empty()).collect();
-    let factorise = |points: &[[f64; 3]], radial: &[f64], run: &mut LbfgsRun| {
+    let factorise = |eval: &Evaluation, run: &mut LbfgsRun| {
         let started = std::time::Instant::now();
-        let pre = faces.preconditioner(energy, k, points, radial).ok();
+        let pre = faces.preconditioner(k, eval).ok();
         run.factor_seconds += started.elapsed().as_secs_f64();
         pre
     };
-    let Some(mut pre) = factorise(points, &eval.radial, &mut run) else {
+    let Some(mut pre) = factorise(&eval, &mut run) else {
         return Ok(run);
     };
     // (s, y, 1 / s.y), oldest first.
@@ -445,7 +444,7 @@ pub fn lbfgs(
         }
         if since_factor == REFACTOR_EVERY {
             since_factor = 0;
-            match factorise(points, &eval.radial, &mut run) {
+            match factorise(&eval, &mut run) {
                 Some(p) => pre = p,
                 None => break,
             }
