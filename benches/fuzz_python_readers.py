@@ -7,13 +7,14 @@ reuse as a rerun does) and geometry images (``sp.load_geometry_image``).
 OFF, PLY and STL readers.
 
 Pickles are loaded by an unpickler that resolves only the globals the seed
-pickle names (``spherify._persist.rebuild`` and numpy's array rebuilders):
-an error of the pickle machine itself (a damaged opcode stream) is the
-pickle format's, not spherify's, and is not counted; an exception that
-leaves ``rebuild`` other than a ``SpherifyError`` is a finding.
+pickle names (``spherify._persist.unpickle_map``: a map pickles as the bytes
+of its ``.spheremap.npz``): an error of the pickle machine itself (a damaged
+opcode stream) is the pickle format's, not spherify's, and is not counted;
+an exception that leaves ``unpickle_map`` other than a ``SpherifyError`` is
+a finding.
 
 Each input is a valid file written by spherify, mutated a few times (bytes
-set, cut, inserted, swapped; a file cut short; a 32-bit field set to an
+set, cut, inserted, swapped, a slice repeated; a file cut short; a 32-bit field set to an
 extreme; the first four bytes set to another format's magic; the shape in an
 ``.npy`` header changed). A finding is a read that raises anything other
 than a ``SpherifyError``, leaves a file open (a ``ResourceWarning``), or
@@ -88,23 +89,32 @@ def globals_of(data: bytes) -> Set[Tuple[str, str]]:
 REBUILD_START: Dict[str, Optional[float]] = {"mb": None, "at": None}
 
 
-def checked_rebuild(arrays: Any, source: str) -> Any:
-    REBUILD_START["mb"] = peak_memory_mb(reset_peak_memory())
-    REBUILD_START["at"] = time.perf_counter()
-    try:
-        return _persist.rebuild(arrays, source)
-    except sp.SpherifyError:
-        raise
-    except Exception as err:
-        raise RebuildError(f"{type(err).__name__}: {err}") from err
+def checked(rebuild: Callable[[Any, str], Any]) -> Callable[[Any, str], Any]:
+    """``rebuild`` (``_persist.unpickle_map``, or ``_persist.rebuild`` of
+    pickles written before maps pickled as archive bytes), its start noted
+    and anything but a SpherifyError made a finding."""
+    def run(record: Any, source: str) -> Any:
+        REBUILD_START["mb"] = peak_memory_mb(reset_peak_memory())
+        REBUILD_START["at"] = time.perf_counter()
+        try:
+            return rebuild(record, source)
+        except sp.SpherifyError:
+            raise
+        except Exception as err:
+            raise RebuildError(f"{type(err).__name__}: {err}") from err
+    return run
+
+
+SPHERIFY_REBUILDERS = {("spherify._persist", "unpickle_map"): checked(_persist.unpickle_map),
+                       ("spherify._persist", "rebuild"): checked(_persist.rebuild)}
 
 
 def pickle_reader(allowed: Set[Tuple[str, str]]) -> Callable[[Path], object]:
     """Unpickles a file with only ``allowed`` globals, rebuild wrapped."""
     class Restricted(pickle.Unpickler):
         def find_class(self, module: str, name: str) -> Any:
-            if (module, name) == ("spherify._persist", "rebuild"):
-                return checked_rebuild
+            if (module, name) in SPHERIFY_REBUILDERS:
+                return SPHERIFY_REBUILDERS[(module, name)]
             if (module, name) not in allowed:
                 raise pickle.UnpicklingError(f"global {module}.{name} is not allowed")
             return super().find_class(module, name)
@@ -175,17 +185,21 @@ def seed_files(folder: Path) -> Dict[str, Tuple[bytes, Callable[[Path], object]]
     seeds = {name: ((folder / name).read_bytes(), read) for name, read in files.items()}
     for name, m in (("tp.pickle", tp), ("pm.pickle", pm)):
         # The default protocol (4), as multiprocessing and Dask send maps.
-        # A mutated pickle can still free a bytearray numpy views in place
-        # (the unpickler takes protocol-5 opcodes whatever the header says;
-        # CPython prints "SystemError: deallocated bytearray object has
-        # exported buffers") or give numpy a damaged dtype, and numpy then
-        # crashed the process about once in 100,000-220,000 pickle inputs.
-        # That is pickle's and numpy's (a pickle is code, never for
-        # untrusted data), not spherify's: docs/reliability.md.
+        # When maps pickled their record's arrays as numpy objects, a mutated
+        # pickle could free a bytearray numpy viewed in place or give numpy a
+        # damaged dtype, and numpy crashed the process about once in
+        # 100,000-220,000 inputs; a map now pickles as bytes, which the pickle
+        # machine builds without numpy (docs/reliability.md).
         data = pickle.dumps(m, protocol=pickle.DEFAULT_PROTOCOL)
         seeds[name] = (data, pickle_reader(globals_of(data)))
     journal, tasks = seed_batch(folder)
     seeds["journal.jsonl"] = (journal, journal_reader(folder, tasks))
+    # A list of inputs for `spherify batch` (paths relative to its folder, a
+    # comment, a blank line), read as the batch reads one. Not expanded: a
+    # mutated line naming "/" would have the batch search the whole disk for
+    # meshes, which is what such a list asks for, not a reader's fault.
+    listed = b"# two meshes\nbatch-in/a.ply\n\nbatch-in/broken.obj\n"
+    seeds["inputs.txt"] = (listed, _files.file_errors(_batch._read_list))
     return seeds
 
 
@@ -215,9 +229,16 @@ def mutate(data: bytes, rng: random.Random) -> bytes:
             if fields:
                 field = rng.choice(fields)
                 b[field.start(1):field.end(1)] = rng.choice(SHAPES)
-        else:
+        elif op < 0.97:
             i, j = rng.randrange(len(b)), rng.randrange(len(b))
             b[i], b[j] = b[j], b[i]
+        else:
+            # A slice repeated up to 600 times: lines, names and fields far
+            # longer than the seeds' (a list's line of 5,000 bytes gave a raw
+            # OSError, ENAMETOOLONG).
+            at = rng.randrange(len(b))
+            piece = b[at:at + rng.randint(1, 32)]
+            b[at:at] = piece * rng.randint(2, 600)
     return bytes(b)
 
 

@@ -144,6 +144,18 @@ def test_a_list_of_inputs_that_names_itself_is_a_format_error(tmp_path: Path,
     assert sp.batch(first, tmp_path / "out").counts["meshes"] == 1
 
 
+def test_a_list_line_too_long_for_a_path_is_a_format_error_naming_the_line(tmp_path: Path) -> None:
+    # Before: a raw OSError (ENAMETOOLONG) from looking the path up, which
+    # named neither the list nor the line (found by fuzzing the list reader).
+    inputs(tmp_path / "in", 1)
+    listed = tmp_path / "inputs.txt"
+    listed.write_text("in/mesh0.ply\n# a comment\n" + "x" * 5000 + ".ply\n")
+    with pytest.raises(sp.FormatError, match="line 3: the listed path is too long") as info:
+        sp.batch(listed, tmp_path / "out")
+    assert info.value.path == str(listed) and info.value.line == 3
+    assert cli.main(["batch", str(listed), "-o", str(tmp_path / "out")]) == 2
+
+
 @pytest.mark.skipif(sys.platform == "darwin", reason="macOS file names are UTF-8")
 def test_a_mesh_whose_file_name_is_not_utf8_is_mapped_and_summarised(tmp_path: Path) -> None:
     # Found while fuzzing the journal: the summary's strict UTF-8 raised

@@ -13,7 +13,7 @@ import tracemalloc
 import zipfile
 import zlib
 from pathlib import Path
-from typing import Any, Callable, Dict, List, Tuple
+from typing import Any, Callable, Dict, List, Set, Tuple
 
 import numpy as np
 import pytest
@@ -245,25 +245,67 @@ def test_a_damaged_map_file_or_pickle_is_a_format_error_naming_it(tmp_path: Path
         _persist.rebuild(arrays, "pickled SphereMap")
 
 
-class DamagedInTransit:
-    """Pickles as a SphereMap does (``_persist.rebuild`` of its record),
-    with a record damaged on the way."""
+def archive_of(arrays: Dict[str, Any]) -> bytes:
+    buffer = io.BytesIO()
+    np.savez(buffer, **arrays)
+    return buffer.getvalue()
 
-    def __init__(self, record: Dict[str, Any]) -> None:
-        self.record = record
+
+class DamagedInTransit:
+    """Pickles as a SphereMap does (``_persist.unpickle_map`` of the bytes of
+    its ``.spheremap.npz``), with a record damaged on the way; ``old`` as
+    spherify did before (``_persist.rebuild`` of the record's arrays), which
+    a pickle written then still goes through."""
+
+    def __init__(self, record: Dict[str, Any], old: bool = False) -> None:
+        self.record, self.old = record, old
 
     def __reduce__(self) -> Tuple[Any, Tuple[Any, ...]]:
-        return (_persist.rebuild, (self.record, "pickled SphereMap"))
+        if self.old:
+            return (_persist.rebuild, (self.record, "pickled SphereMap"))
+        return (_persist.unpickle_map, (archive_of(self.record), "pickled SphereMap"))
 
 
+@pytest.mark.parametrize("old", [False, True], ids=["archive", "record of before"])
 @pytest.mark.parametrize("case", ["iterations negative", "meta nested 100,000 deep",
                                   "version complex"])
-def test_an_unpickled_damaged_record_is_a_format_error(case: str) -> None:
+def test_an_unpickled_damaged_record_is_a_format_error(case: str, old: bool) -> None:
     m = small_map()
     assert pickle.loads(pickle.dumps(m)).valid
-    blob = pickle.dumps(DamagedInTransit(edited_record(m, EDITS[case])))
+    blob = pickle.dumps(DamagedInTransit(edited_record(m, EDITS[case]), old))
     with pytest.raises(sp.FormatError, match="pickled SphereMap"):
         pickle.loads(blob)
+
+
+def globals_of(blob: bytes) -> Set[Tuple[str, str]]:
+    found: Set[Tuple[str, str]] = set()
+
+    class Recording(pickle.Unpickler):
+        def find_class(self, module: str, name: str) -> Any:
+            found.add((module, name))
+            return super().find_class(module, name)
+    Recording(io.BytesIO(blob)).load()
+    return found
+
+
+def test_a_pickled_map_carries_its_file_bytes_and_no_numpy_object() -> None:
+    # Before, the record's arrays were pickled as numpy objects, and a mutated
+    # pickle could make numpy crash the process (about once in 100,000 fuzzed
+    # pickles) before spherify saw the record. Now the pickle machine makes one
+    # bytes object, read as load_map reads a file.
+    m = small_map()
+    blob = pickle.dumps(m)
+    assert globals_of(blob) == {("spherify._persist", "unpickle_map")}
+    again = pickle.loads(blob)
+    assert again.valid and np.array_equal(again.points, m.points)
+    archive = _persist.map_archive(m)
+    assert archive in blob
+    for damaged in (archive[: len(archive) // 2], archive[:-30] + bytes(30), b"PK\x03\x04",
+                    archive.replace(b"points", b"pointz")):
+        with pytest.raises(sp.FormatError, match="pickled SphereMap"):
+            _persist.unpickle_map(damaged, "pickled SphereMap")
+    with pytest.raises(sp.FormatError, match="carries bytes, not a str"):
+        _persist.unpickle_map("PK", "pickled SphereMap")
 
 
 def test_an_npy_header_with_an_unbalanced_bracket_is_a_format_error(tmp_path: Path) -> None:

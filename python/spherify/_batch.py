@@ -145,7 +145,17 @@ def _read_list(path: Path) -> List[Path]:
         if not entry or entry.startswith("#"):
             continue
         item = path.parent / entry
-        if not item.exists():
+        try:
+            exists = item.exists()
+        except OSError as err:
+            if err.errno != errno.ENAMETOOLONG:
+                raise  # (a FileError through sp.batch: permission, I/O)
+            # Raised, not "does not exist": a damaged list's line of
+            # thousands of bytes (found by the fuzzer, issue 26).
+            raise FormatError(f"{path} line {number}: the listed path is too long for the file "
+                              f"system ({len(entry):,} characters): {entry[:80]!r}...",
+                              str(path), number) from None
+        if not exists:
             raise MeshError(f"batch input {item}, listed in {path} line {number}, does not exist "
                             "(a relative path is read from the list's folder)")
         listed.append(item)

@@ -97,7 +97,9 @@ def check_npz(handle: IO[bytes], source: str) -> Shapes:
     def fail(why: str) -> FormatError:
         return FormatError(f"{source}: {why}", source)
 
-    archive_bytes = os.fstat(handle.fileno()).st_size
+    # The archive's size: of the open file, or of bytes in memory (a pickled
+    # map, _persist.unpickle_map), by seeking to the end.
+    archive_bytes = handle.seek(0, os.SEEK_END)
     handle.seek(0)
     with zipfile.ZipFile(handle) as archive:
         for info in archive.infolist():

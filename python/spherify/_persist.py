@@ -17,14 +17,24 @@ holds, or a FormatError when its parts do not fit together.
 The ``.npz`` is plain arrays (loaded with ``allow_pickle=False``): ``meta``
 is one JSON string; arrays inside the options and details are stored beside
 it as ``array_<k>`` and referenced from the JSON.
+
+A pickled map is the bytes of that same ``.npz`` (:func:`map_archive`), and
+unpickling reads them with :func:`load_map`'s reader (:func:`unpickle_map`):
+the pickle machine makes one ``bytes`` object and no numpy array, so a
+damaged pickle meets the same checks as a damaged file (issue 26). Before,
+the record's arrays went into the pickle as numpy objects, and a mutated
+pickle could hand numpy a freed buffer or a broken dtype and crash the
+process before spherify saw the record (about once in 100,000 fuzzed pickles).
 """
 
 from __future__ import annotations
 
+import io
 import json
 import os
+import zipfile
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Callable, Dict, List, Optional, Tuple, Union
+from typing import IO, TYPE_CHECKING, Any, Callable, Dict, List, Optional, Tuple, Union
 
 import numpy as np
 
@@ -324,21 +334,51 @@ def load_map(path: PathLike) -> "SphereMap":
     require_regular_file(file)
     if not is_zip_archive(file):  # (FileNotFoundError, PermissionError, ... from open)
         raise FormatError(f"{file}: not a sphere map (.spheremap.npz is a zip archive)", str(file))
+    # (An open file, not the path: see _formats.read_npz.)
+    with open(file, "rb") as handle:
+        return _read_archive(handle, str(file))
+
+
+def map_archive(m: "SphereMap") -> bytes:
+    """``m``'s record as the bytes of a ``.spheremap.npz`` (what a pickled
+    map carries: see the module docstring). Cost: O(n + m), one copy."""
+    arrays: Dict[str, Any] = record(m)
+    buffer = io.BytesIO()
+    np.savez(buffer, **arrays)
+    return buffer.getvalue()
+
+
+def unpickle_map(archive: Any, source: str) -> "SphereMap":
+    """The map a pickle carries as :func:`map_archive`'s bytes, read and
+    certified as :func:`load_map` reads a file; whatever the bytes hold, the
+    error is a :class:`FormatError` naming ``source``."""
+    if not isinstance(archive, bytes):
+        raise FormatError(f"{source}: a pickled map carries bytes, not a "
+                          f"{type(archive).__name__}", source)
+    handle = io.BytesIO(archive)
+    # Both ends, as is_zip_archive reads a file: np.load goes by the first
+    # bytes, zipfile by the end record.
+    if archive[:4] not in (b"PK\x03\x04", b"PK\x05\x06") or not zipfile.is_zipfile(handle):
+        raise FormatError(f"{source}: not a sphere map archive", source)
+    handle.seek(0)
+    return _read_archive(handle, source)
+
+
+def _read_archive(handle: IO[bytes], source: str) -> "SphereMap":
+    """The map in the open ``.npz`` ``handle``: declared sizes checked before
+    anything is inflated, then :func:`rebuild`."""
     try:
-        # (An open file, not the path: see _formats.read_npz.)
         # (The declared sizes are checked before numpy allocates them.)
-        with open(file, "rb") as handle:
-            shapes = check_npz(handle, str(file))
-            vertices, points = shapes.get("vertices", ()), shapes.get("points", ())
-            if vertices[:1] and points[:1] and vertices[0] != points[0]:
-                # Refused before either is inflated (a map of 60 vertices
-                # whose points member declared 50M rows of deflated zeros).
-                raise FormatError(f"{file}: {points[0]:,} points stored for {vertices[0]:,} "
-                                  "vertices (declared; a map has one point per vertex)",
-                                  str(file))
-            with np.load(handle, allow_pickle=False) as arrays:
-                return rebuild(arrays, str(file))
+        shapes = check_npz(handle, source)
+        vertices, points = shapes.get("vertices", ()), shapes.get("points", ())
+        if vertices[:1] and points[:1] and vertices[0] != points[0]:
+            # Refused before either is inflated (a map of 60 vertices
+            # whose points member declared 50M rows of deflated zeros).
+            raise FormatError(f"{source}: {points[0]:,} points stored for {vertices[0]:,} "
+                              "vertices (declared; a map has one point per vertex)", source)
+        with np.load(handle, allow_pickle=False) as arrays:
+            return rebuild(arrays, source)
     except Exception as err:
         if isinstance(err, FormatError) or not damaged_archive(err):
             raise
-        raise FormatError(f"{file}: unreadable sphere map ({err})", str(file)) from None
+        raise FormatError(f"{source}: unreadable sphere map ({err})", source) from None

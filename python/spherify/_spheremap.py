@@ -124,9 +124,10 @@ class SphereMap:
         return m
 
     def __reduce__(self) -> Tuple[Any, Tuple[Any, ...]]:
-        # Pickled as its record; unpickling certifies it again in the core.
+        # Pickled as the bytes of its .spheremap.npz; unpickling reads them
+        # as load_map reads a file and certifies the map again in the core.
         from . import _persist
-        return (_persist.rebuild, (_persist.record(self), "pickled SphereMap"))
+        return (_persist.unpickle_map, (_persist.map_archive(self), "pickled SphereMap"))
 
     def save(self, path: Union[str, "os.PathLike[str]"]) -> None:
         """Write the map to ``path`` (by convention ``*.spheremap.npz``):
