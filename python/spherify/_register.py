@@ -102,11 +102,6 @@ def _superimposed(a: np.ndarray, xyz: np.ndarray, b: np.ndarray
     return spatial, {"rms": float(np.sqrt(np.mean(distance ** 2))), "max": float(distance.max())}
 
 
-def _residual_rms(map_a: SphereMap, m_b: SphereMap) -> float:
-    _, _, xyz = m_b.to_surface(map_a.points)
-    return _superimposed(map_a.mesh.vertices, xyz, m_b.mesh.vertices)[1]["rms"]
-
-
 def _check_maps(m_a: Any, m_b: Any) -> None:
     for name, m in (("m_a", m_a), ("m_b", m_b)):
         if not isinstance(m, SphereMap):
@@ -344,7 +339,7 @@ def register(m_a: SphereMap, m_b: SphereMap, *, landmarks: Any = None,
     details.update(start=start, rotation_steps=steps)
     map_a = _moved(m_a, m_a.points @ rotation.T)
     seconds["rotation"] = time.perf_counter() - started
-    total = 2 + (sum(s for _, _, s in _warp.SCHEDULE) if transform == "warp" else 0)
+    total = 2 + (_warp.STEPS if transform == "warp" else 0)
     if report:
         report(1, total)
     moebius: Optional[Dict[str, np.ndarray]] = None
@@ -383,19 +378,11 @@ def register(m_a: SphereMap, m_b: SphereMap, *, landmarks: Any = None,
                 report(2 + done, total)
             return False
 
-        warped, run = _warp.warp(map_a, m_b, fixed=fixed, should_stop=heard)
-        details["warp_steps"] = run["steps"]
+        map_a, run = _warp.warp(map_a, m_b, fixed=fixed,
+                                fixed_on_b=None if fixed is None else pairs[:, 1],
+                                should_stop=heard)
+        details["warp_icp_distance"] = run["icp"]
         details["warp_moved"] = run["moved"]
-        # Without landmarks, kept only where it superimposes the shapes better
-        # than its start (on an octopus of 451 vertices, whose arms are thin
-        # on the sphere, it did not: 7.6% -> 7.8% residual, and its error
-        # grew). With landmarks the warp must bend the shape to meet them, so
-        # the residual may grow while the correspondence improves (a blob
-        # with 8 landmarks: 1.22% -> 0.93% of the diagonal, residual up).
-        details["warp_kept"] = bool(fixed is not None
-                                    or _residual_rms(warped, m_b) < _residual_rms(map_a, m_b))
-        if details["warp_kept"]:
-            map_a = warped
         seconds["warp"] = time.perf_counter() - started
     if report:
         report(total, total)
