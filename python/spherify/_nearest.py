@@ -21,7 +21,7 @@ test-only extra). Two steps:
 
 from __future__ import annotations
 
-from typing import List, Tuple
+from typing import List, Optional, Tuple
 
 import numpy as np
 
@@ -32,6 +32,8 @@ __all__ = ["NearestOnSurface", "closest_on_triangles"]
 COARSER = 3.0
 # Queries handled at once (memory: about 27 * cell occupancy candidates each).
 CHUNK = 20000
+# The largest grid given a table of cells (8 bytes a cell).
+TABLE_CELLS = 1 << 22
 
 
 def closest_on_triangles(p: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.ndarray
@@ -91,6 +93,11 @@ class _Grid:
         keys = self._keys(cells)
         self.order = np.argsort(keys, kind="stable")
         self.keys = keys[self.order]
+        # Where the grid is small enough, a table from every cell's key to its
+        # first vertex replaces the binary searches (half the query time).
+        self.table: Optional[np.ndarray] = None
+        if self.span ** 3 <= TABLE_CELLS:
+            self.table = np.searchsorted(self.keys, np.arange(self.span ** 3 + 1))
 
     def _keys(self, cells: np.ndarray) -> np.ndarray:
         c = cells + 1
@@ -109,8 +116,11 @@ class _Grid:
             neighbour = cells[rows] + offset
             ok = ((neighbour >= -1) & (neighbour <= self.span - 2)).all(axis=1)
             keys = self._keys(neighbour[ok])
-            lo = np.searchsorted(self.keys, keys, "left")
-            hi = np.searchsorted(self.keys, keys, "right")
+            if self.table is not None:
+                lo, hi = self.table[keys], self.table[keys + 1]
+            else:
+                lo = np.searchsorted(self.keys, keys, "left")
+                hi = np.searchsorted(self.keys, keys, "right")
             counts = hi - lo
             if not counts.any():
                 continue
@@ -171,15 +181,11 @@ class NearestOnSurface:
                 if not len(rows):
                     continue
                 d = np.linalg.norm(queries[part][rows] - self.vertices[ids], axis=1)
-                # The smallest distance per query row: sort by (row, distance).
-                order = np.lexsort((d, rows))
-                rows, ids, d = rows[order], ids[order], d[order]
-                first = np.ones(len(rows), dtype=bool)
-                first[1:] = rows[1:] != rows[:-1]
-                found = part[rows[first]]
-                better = d[first] < distance[found]
-                distance[found[better]] = d[first][better]
-                best[found[better]] = ids[first][better]
+                found, vertex, d_min = _smallest(rows, d, ids)
+                found = part[found]
+                better = d_min < distance[found]
+                distance[found[better]] = d_min[better]
+                best[found[better]] = vertex[better]
             # Settled: a vertex within this grid's step was found, so no vertex
             # outside the 27 cells can be nearer.
             todo = todo[~(distance[todo] <= grid.h)]
@@ -200,8 +206,20 @@ class NearestOnSurface:
         bary, points = closest_on_triangles(queries[rows], v[corners[:, 0]], v[corners[:, 1]],
                                             v[corners[:, 2]])
         d = np.linalg.norm(points - queries[rows], axis=1)
-        order = np.lexsort((d, rows))
-        first = np.ones(len(order), dtype=bool)
-        first[1:] = rows[order][1:] != rows[order][:-1]
-        pick = order[first]
+        _, pick, _ = _smallest(rows, d, np.arange(len(rows)))
         return faces[pick], bary[pick], points[pick]
+
+
+def _smallest(rows: np.ndarray, d: np.ndarray, items: np.ndarray
+              ) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """For each distinct row: the row, the item of its smallest ``d`` and
+    that distance (a scatter-min, O(k), instead of sorting the candidates)."""
+    top = int(rows.max()) + 1 if len(rows) else 0
+    smallest = np.full(top, np.inf)
+    np.minimum.at(smallest, rows, d)
+    hit = np.flatnonzero(d == smallest[rows])
+    # Ties: the last hit of a row wins, any of them is nearest.
+    item = np.full(top, -1, dtype=np.int64)
+    item[rows[hit]] = items[hit]
+    found = np.flatnonzero(item >= 0)
+    return found, item[found], smallest[found]

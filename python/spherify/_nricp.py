@@ -93,12 +93,12 @@ class Deformation:
 
 
 def fit(a: np.ndarray, y: np.ndarray, v: np.ndarray, controls: np.ndarray, sigma: float,
-        stiffness: float) -> Deformation:
+        stiffness: float, phi: Optional[np.ndarray] = None) -> Deformation:
     """The deformation minimising the module doc's energy for points ``a``,
-    targets ``y`` and weights ``v`` (lambda = stiffness times the weights' sum)."""
+    targets ``y`` and weights ``v`` (lambda = stiffness times the weights'
+    sum); ``phi`` is the kernel between ``a`` and the controls if known."""
     model = Deformation(np.eye(3), np.zeros(3), controls, np.zeros((len(controls), 3)), sigma)
-    phi = model.kernel(a)
-    design = np.hstack([a, np.ones((len(a), 1)), phi])
+    design = _design(a, model.kernel(a) if phi is None else phi)
     weighted = design * v[:, None]
     normal = design.T @ weighted
     rhs = weighted.T @ y
@@ -113,6 +113,11 @@ def fit(a: np.ndarray, y: np.ndarray, v: np.ndarray, controls: np.ndarray, sigma
     normal[4:, 4:] += 1e-10 * total * np.eye(k)
     theta = np.linalg.solve(normal, rhs)
     return Deformation(theta[:3].T.copy(), theta[3].copy(), controls, theta[4:].copy(), sigma)
+
+
+def _design(a: np.ndarray, phi: np.ndarray) -> np.ndarray:
+    out: np.ndarray = np.hstack([a, np.ones((len(a), 1)), phi])
+    return out
 
 
 def _outward(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
@@ -164,6 +169,7 @@ def nonrigid_icp(a: np.ndarray, a_normals: np.ndarray, area: np.ndarray,
     """
     from .datasets import farthest_points
     controls = a[farthest_points(a, min(CONTROLS, len(a)))]
+    n = len(a)
     v0 = area / area.mean()
     ids = np.zeros(0, dtype=np.int64)
     targets_l = np.zeros((0, 3))
@@ -175,16 +181,22 @@ def nonrigid_icp(a: np.ndarray, a_normals: np.ndarray, area: np.ndarray,
     done = 0
     record: Dict[str, Any] = {"kept": [], "distance": []}
     model: Optional[Deformation] = None
+    if len(ids):
+        a = np.vstack([a, a[ids]])
     for sigma, stiffness, steps in schedule:
+        # A's points do not move between fits, so their kernel is computed
+        # once a width.
+        phi = Deformation(np.eye(3), np.zeros(3), controls, np.zeros((0, 3)), sigma).kernel(a)
+        design = _design(a, phi)
         for _ in range(steps):
             v = v0 * use
-            points, y, weights = a, targets, v
+            y, weights = targets, v
             if len(ids):
-                points = np.vstack([a, a[ids]])
                 y = np.vstack([targets, targets_l])
                 weights = np.concatenate([v, np.full(len(ids), landmark_weight)])
-            model = fit(points, y, weights, controls, sigma, stiffness)
-            moved = model(a)
+            model = fit(a, y, weights, controls, sigma, stiffness, phi)
+            theta = np.vstack([model.linear.T, model.shift, model.weights])
+            moved = (design @ theta)[:n]
             faces, _, on_b = nearest(moved)
             distance = np.linalg.norm(on_b - moved, axis=1)
             agree = (model.turn_normals(a_normals) * b_face_normals[faces]).sum(1)

@@ -15,7 +15,8 @@ warp finds better ones in space and then moves A's map to them:
 3. Every vertex of A gets the closest point of B's surface to ``T(a_i)``
    (:class:`spherify._nearest.NearestOnSurface`), and that point's place on
    the sphere in B's map (:meth:`SphereMap.to_sphere`) is its target.
-4. A's map moves towards the targets by rounds of flip-free moves
+4. A's map moves towards the targets by rounds of flip-free moves, each
+   round aimed a little further along the way
    (:func:`spherify._landmarks.move_towards`: each vertex goes as far along
    its great circle as every face around it stays positive under the exact
    test), landmarks held. So A's map is certified after every round, and
@@ -25,7 +26,7 @@ warp finds better ones in space and then moves A's map to them:
 
 from __future__ import annotations
 
-from typing import Any, Callable, Dict, Optional, Tuple
+from typing import Any, Callable, Dict, Optional, Sequence, Tuple
 
 import numpy as np
 
@@ -34,14 +35,14 @@ from ._align import kabsch
 from ._nearest import NearestOnSurface
 from ._spheremap import SphereMap
 
-__all__ = ["ROUNDS", "SAMPLE", "STEPS", "warp"]
+__all__ = ["ROUNDS", "SAMPLE", "STEPS", "sphere_targets", "warp"]
 
 # Vertices of A the deformation is fitted on (all of a smaller mesh).
 SAMPLE = 3000
-# Rounds of flip-free moves towards the targets, at most; they stop earlier
-# when a round moves the vertices less than STALL of the first round's move.
-ROUNDS = 12
-STALL = 0.02
+# Rounds of flip-free moves: HOMOTOPY rounds aimed ever closer to the
+# targets, then the rest aimed at them.
+ROUNDS = 10
+HOMOTOPY = 8
 # A landmark pair weighs this many mean vertices in the fit.
 LANDMARK_WEIGHT = 50.0
 # The steps reported to a progress callback: one per ICP iteration and one per round.
@@ -71,19 +72,14 @@ def _angles(p: np.ndarray, q: np.ndarray) -> np.ndarray:
     return out
 
 
-def warp(map_a: SphereMap, m_b: SphereMap, *, fixed: Optional[np.ndarray] = None,
-         fixed_on_b: Optional[np.ndarray] = None,
-         should_stop: Callable[[int, int], bool] = lambda done, total: False
-         ) -> Tuple[SphereMap, Dict[str, Any]]:
-    """Warp ``map_a`` (A's certified map, already in B's frame) onto B's map.
-
-    ``fixed`` are A's vertices that do not move (landmarks already at their
-    targets) and ``fixed_on_b`` B's vertices they pair with. ``should_stop(done,
-    total)`` is asked after every ICP iteration and every round of moves.
-    Returns the warped, certified map and a record of the run (``icp``: the
-    mean distance from the deformed sample to B at each iteration,
-    ``moved``: the mean angle still to go after each round of moves).
-    """
+def sphere_targets(map_a: SphereMap, m_b: SphereMap, *, fixed: Optional[np.ndarray] = None,
+                   fixed_on_b: Optional[np.ndarray] = None,
+                   schedule: Sequence[Tuple[float, float, int]] = _nricp.SCHEDULE,
+                   should_stop: Callable[[int, int], bool] = lambda done, total: False
+                   ) -> Tuple[np.ndarray, Dict[str, Any]]:
+    """Steps 1-3 of the module doc: where on the sphere each vertex of A
+    should go, (n_a, 3) unit vectors in B's map (the ``fixed`` vertices keep
+    their places), and the ICP's record."""
     a_mesh, b_mesh = map_a.mesh, m_b.mesh
     a_centre, a_scale = _frame(a_mesh.vertices)
     b_centre, b_scale = _frame(b_mesh.vertices)
@@ -104,6 +100,32 @@ def warp(map_a: SphereMap, m_b: SphereMap, *, fixed: Optional[np.ndarray] = None
     if held:
         assert fixed is not None and fixed_on_b is not None
         landmarks = (np.searchsorted(sample, fixed), b_all[fixed_on_b])
+    normals = _nricp.vertex_normals(a_all, a_mesh.faces)
+    model, icp = _nricp.nonrigid_icp(
+        a_all[sample], normals[sample], _vertex_areas(a_mesh.vertices, a_mesh.faces)[sample],
+        first, nearest, _nricp.face_normals(b_all, b_mesh.faces), landmarks=landmarks,
+        landmark_weight=LANDMARK_WEIGHT, schedule=schedule, should_stop=should_stop)
+    faces, bary, _ = nearest(model(a_all))
+    targets = m_b.to_sphere(faces, bary)
+    if held:
+        assert fixed is not None
+        targets[fixed] = map_a.points[fixed]
+    return targets, icp
+
+
+def warp(map_a: SphereMap, m_b: SphereMap, *, fixed: Optional[np.ndarray] = None,
+         fixed_on_b: Optional[np.ndarray] = None,
+         should_stop: Callable[[int, int], bool] = lambda done, total: False
+         ) -> Tuple[SphereMap, Dict[str, Any]]:
+    """Warp ``map_a`` (A's certified map, already in B's frame) onto B's map.
+
+    ``fixed`` are A's vertices that do not move (landmarks already at their
+    targets) and ``fixed_on_b`` B's vertices they pair with. ``should_stop(done,
+    total)`` is asked after every ICP iteration and every round of moves.
+    Returns the warped, certified map and a record of the run (``icp``: the
+    mean distance from the deformed sample to B at each iteration,
+    ``moved``: the mean angle still to go after each round of moves).
+    """
     done = 0
 
     def step(_: int, __: int) -> bool:
@@ -111,23 +133,30 @@ def warp(map_a: SphereMap, m_b: SphereMap, *, fixed: Optional[np.ndarray] = None
         done += 1
         return should_stop(done, STEPS)
 
-    normals = _nricp.vertex_normals(a_all, a_mesh.faces)
-    model, icp = _nricp.nonrigid_icp(
-        a_all[sample], normals[sample], _vertex_areas(a_mesh.vertices, a_mesh.faces)[sample],
-        first, nearest, _nricp.face_normals(b_all, b_mesh.faces), landmarks=landmarks,
-        landmark_weight=LANDMARK_WEIGHT, should_stop=step)
-    faces, bary, _ = nearest(model(a_all))
-    targets = m_b.to_sphere(faces, bary)
-    if held:
-        assert fixed is not None
-        targets[fixed] = map_a.points[fixed]
+    targets, icp = sphere_targets(map_a, m_b, fixed=fixed, fixed_on_b=fixed_on_b,
+                                  should_stop=step)
     current = map_a
+    start = map_a.points
     left = [float(_angles(current.points, targets).mean())]
-    while len(left) <= ROUNDS and done < STEPS:
-        current = _landmarks.move_towards(current, targets, fixed=fixed, energy_sweeps=0)
+    for k in range(1, ROUNDS + 1):
+        # The first rounds aim part of the way (along each great circle), so
+        # that a region moves together instead of its first vertices running
+        # ahead and blocking the rest: on horse, 8 rounds to 1/8, 2/8, ...
+        # of the way left 1.75% mean error against 1.91% for 8 rounds aimed
+        # at the targets (1.19% if every target were reached).
+        aim = _slerp(start, targets, min(1.0, k / HOMOTOPY))
+        current = _landmarks.move_towards(current, aim, fixed=fixed, energy_sweeps=0)
         left.append(float(_angles(current.points, targets).mean()))
         if step(0, 0):
             break
-        if left[-2] - left[-1] < STALL * (left[0] - left[1]):
-            break
     return current, {"icp": icp["distance"], "moved": left}
+
+
+def _slerp(p: np.ndarray, q: np.ndarray, t: float) -> np.ndarray:
+    """The point a fraction ``t`` of the way from ``p`` to ``q`` along each great circle."""
+    angle = _angles(p, q)[:, None]
+    sine = np.sin(angle)
+    safe = np.where(sine > 1e-12, sine, 1.0)
+    out = np.where(angle > 1e-12, (np.sin((1 - t) * angle) * p + np.sin(t * angle) * q) / safe, p)
+    result: np.ndarray = out / np.linalg.norm(out, axis=1)[:, None]
+    return result
