@@ -7,8 +7,9 @@ test-only extra). Two steps:
 1. The nearest *vertex*, by a uniform grid of cubic cells: a query's nearest
    vertex within distance ``h`` lies in the 27 cells around the query's own,
    so a query whose best candidate there is within ``h`` is settled. The rest
-   are asked again on a grid three times coarser, and so on; the coarsest
-   grid holds the whole mesh in one cell, so every query is settled. Cells
+   are asked again on a grid three times coarser, and so on; a query the
+   coarsest grid (about the mesh's size) leaves unsettled, far outside the
+   mesh's box, is compared with every vertex. Cells
    are keyed by one integer and found by binary search in the sorted keys,
    so the cost is O((q + n) log n) whatever the shape's extent.
 2. The nearest point on the faces around that vertex (Ericson 2005,
@@ -189,6 +190,14 @@ class NearestOnSurface:
             # Settled: a vertex within this grid's step was found, so no vertex
             # outside the 27 cells can be nearer.
             todo = todo[~(distance[todo] <= grid.h)]
+        # Queries farther outside the mesh's box than the coarsest grid
+        # reaches: every vertex, a few queries at a time (rare: the deformed
+        # shape stays near the surface it is fitted to).
+        for start in range(0, len(todo), 64):
+            part = todo[start:start + 64]
+            d = np.linalg.norm(queries[part][:, None, :] - self.vertices[None, :, :], axis=2)
+            best[part] = np.argmin(d, axis=1)
+            distance[part] = d[np.arange(len(part)), best[part]]
         return best, distance
 
     def __call__(self, queries: np.ndarray) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
