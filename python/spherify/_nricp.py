@@ -44,7 +44,10 @@ from ._nearest import NearestOnSurface
 __all__ = ["Deformation", "SCHEDULE", "fit", "nonrigid_icp"]
 
 # (sigma over the shape's rms radius, lambda per point, ICP iterations),
-# wide and stiff to narrow and soft.
+# wide and stiff to narrow and soft. Measured on issue 23's pairs (targets'
+# mean error over B's diagonal, from the Möbius start): stopping at sigma 0.4
+# left hand at 1.38% and horse at 1.38% against 1.15% and 1.19% with this
+# schedule; one iteration a stage instead of three, 1.87% and 2.07%.
 SCHEDULE: Tuple[Tuple[float, float, int], ...] = (
     (1.0, 1e-1, 3), (0.6, 3e-2, 3), (0.4, 1e-2, 3), (0.25, 3e-3, 3), (0.15, 1e-3, 3))
 # How strongly the affine part is held to the identity (per point).
@@ -56,7 +59,11 @@ AFFINE_STIFFNESS = 1e-3
 # horse it dropped a quarter of the pairs, exactly where the fit was still
 # wrong, and the error from the true pairs grew from 0.7% to 1.1%.
 NORMAL_COSINE = 0.0
+# Control points of the radial part. Fitted to the true pairs of horse's
+# bend, 100 or 300 reproduce it to 0.06-0.1% of the diagonal; 300 leave room
+# for bends less smooth than the bench's.
 CONTROLS = 300
+# Points whose kernel is evaluated at once (memory: ROWS x CONTROLS doubles).
 ROWS = 20000
 
 
