@@ -119,6 +119,7 @@ def test_on_spot_the_warp_halves_the_error_of_the_rotation() -> None:
     assert np.percentile(warp, 95) <= 0.5 * np.percentile(rotation, 95)
 
 
+@pytest.mark.slow  # (about 12 s on a quiet machine; .ci/run runs the slow tests)
 @pytest.mark.skipif(not (SHARED / "knight.off").exists(), reason="needs ../shared/meshes")
 def test_on_knight_the_warp_meets_the_issue_bars() -> None:
     # Issue 23's bars on one corpus pair: the warp at most half the
