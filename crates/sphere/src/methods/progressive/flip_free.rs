@@ -106,13 +106,18 @@ impl Problem<'_> {
         for ring in rings {
             start.push(start[start.len() - 1] + ring.len());
         }
-        let ring = rings.concat();
-        let refs = rings
-            .par_iter()
-            .enumerate()
-            .flat_map_iter(|(i, ring)| {
-                let m = ring.len();
-                (0..m).map(move |j| self.reference(i as u32, ring[j], ring[(j + 1) % m]))
+        self.stars_of(start, rings.concat())
+    }
+
+    /// [`Problem::stars`] from the rings laid end to end in `ring`, vertex
+    /// `i`'s at `start[i]..start[i + 1]`.
+    pub fn stars_of(&self, start: Vec<usize>, ring: Vec<u32>) -> Stars {
+        let refs = (0..start.len() - 1)
+            .into_par_iter()
+            .flat_map_iter(|i| {
+                let r = &ring[start[i]..start[i + 1]];
+                let m = r.len();
+                (0..m).map(move |j| self.reference(i as u32, r[j], r[(j + 1) % m]))
             })
             .collect();
         Stars { start, ring, refs }
@@ -386,11 +391,21 @@ pub fn tangent_basis(p: [f64; 3]) -> ([f64; 3], [f64; 3]) {
 /// each class holds vertices no two of which are neighbours (so no two share
 /// a face). Deterministic.
 pub fn colour_classes(rings: &[Vec<u32>]) -> Vec<Vec<u32>> {
+    greedy_colouring(rings.len(), |i| &rings[i])
+}
+
+/// [`colour_classes`] of the rings of `stars`.
+pub fn colour_stars(stars: &Stars) -> Vec<Vec<u32>> {
+    greedy_colouring(stars.len(), |i| stars.ring(i as u32))
+}
+
+fn greedy_colouring<'r>(n: usize, ring_of: impl Fn(usize) -> &'r [u32]) -> Vec<Vec<u32>> {
     const NONE: u16 = u16::MAX;
-    let mut colour = vec![NONE; rings.len()];
+    let mut colour = vec![NONE; n];
     let mut classes: Vec<Vec<u32>> = Vec::new();
     let mut used: Vec<bool> = Vec::new();
-    for (i, ring) in rings.iter().enumerate() {
+    for i in 0..n {
+        let ring = ring_of(i);
         if ring.is_empty() {
             continue;
         }
@@ -453,16 +468,30 @@ impl Problem<'_> {
         stop: &(dyn Fn(usize) -> bool + Sync),
     ) -> Result<Optimised, Stopped> {
         let stars = self.stars(rings);
-        let classes = colour_classes(rings);
+        self.optimise_stars(&stars, points, max_sweeps, tolerance, held, stop)
+    }
+
+    /// [`Problem::optimise_holding`] on rings already gathered with their
+    /// references ([`Problem::stars`], [`Problem::stars_of`]).
+    pub fn optimise_stars(
+        &self,
+        stars: &Stars,
+        points: &mut [[f64; 3]],
+        max_sweeps: usize,
+        tolerance: f64,
+        held: Option<&[bool]>,
+        stop: &(dyn Fn(usize) -> bool + Sync),
+    ) -> Result<Optimised, Stopped> {
+        let classes = colour_stars(stars);
         let free = |v: u32| held.is_none_or(|h| !h[v as usize]);
-        let mut active: Vec<bool> = (0..rings.len() as u32).map(free).collect();
-        let mut k = self.area_scale(&stars, points);
-        let mut energy = self.total_energy(k, &stars, points);
+        let mut active: Vec<bool> = (0..stars.len() as u32).map(free).collect();
+        let mut k = self.area_scale(stars, points);
+        let mut energy = self.total_energy(k, stars, points);
         let mut result =
             Optimised { sweeps: 0, energy, last_change: f64::INFINITY, converged: false, scale: k };
         while result.sweeps < max_sweeps {
             let sweeps = result.sweeps;
-            let moved = self.sweep(k, &classes, &stars, points, Some(&active), &|| stop(sweeps))?;
+            let moved = self.sweep(k, &classes, stars, points, Some(&active), &|| stop(sweeps))?;
             result.sweeps += 1;
             // Only what moved, and its neighbours, can still go down much.
             active.iter_mut().for_each(|a| *a = false);
@@ -472,8 +501,8 @@ impl Problem<'_> {
                     active[r as usize] = free(r);
                 }
             }
-            k = self.area_scale(&stars, points);
-            let next = self.total_energy(k, &stars, points);
+            k = self.area_scale(stars, points);
+            let next = self.total_energy(k, stars, points);
             result.last_change = (energy - next).abs() / energy.abs().max(f64::MIN_POSITIVE);
             energy = next;
             if moved.is_empty() || result.last_change < tolerance {
@@ -496,10 +525,19 @@ impl Problem<'_> {
     /// smaller than [`LEVEL_AREA_FLOOR`] times the level's mean face area
     /// count as that large.
     pub fn at_level(&self, rings: &[Vec<u32>]) -> Problem<'_> {
-        let (area, corners): (f64, usize) = rings
-            .par_iter()
-            .enumerate()
-            .map(|(i, ring)| {
+        self.at_level_of(rings.len(), &|i| &rings[i])
+    }
+
+    /// [`Problem::at_level`] on `n` vertices whose rings `ring_of` gives.
+    pub fn at_level_of<'r>(
+        &self,
+        n: usize,
+        ring_of: &(dyn Fn(usize) -> &'r [u32] + Sync),
+    ) -> Problem<'_> {
+        let (area, corners): (f64, usize) = (0..n)
+            .into_par_iter()
+            .map(|i| {
+                let ring = ring_of(i);
                 let m = ring.len();
                 let area: f64 =
                     (0..m).map(|j| self.reference(i as u32, ring[j], ring[(j + 1) % m]).area).sum();
