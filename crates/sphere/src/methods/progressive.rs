@@ -59,7 +59,9 @@ use crate::methods::progressive::authalic_newton::{
     authalic_newton, authalic_newton_rings, AuthalicSteps,
 };
 use crate::methods::progressive::distortion_energy::Energy;
-use crate::methods::progressive::flip_free::{check_tolerance, positive_star, Optimised, Problem};
+use crate::methods::progressive::flip_free::{
+    check_tolerance, flat_rings, positive_star, Optimised, Problem,
+};
 use crate::methods::progressive::lbfgs::{lbfgs, LbfgsParams, LbfgsRun};
 use conformal::NotUsed;
 use hierarchy::Hierarchy;
@@ -207,14 +209,24 @@ pub fn progressive(
     seconds.push(("insertion", started.elapsed().as_secs_f64()));
 
     let started = Instant::now();
+    // The hierarchy has been undone: only its size is told from here on.
+    let undone = (hierarchy.collapses.len(), hierarchy.rounds.len());
+    drop(hierarchy);
     let max_iter = params.max_iter.max(1);
     let stop = |sweep: usize| !(go_on() && progress(2 * n + n * sweep / max_iter, total));
+    let global_params = global_steps(params.energy);
+    let (start, flat) = flat_rings(&rings.rings);
+    // Only the global steps read the rings again; without them they are
+    // let go before the references, the method's largest buffer, are made.
+    let rings = global_params.map(|_| rings);
+    let stars = problem.stars_of(start, flat);
     let end = problem
-        .optimise(&rings.rings, &mut points, params.max_iter, params.tolerance, &stop)
+        .optimise_stars(&stars, &mut points, params.max_iter, params.tolerance, None, &stop)
         .map_err(|_| cancelled("optimisation", 2 * n))?;
+    drop(stars);
     seconds.push(("optimisation", started.elapsed().as_secs_f64()));
     let mut global: Option<LbfgsRun> = None;
-    if let Some(steps) = global_steps(params.energy) {
+    if let (Some(steps), Some(rings)) = (global_params, &rings) {
         let started = Instant::now();
         let run = lbfgs(&problem, &rings.rings, &mut points, &steps, &|| !go_on())
             .map_err(|_| cancelled("optimisation", 2 * n))?;
@@ -235,7 +247,7 @@ pub fn progressive(
     progress(total, total);
 
     let status = if end.converged { Status::Converged } else { Status::MaxIterations };
-    let message = message(&hierarchy, params.energy, &end, global, authalic, not_used);
+    let message = message(undone, params.energy, &end, global, authalic, not_used);
     Ok(SphereEmbedding { points, iterations: end.sweeps, status, message, seconds })
 }
 
@@ -465,7 +477,7 @@ fn global_steps(energy: Energy) -> Option<LbfgsParams> {
 /// The run's account in words: the hierarchy, the final sweeps, the global
 /// authalic steps, and why the conformal start was not used.
 fn message(
-    hierarchy: &Hierarchy,
+    (collapses, rounds): (usize, usize),
     energy: Energy,
     end: &Optimised,
     global: Option<LbfgsRun>,
@@ -475,8 +487,8 @@ fn message(
     let mut message = format!(
         "{} collapses in {} rounds undone; {} final sweeps of the {} energy, {:.4} per unit area \
          (last relative change {:.1e})",
-        hierarchy.collapses.len(),
-        hierarchy.rounds.len(),
+        collapses,
+        rounds,
         end.sweeps,
         energy.name(),
         end.energy,

@@ -101,25 +101,39 @@ impl Problem<'_> {
 
     /// The rings and references of every vertex of `rings`.
     pub fn stars(&self, rings: &[Vec<u32>]) -> Stars {
-        let mut start = Vec::with_capacity(rings.len() + 1);
-        start.push(0);
-        for ring in rings {
-            start.push(start[start.len() - 1] + ring.len());
-        }
-        self.stars_of(start, rings.concat())
+        let (start, ring) = flat_rings(rings);
+        self.stars_of(start, ring)
     }
 
     /// [`Problem::stars`] from the rings laid end to end in `ring`, vertex
     /// `i`'s at `start[i]..start[i + 1]`.
     pub fn stars_of(&self, start: Vec<usize>, ring: Vec<u32>) -> Stars {
-        let refs = (0..start.len() - 1)
-            .into_par_iter()
-            .flat_map_iter(|i| {
+        // Filled in place, block by block: collecting an iterator of
+        // unknown length held every reference twice at the peak (the
+        // largest buffer of the method, 192 bytes per vertex).
+        const BLOCK: usize = 1024;
+        let n = start.len() - 1;
+        let empty = Reference { gram: [0.0; 3], area: 0.0 };
+        let mut refs = vec![empty; start[n]];
+        let mut blocks = Vec::with_capacity(n.div_ceil(BLOCK));
+        let mut rest = refs.as_mut_slice();
+        for first in (0..n).step_by(BLOCK) {
+            let end = (first + BLOCK).min(n);
+            let (block, tail) = rest.split_at_mut(start[end] - start[first]);
+            blocks.push((first..end, block));
+            rest = tail;
+        }
+        blocks.into_par_iter().for_each(|(vertices, out)| {
+            let mut at = 0;
+            for i in vertices {
                 let r = &ring[start[i]..start[i + 1]];
                 let m = r.len();
-                (0..m).map(move |j| self.reference(i as u32, r[j], r[(j + 1) % m]))
-            })
-            .collect();
+                for j in 0..m {
+                    out[at] = self.reference(i as u32, r[j], r[(j + 1) % m]);
+                    at += 1;
+                }
+            }
+        });
         Stars { start, ring, refs }
     }
 
@@ -385,6 +399,17 @@ pub fn tangent_basis(p: [f64; 3]) -> ([f64; 3], [f64; 3]) {
     let e1 = cross(p, axis);
     let e1 = scale(e1, 1.0 / norm(e1));
     (e1, cross(p, e1))
+}
+
+/// The rings laid end to end, as [`Problem::stars_of`] takes them: vertex
+/// `i`'s at `start[i]..start[i + 1]`.
+pub fn flat_rings(rings: &[Vec<u32>]) -> (Vec<usize>, Vec<u32>) {
+    let mut start = Vec::with_capacity(rings.len() + 1);
+    start.push(0);
+    for ring in rings {
+        start.push(start[start.len() - 1] + ring.len());
+    }
+    (start, rings.concat())
 }
 
 /// Greedy colouring of the vertices with non-empty rings, in index order:
