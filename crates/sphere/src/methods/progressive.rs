@@ -39,6 +39,7 @@ mod hierarchy;
 pub mod improve;
 pub mod landmarks;
 pub mod lbfgs;
+mod level_mesh;
 pub mod mobius_centring;
 pub mod move_towards;
 mod placement;
@@ -58,10 +59,13 @@ use crate::methods::progressive::authalic_newton::{
     authalic_newton, authalic_newton_rings, AuthalicSteps,
 };
 use crate::methods::progressive::distortion_energy::Energy;
-use crate::methods::progressive::flip_free::{check_tolerance, positive_star, Optimised, Problem};
+use crate::methods::progressive::flip_free::{
+    check_tolerance, flat_rings, positive_star, Optimised, Problem,
+};
 use crate::methods::progressive::lbfgs::{lbfgs, LbfgsParams, LbfgsRun};
 use conformal::NotUsed;
 use hierarchy::Hierarchy;
+use level_mesh::LevelMesh;
 use ring_mesh::{Collapse, RingMesh};
 
 /// Optimise the current level when it has grown by this factor since the last time.
@@ -205,14 +209,24 @@ pub fn progressive(
     seconds.push(("insertion", started.elapsed().as_secs_f64()));
 
     let started = Instant::now();
+    // The hierarchy has been undone: only its size is told from here on.
+    let undone = (hierarchy.collapses.len(), hierarchy.rounds.len());
+    drop(hierarchy);
     let max_iter = params.max_iter.max(1);
     let stop = |sweep: usize| !(go_on() && progress(2 * n + n * sweep / max_iter, total));
+    let global_params = global_steps(params.energy);
+    let (start, flat) = flat_rings(&rings.rings);
+    // Only the global steps read the rings again; without them they are
+    // let go before the references, the method's largest buffer, are made.
+    let rings = global_params.map(|_| rings);
+    let stars = problem.stars_of(start, flat);
     let end = problem
-        .optimise(&rings.rings, &mut points, params.max_iter, params.tolerance, &stop)
+        .optimise_stars(&stars, &mut points, params.max_iter, params.tolerance, None, &stop)
         .map_err(|_| cancelled("optimisation", 2 * n))?;
+    drop(stars);
     seconds.push(("optimisation", started.elapsed().as_secs_f64()));
     let mut global: Option<LbfgsRun> = None;
-    if let Some(steps) = global_steps(params.energy) {
+    if let (Some(steps), Some(rings)) = (global_params, &rings) {
         let started = Instant::now();
         let run = lbfgs(&problem, &rings.rings, &mut points, &steps, &|| !go_on())
             .map_err(|_| cancelled("optimisation", 2 * n))?;
@@ -233,7 +247,7 @@ pub fn progressive(
     progress(total, total);
 
     let status = if end.converged { Status::Converged } else { Status::MaxIterations };
-    let message = message(&hierarchy, params.energy, &end, global, authalic, not_used);
+    let message = message(undone, params.energy, &end, global, authalic, not_used);
     Ok(SphereEmbedding { points, iterations: end.sweeps, status, message, seconds })
 }
 
@@ -257,9 +271,15 @@ fn insert_levels(
     // the moves of new vertices.
     let mut level: Option<Level> = None;
     let mut inserted = 0usize;
+    // The alive vertices in ascending order as of the last level, those
+    // inserted since, and each level's local numbers ([`LevelMesh`]).
+    let mut alive: Vec<u32> = (0..n as u32).filter(|&v| rings.is_alive(v)).collect();
+    let mut fresh: Vec<u32> = Vec::new();
+    let mut local = filled(n, 0u32, "the progressive method's level numbers")?;
     for round in hierarchy.rounds.iter().rev() {
         let collapses = &hierarchy.collapses[round.clone()];
         insert_round(collapses, problem, rings, points)?;
+        fresh.extend(collapses.iter().map(|c| c.u));
         if let Some(level) = &level {
             move_new_vertices(collapses, &level.problem(problem), level.scale, points);
         }
@@ -276,10 +296,15 @@ fn insert_levels(
             } else {
                 None
             };
+            // Two ascending runs: the stable sort merges them in linear time.
+            fresh.sort_unstable();
+            alive.append(&mut fresh);
+            alive.sort();
             level = Some(optimise_level(
                 problem,
                 params,
                 rings,
+                (&alive, &mut local),
                 represented,
                 points,
                 &go_on,
@@ -373,24 +398,49 @@ fn move_new_vertices(collapses: &[Collapse], level: &Problem<'_>, k: f64, points
 /// Step 4 on a coarse level: flip-free sweeps of the coarse-level energy
 /// against the finest surface's areas (`represented`, see
 /// [`Hierarchy::represented_area`]), then, for the authalic energy, global
-/// steps towards equal areas. Returns what the moves of the next new
+/// steps towards equal areas. The sweeps run on the level copied out
+/// ([`LevelMesh`]) from its vertices `alive` (ascending), with `local` as
+/// the scratch for their numbers. Returns what the moves of the next new
 /// vertices need; `cancelled` is the error when `go_on` says stop.
+#[allow(clippy::too_many_arguments)]
 fn optimise_level(
     problem: &Problem<'_>,
     params: &ProgressiveParams,
     rings: &RingMesh,
+    (alive, local): (&[u32], &mut [u32]),
     represented: Option<Vec<f64>>,
     points: &mut [[f64; 3]],
     go_on: &(dyn Fn() -> bool + Sync),
     cancelled: impl Fn() -> SphereError,
 ) -> Result<Level, SphereError> {
-    let area_floor = problem.at_level(&rings.rings).area_floor;
+    let mut sub = LevelMesh::gather(
+        alive,
+        local,
+        &rings.rings,
+        problem.surface,
+        represented.as_deref(),
+        points,
+    )?;
+    let whole_level = Problem { surface: &sub.surface, ..*problem };
+    let area_floor = whole_level.at_level_of(sub.n_vertices(), &|j| sub.ring(j)).area_floor;
+    let local_problem = Problem {
+        energy: problem.energy.on_coarse_levels(),
+        surface: &sub.surface,
+        area_floor,
+        represented: sub.represented.as_deref(),
+    };
+    // The stars take over the level's rings.
+    let stars =
+        local_problem.stars_of(std::mem::take(&mut sub.start), std::mem::take(&mut sub.ring));
+    let sweeps = (LEVEL_MOVES / rings.n_alive).clamp(LEVEL_SWEEPS, MAX_LEVEL_SWEEPS);
+    let end = local_problem
+        .optimise_stars(&stars, &mut sub.points, sweeps, params.tolerance, None, &|_| !go_on())
+        .map_err(|_| cancelled())?;
+    drop(stars);
+    sub.scatter(alive, points);
+    drop(sub);
     let mut level = Level { area_floor, represented, scale: 1.0 };
     let at_level = level.problem(problem);
-    let sweeps = (LEVEL_MOVES / rings.n_alive).clamp(LEVEL_SWEEPS, MAX_LEVEL_SWEEPS);
-    let end = at_level
-        .optimise(&rings.rings, points, sweeps, params.tolerance, &|_| !go_on())
-        .map_err(|_| cancelled())?;
     if params.energy == Energy::Authalic && rings.n_alive >= AUTHALIC_LEVEL_MIN {
         authalic_newton_rings(
             &rings.rings,
@@ -427,7 +477,7 @@ fn global_steps(energy: Energy) -> Option<LbfgsParams> {
 /// The run's account in words: the hierarchy, the final sweeps, the global
 /// authalic steps, and why the conformal start was not used.
 fn message(
-    hierarchy: &Hierarchy,
+    (collapses, rounds): (usize, usize),
     energy: Energy,
     end: &Optimised,
     global: Option<LbfgsRun>,
@@ -437,8 +487,8 @@ fn message(
     let mut message = format!(
         "{} collapses in {} rounds undone; {} final sweeps of the {} energy, {:.4} per unit area \
          (last relative change {:.1e})",
-        hierarchy.collapses.len(),
-        hierarchy.rounds.len(),
+        collapses,
+        rounds,
         end.sweeps,
         energy.name(),
         end.energy,

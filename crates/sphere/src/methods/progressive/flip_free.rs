@@ -101,20 +101,39 @@ impl Problem<'_> {
 
     /// The rings and references of every vertex of `rings`.
     pub fn stars(&self, rings: &[Vec<u32>]) -> Stars {
-        let mut start = Vec::with_capacity(rings.len() + 1);
-        start.push(0);
-        for ring in rings {
-            start.push(start[start.len() - 1] + ring.len());
+        let (start, ring) = flat_rings(rings);
+        self.stars_of(start, ring)
+    }
+
+    /// [`Problem::stars`] from the rings laid end to end in `ring`, vertex
+    /// `i`'s at `start[i]..start[i + 1]`.
+    pub fn stars_of(&self, start: Vec<usize>, ring: Vec<u32>) -> Stars {
+        // Filled in place, block by block: collecting an iterator of
+        // unknown length held every reference twice at the peak (the
+        // largest buffer of the method, 192 bytes per vertex).
+        const BLOCK: usize = 1024;
+        let n = start.len() - 1;
+        let empty = Reference { gram: [0.0; 3], area: 0.0 };
+        let mut refs = vec![empty; start[n]];
+        let mut blocks = Vec::with_capacity(n.div_ceil(BLOCK));
+        let mut rest = refs.as_mut_slice();
+        for first in (0..n).step_by(BLOCK) {
+            let end = (first + BLOCK).min(n);
+            let (block, tail) = rest.split_at_mut(start[end] - start[first]);
+            blocks.push((first..end, block));
+            rest = tail;
         }
-        let ring = rings.concat();
-        let refs = rings
-            .par_iter()
-            .enumerate()
-            .flat_map_iter(|(i, ring)| {
-                let m = ring.len();
-                (0..m).map(move |j| self.reference(i as u32, ring[j], ring[(j + 1) % m]))
-            })
-            .collect();
+        blocks.into_par_iter().for_each(|(vertices, out)| {
+            let mut at = 0;
+            for i in vertices {
+                let r = &ring[start[i]..start[i + 1]];
+                let m = r.len();
+                for j in 0..m {
+                    out[at] = self.reference(i as u32, r[j], r[(j + 1) % m]);
+                    at += 1;
+                }
+            }
+        });
         Stars { start, ring, refs }
     }
 
@@ -382,15 +401,36 @@ pub fn tangent_basis(p: [f64; 3]) -> ([f64; 3], [f64; 3]) {
     (e1, cross(p, e1))
 }
 
+/// The rings laid end to end, as [`Problem::stars_of`] takes them: vertex
+/// `i`'s at `start[i]..start[i + 1]`.
+pub fn flat_rings(rings: &[Vec<u32>]) -> (Vec<usize>, Vec<u32>) {
+    let mut start = Vec::with_capacity(rings.len() + 1);
+    start.push(0);
+    for ring in rings {
+        start.push(start[start.len() - 1] + ring.len());
+    }
+    (start, rings.concat())
+}
+
 /// Greedy colouring of the vertices with non-empty rings, in index order:
 /// each class holds vertices no two of which are neighbours (so no two share
 /// a face). Deterministic.
 pub fn colour_classes(rings: &[Vec<u32>]) -> Vec<Vec<u32>> {
+    greedy_colouring(rings.len(), |i| &rings[i])
+}
+
+/// [`colour_classes`] of the rings of `stars`.
+pub fn colour_stars(stars: &Stars) -> Vec<Vec<u32>> {
+    greedy_colouring(stars.len(), |i| stars.ring(i as u32))
+}
+
+fn greedy_colouring<'r>(n: usize, ring_of: impl Fn(usize) -> &'r [u32]) -> Vec<Vec<u32>> {
     const NONE: u16 = u16::MAX;
-    let mut colour = vec![NONE; rings.len()];
+    let mut colour = vec![NONE; n];
     let mut classes: Vec<Vec<u32>> = Vec::new();
     let mut used: Vec<bool> = Vec::new();
-    for (i, ring) in rings.iter().enumerate() {
+    for i in 0..n {
+        let ring = ring_of(i);
         if ring.is_empty() {
             continue;
         }
@@ -453,16 +493,30 @@ impl Problem<'_> {
         stop: &(dyn Fn(usize) -> bool + Sync),
     ) -> Result<Optimised, Stopped> {
         let stars = self.stars(rings);
-        let classes = colour_classes(rings);
+        self.optimise_stars(&stars, points, max_sweeps, tolerance, held, stop)
+    }
+
+    /// [`Problem::optimise_holding`] on rings already gathered with their
+    /// references ([`Problem::stars`], [`Problem::stars_of`]).
+    pub fn optimise_stars(
+        &self,
+        stars: &Stars,
+        points: &mut [[f64; 3]],
+        max_sweeps: usize,
+        tolerance: f64,
+        held: Option<&[bool]>,
+        stop: &(dyn Fn(usize) -> bool + Sync),
+    ) -> Result<Optimised, Stopped> {
+        let classes = colour_stars(stars);
         let free = |v: u32| held.is_none_or(|h| !h[v as usize]);
-        let mut active: Vec<bool> = (0..rings.len() as u32).map(free).collect();
-        let mut k = self.area_scale(&stars, points);
-        let mut energy = self.total_energy(k, &stars, points);
+        let mut active: Vec<bool> = (0..stars.len() as u32).map(free).collect();
+        let mut k = self.area_scale(stars, points);
+        let mut energy = self.total_energy(k, stars, points);
         let mut result =
             Optimised { sweeps: 0, energy, last_change: f64::INFINITY, converged: false, scale: k };
         while result.sweeps < max_sweeps {
             let sweeps = result.sweeps;
-            let moved = self.sweep(k, &classes, &stars, points, Some(&active), &|| stop(sweeps))?;
+            let moved = self.sweep(k, &classes, stars, points, Some(&active), &|| stop(sweeps))?;
             result.sweeps += 1;
             // Only what moved, and its neighbours, can still go down much.
             active.iter_mut().for_each(|a| *a = false);
@@ -472,8 +526,8 @@ impl Problem<'_> {
                     active[r as usize] = free(r);
                 }
             }
-            k = self.area_scale(&stars, points);
-            let next = self.total_energy(k, &stars, points);
+            k = self.area_scale(stars, points);
+            let next = self.total_energy(k, stars, points);
             result.last_change = (energy - next).abs() / energy.abs().max(f64::MIN_POSITIVE);
             energy = next;
             if moved.is_empty() || result.last_change < tolerance {
@@ -496,10 +550,19 @@ impl Problem<'_> {
     /// smaller than [`LEVEL_AREA_FLOOR`] times the level's mean face area
     /// count as that large.
     pub fn at_level(&self, rings: &[Vec<u32>]) -> Problem<'_> {
-        let (area, corners): (f64, usize) = rings
-            .par_iter()
-            .enumerate()
-            .map(|(i, ring)| {
+        self.at_level_of(rings.len(), &|i| &rings[i])
+    }
+
+    /// [`Problem::at_level`] on `n` vertices whose rings `ring_of` gives.
+    pub fn at_level_of<'r>(
+        &self,
+        n: usize,
+        ring_of: &(dyn Fn(usize) -> &'r [u32] + Sync),
+    ) -> Problem<'_> {
+        let (area, corners): (f64, usize) = (0..n)
+            .into_par_iter()
+            .map(|i| {
+                let ring = ring_of(i);
                 let m = ring.len();
                 let area: f64 =
                     (0..m).map(|j| self.reference(i as u32, ring[j], ring[(j + 1) % m]).area).sum();
