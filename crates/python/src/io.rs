@@ -6,7 +6,9 @@ use pyo3::types::{PyBytes, PyDict};
 use spherify_mesh::io::{self, PlyEncoding, VertexAttributes, WriteOptions};
 
 use crate::convert::{rows, to_numpy};
-use crate::errors::{to_py, unknown_name};
+use spherify_sphere::memory_budget::{self, Application};
+
+use crate::errors::{resource_error, to_py, unknown_name};
 use crate::mesh::CoreMesh;
 
 /// load(path) -> (CoreMesh, notes, attributes): reads OBJ, OFF, PLY or STL.
@@ -15,6 +17,13 @@ pub fn load<'py>(
     py: Python<'py>,
     path: std::path::PathBuf,
 ) -> PyResult<(CoreMesh, Vec<String>, Bound<'py, PyDict>)> {
+    // The memory policy by the file's size, before it is read (a file that
+    // cannot be looked at is left to the reader, which names what is wrong).
+    if let Ok(meta) = std::fs::metadata(&path) {
+        let bytes = usize::try_from(meta.len()).unwrap_or(usize::MAX);
+        let need = memory_budget::application_need(Application::Load, 0, 0, bytes);
+        memory_budget::check(&need).map_err(resource_error)?;
+    }
     // Detachable: parsing a large text file takes seconds and cannot poll
     // (issue 13, item 2); after Ctrl-C the parse finishes in the background.
     let loaded = crate::progress::run_detachable(py, None, move |_| io::read(&path))?
