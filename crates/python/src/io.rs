@@ -19,10 +19,17 @@ pub fn load<'py>(
 ) -> PyResult<(CoreMesh, Vec<String>, Bound<'py, PyDict>)> {
     // The memory policy by the file's size, before it is read (a file that
     // cannot be looked at is left to the reader, which names what is wrong).
+    // A file larger than all that is available is left to the reader too: its
+    // FileError says the file is more than the process can hold; one that can
+    // be held but not parsed is refused here.
     if let Ok(meta) = std::fs::metadata(&path) {
         let bytes = usize::try_from(meta.len()).unwrap_or(usize::MAX);
         let need = memory_budget::application_need(Application::Load, 0, 0, bytes);
-        memory_budget::check(&need).map_err(resource_error)?;
+        if let Err(err) = memory_budget::check(&need) {
+            if err.available().is_some_and(|available| meta.len() <= available) {
+                return Err(resource_error(err));
+            }
+        }
     }
     // Detachable: parsing a large text file takes seconds and cannot poll
     // (issue 13, item 2); after Ctrl-C the parse finishes in the background.
