@@ -8,7 +8,7 @@ import numpy.typing as npt
 
 from ._report import MeshReport, SphereReport
 
-__all__ = ["AtomicWrite", "CoreMesh", "CoreSphereMap", "__version__", "boundary_loop", "check", "check_memory", "check_raw", "check_sphere", "choices", "dijkstra", "embed", "embed_need", "encode", "face_quality", "from_points", "get_num_threads", "harmonics_evaluate", "harmonics_fit", "improve", "is_stale_temporary", "is_temporary", "load", "method_options", "methods", "move_towards", "orient", "quality", "remove_stale_temporaries", "require_regular_file", "restore_map", "save", "save_textured_obj", "set_num_threads", "shortest_path", "special_kind", "temporary_path", "tutte", "weld", "write_atomic"]
+__all__ = ["AtomicWrite", "CoreMesh", "CoreSphereMap", "__version__", "boundary_loop", "check", "check_application", "check_memory", "check_raw", "check_sphere", "choices", "dijkstra", "embed", "embed_need", "encode", "face_quality", "from_points", "get_num_threads", "harmonics_evaluate", "harmonics_fit", "improve", "is_stale_temporary", "is_temporary", "load", "method_options", "methods", "move_towards", "orient", "quality", "remove_stale_temporaries", "require_regular_file", "restore_map", "save", "save_textured_obj", "set_num_threads", "shortest_path", "special_kind", "temporary_path", "tutte", "weld", "write_atomic"]
 
 __version__: str
 
@@ -178,3 +178,4 @@ def embed_need(
     landmarks: bool = False,
 ) -> int: ...
 def check_memory(call: str, n_vertices: int, bytes: int) -> None: ...
+def check_application(name: str, n_vertices: int, n_faces: int, items: int) -> None: ...

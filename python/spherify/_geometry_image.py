@@ -25,19 +25,24 @@ from typing import Any, Tuple, Union
 
 import numpy as np
 
-from . import _args
+from . import _args, _core, _progress
 from ._limits import GEOMETRY_IMAGE_SIZE_MAX
 from ._atomic import write_bytes_atomically
 from ._errors import FormatError, MeshError
 from ._files import file_errors, require_regular_file
 from ._mesh import Mesh
-from ._progress import to_surface_in_chunks
+from ._progress import as_callback
 from ._spheremap import SphereMap
 
 __all__ = ["from_geometry_image", "geometry_image", "load_geometry_image",
            "octahedral_points", "save_geometry_image"]
 
 PathLike = Union[str, "os.PathLike[str]"]
+
+
+#: Pixels per band of rows of :func:`geometry_image`, at most (the core's
+#: memory rate counts one band of this size: ``memory_budget::BAND_PIXELS``).
+_BAND_PIXELS = 1 << 18
 
 
 def _size(size: object) -> int:
@@ -97,10 +102,28 @@ def geometry_image(m: SphereMap, size: int, *, progress: Any = None) -> np.ndarr
     ------
     MapError
         ``m`` is not a certified bijection.
+    ResourceError
+        The image cannot fit in the memory the process can still get
+        (docs/reliability.md, "Memory"); raised before anything is allocated.
     """
-    p = octahedral_points(size)
-    _, _, xyz = to_surface_in_chunks(m, p.reshape(-1, 3), progress, "geometry image")
-    image: np.ndarray = xyz.reshape(p.shape)
+    n = _size(size)
+    _core.check_application("geometry_image", m.mesh.n_vertices, m.mesh.n_faces, n * n)
+    callback = as_callback(progress, "geometry image")
+    # In bands of rows: the pixels' directions and their located points are
+    # never all held at once, only the image (24 bytes a pixel), so that the
+    # largest image fits where its rate says. Each pixel is computed as in
+    # octahedral_points, and point location is point by point: the same bits.
+    band = max(1, (_progress.CHUNK_ROWS if callback else _BAND_PIXELS) // n)
+    t = np.linspace(-1.0, 1.0, n)
+    image = np.empty((n, n, 3))
+    for start in range(0, n, band):
+        u, v = np.meshgrid(t, t[start:start + band])
+        p = octahedron_unfolded(u, v)
+        p /= np.linalg.norm(p, axis=-1, keepdims=True)
+        _, _, xyz = m.to_surface(p.reshape(-1, 3))
+        image[start:start + band] = xyz.reshape(p.shape)
+        if callback:
+            callback(min(start + band, n) * n, n * n)
     return image
 
 
@@ -135,11 +158,14 @@ def from_geometry_image(image: np.ndarray) -> Mesh:
     ------
     MeshError
         Not a (size, size, 3) array of finite numbers with an odd size >= 3.
+    ResourceError
+        The mesh cannot fit in the memory the process can still get.
     """
     g = np.asarray(image, dtype=np.float64)
     if g.ndim != 3 or g.shape[0] != g.shape[1] or g.shape[2] != 3:
         raise MeshError(f"a geometry image must have shape (n, n, 3), got {g.shape}")
     n = _size(g.shape[0])
+    _core.check_application("from_geometry_image", 0, 0, n * n)
     if not np.isfinite(g).all():
         raise MeshError("a geometry image must be finite")
     ids = _pixel_ids(n)

@@ -28,7 +28,7 @@ from . import _align
 from ._errors import MeshError
 from ._mesh import Mesh
 from ._progress import to_surface_in_chunks
-from ._register import Correspondence, landmark_pairs, register
+from ._register import Correspondence, check_memory, landmark_pairs, register
 from ._spheremap import SphereMap
 
 __all__ = ["Morph", "morph"]
@@ -167,12 +167,17 @@ def morph(m_a: SphereMap, m_b: SphereMap, *, align: str = "rotation",
     MeshError
         Unknown ``align``, landmark ids out of range or repeated, or too few
         landmarks.
+    ResourceError
+        The morph (with its registration) cannot fit in the memory the
+        process can still get (docs/reliability.md, "Memory"); raised before
+        it starts.
     """
     if align not in ALIGNS:
         raise MeshError(f"unknown align {align!r}; available: {', '.join(ALIGNS)}")
     if not isinstance(normalize, bool):
         raise MeshError(f"normalize must be True or False, got {normalize!r}")
     pairs = landmark_pairs(landmarks, len(m_a.points), len(m_b.points))
+    check_memory("morph", m_a, m_b)
     alignment: Dict[str, Any] = {}
     correspondence = None
     if align == "landmarks" and not len(pairs):

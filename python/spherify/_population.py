@@ -25,7 +25,7 @@ from . import _align
 from ._errors import MapError, MeshError
 from ._mesh import Mesh
 from ._progress import as_callback
-from ._register import TRANSFORMS, register
+from ._register import TRANSFORMS, check_memory, register
 from ._spheremap import SphereMap
 
 __all__ = ["Population", "correspond"]
@@ -243,6 +243,10 @@ def correspond(maps: Sequence[SphereMap], *, reference: int = 0, landmarks: Any 
         range, a bad landmark table, unknown ``transform``.
     MapError
         A map that is not certified, or maps by different methods.
+    ResourceError
+        The registrations and the population cannot fit in the memory the
+        process can still get (docs/reliability.md, "Memory"); raised before
+        the first registration.
     """
     started = time.perf_counter()
     maps = list(maps)
@@ -265,6 +269,11 @@ def correspond(maps: Sequence[SphereMap], *, reference: int = 0, landmarks: Any 
     table = _landmark_table(landmarks, maps)
     ref = maps[reference]
     samples, faces = _sample_points(ref, level)
+    # The largest registration to the reference, and every shape's samples
+    # (the grid of level 8 is 655,362 points: small beside them).
+    largest = max((m for i, m in enumerate(maps) if i != reference),
+                  key=lambda m: m.mesh.n_vertices)
+    check_memory("correspond", largest, ref, len(maps) * len(samples))
     report = as_callback(progress, "correspond")
 
     def pairs_of(i: int) -> Optional[np.ndarray]:

@@ -83,20 +83,3 @@ def to_surface_in_chunks(m: Any, points: Any, progress: object, label: str) -> A
         callback(0, 0)
         return result
     return tuple(np.concatenate([part[k] for part in parts]) for k in range(3))
-
-
-def rows_in_chunks(function: Callable[[Any], Any], array: Any, progress: object,
-                   label: str, rows: int = 64) -> Any:
-    """``function(array)`` for an array of image rows, called ``rows`` rows at
-    a time when ``progress`` asks for it (``(rows done, rows)`` after each)."""
-    import numpy as np
-
-    callback = as_callback(progress, label)
-    if callback is None:
-        return function(array)
-    total = len(array)
-    parts = []
-    for start in range(0, total, rows):
-        parts.append(np.asarray(function(array[start:start + rows])))
-        callback(min(start + rows, total), total)
-    return np.concatenate(parts) if parts else function(array)

@@ -27,7 +27,7 @@ from typing import Any, Dict, Optional, Tuple
 import numpy as np
 import numpy.typing as npt
 
-from . import _align, _landmarks, _warp
+from . import _align, _core, _landmarks, _warp
 from ._embed import improve
 from ._errors import MapError, MeshError
 from ._progress import as_callback
@@ -101,6 +101,13 @@ def _superimposed(a: np.ndarray, xyz: np.ndarray, b: np.ndarray
     spatial = {"rotation": _read_only(spin), "scale": scale,
                "translation": _read_only(b_centre - scale * spin @ a_centre)}
     return spatial, {"rms": float(np.sqrt(np.mean(distance ** 2))), "max": float(distance.max())}
+
+
+def check_memory(call: str, m_a: SphereMap, m_b: SphereMap, items: int = 0) -> None:
+    """The memory policy's check of ``call`` on the maps of A and B (their
+    vertices and faces together): a ResourceError before the work starts."""
+    _core.check_application(call, m_a.mesh.n_vertices + m_b.mesh.n_vertices,
+                            m_a.mesh.n_faces + m_b.mesh.n_faces, items)
 
 
 def _check_maps(m_a: Any, m_b: Any) -> None:
@@ -324,11 +331,15 @@ def register(m_a: SphereMap, m_b: SphereMap, *, landmarks: Any = None,
     MapError
         A map that is not certified, or landmarks that cannot all be placed
         (the error names them).
+    ResourceError
+        The registration cannot fit in the memory the process can still get
+        (docs/reliability.md, "Memory"); raised before it starts.
     """
     if transform not in TRANSFORMS:
         raise MeshError(f"unknown transform {transform!r}; choose one of {', '.join(TRANSFORMS)}")
     _check_maps(m_a, m_b)
     pairs = landmark_pairs(landmarks, len(m_a.points), len(m_b.points))
+    check_memory("register", m_a, m_b)
     report = as_callback(progress, "register")
     seconds: Dict[str, float] = {}
     details: Dict[str, Any] = {}

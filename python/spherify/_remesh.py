@@ -13,7 +13,7 @@ from typing import Any, Dict
 
 import numpy as np
 
-from . import _args, datasets
+from . import _args, _core, datasets
 from ._limits import DISTANCE_SAMPLES_MAX, REMESH_LEVEL_MAX
 from ._errors import MeshError
 from ._mesh import Mesh
@@ -66,10 +66,17 @@ def remesh_map(m: SphereMap, kind: str = "icosphere", *, level: int = 4,
         ``m`` is not a certified bijection.
     MeshError
         Unknown ``kind`` or a bad ``level``.
+    ResourceError
+        The remeshed surface cannot fit in the memory the process can still
+        get (docs/reliability.md, "Memory"); raised before it is made.
     """
     if kind not in KINDS:
         raise MeshError(f"unknown remesh kind {kind!r}; available: {', '.join(KINDS)}")
-    ico = datasets.icosphere(subdivisions=_level(level))
+    level = _level(level)
+    # The memory policy before the icosphere is made: its vertices, their
+    # located surface points and the new map's certificate, per output vertex.
+    _core.check_application("remesh", m.mesh.n_vertices, m.mesh.n_faces, 10 * 4 ** level + 2)
+    ico = datasets.icosphere(subdivisions=level)
     _, _, xyz = to_surface_in_chunks(m, ico.vertices, progress, "remesh")
     return SphereMap.from_points(Mesh(xyz, ico.faces), ico.vertices)
 

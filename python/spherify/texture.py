@@ -64,7 +64,7 @@ from ._files import file_errors
 from ._geometry_image import _chunk, octahedron_unfolded
 from ._limits import ATLAS_HEIGHT_MAX
 from ._mesh import Mesh
-from ._progress import rows_in_chunks
+from ._progress import as_callback
 from ._quality import quality
 from ._spheremap import SphereMap
 
@@ -72,6 +72,10 @@ __all__ = ["PROJECTIONS", "UVLayout", "save_obj", "uv", "write_png"]
 
 #: The projections of :func:`uv`, the default first (see the module doc).
 PROJECTIONS = ("cube", "equirectangular", "octahedral")
+
+#: Pixels per band of rows of :meth:`UVLayout.bake`, at most (the core's
+#: memory rate counts one band of this size: ``memory_budget::BAND_PIXELS``).
+_BAND_PIXELS = 1 << 18
 PathLike = Union[str, "os.PathLike[str]"]
 
 # Cube tiles: normal, s axis, t axis (s x t = normal, so CCW stays CCW), atlas column, row.
@@ -214,7 +218,9 @@ class UVLayout:
             ``2 height`` for equirectangular and ``height`` for octahedral.
         progress : bool or callable, optional
             ``True`` draws a bar on stderr, a callable receives ``(done,
-            total)`` rows; ``texture`` is then called on 64 rows at a time.
+            total)`` rows; ``texture`` is then called on 64 rows at a time
+            (otherwise on bands of about a million pixels: it is called on
+            each pixel's direction, in pieces).
 
         Returns
         -------
@@ -225,15 +231,38 @@ class UVLayout:
         MeshError
             ``height`` or ``width`` not an integer in its range (before
             anything is allocated).
+        ResourceError
+            The atlas cannot fit in the memory the process can still get
+            (docs/reliability.md, "Memory"); raised before it is allocated.
         """
         height = _args.integer(height, "height", 1, ATLAS_HEIGHT_MAX)
         if width is None:
             aspect = {"cube": 1.5, "equirectangular": 2.0}.get(self._projection, 1.0)
             width = int(round(height * aspect))
         width = _args.integer(width, "width", 1, 2 * ATLAS_HEIGHT_MAX)
-        directions = self.directions(height, width)
-        image: np.ndarray = np.asarray(rows_in_chunks(texture, directions, progress, "bake"),
-                                       dtype=np.float64)
+        _core.check_application("UVLayout.bake", 0, 0, height * width)
+        callback = as_callback(progress, "bake")
+        # In bands of rows: the directions (and whatever texture makes of
+        # them) are never all held at once, only the atlas, so that the
+        # largest atlas fits where its rate says. Each pixel's direction is
+        # the one directions() gives it.
+        band = max(1, _BAND_PIXELS // width)
+        if callback:
+            band = min(band, 64)
+        u = (np.arange(width) + 0.5) / width
+        v = 1 - (np.arange(height) + 0.5) / height
+        image = np.empty((height, width, 3))
+        for start in range(0, height, band):
+            uu, vv = np.meshgrid(u, v[start:start + band])
+            colour = np.asarray(texture(self.direction_at(np.stack([uu, vv], axis=-1))),
+                                dtype=np.float64)
+            if colour.shape != uu.shape + (3,):
+                raise MeshError(f"texture must return one RGB row per direction, shape "
+                                f"{uu.shape + (3,)} for directions of shape {uu.shape + (3,)}, "
+                                f"got {colour.shape}")
+            image[start:start + band] = colour
+            if callback:
+                callback(min(start + band, height), height)
         return image
 
     def sample(self, image: np.ndarray, face_ids: npt.ArrayLike, bary: npt.ArrayLike) -> np.ndarray:
@@ -480,9 +509,13 @@ def uv(m: SphereMap, projection: str = "cube") -> UVLayout:
         Unknown projection; for ``"cube"``, a face so large that a corner is
         more than 78 degrees from its tile's axis; for ``"octahedral"``, a
         reversed face that no octant's projection reaches whole.
+    ResourceError
+        The layout cannot fit in the memory the process can still get
+        (docs/reliability.md, "Memory"); raised before it is made.
     """
     if projection not in PROJECTIONS:
         raise MeshError(f"unknown projection {projection!r}; available: {', '.join(PROJECTIONS)}")
+    _core.check_application(f"texture.uv {projection}", m.mesh.n_vertices, m.mesh.n_faces, 0)
     points, faces = np.asarray(m.points), m.mesh.faces
     if projection == "cube":
         return _cube(points, faces)

@@ -199,6 +199,7 @@ pub fn tutte_error(py: Python<'_>, err: TutteError) -> PyErr {
 pub fn point_map_error(err: PointMapError) -> PyErr {
     match err {
         PointMapError::NotBijective(_) => class::MapError::new_err(err.to_string()),
+        PointMapError::Resource(e) => resource_error(e),
         other => mesh_error(other.to_string()),
     }
 }
@@ -208,6 +209,7 @@ pub fn point_map_error(err: PointMapError) -> PyErr {
 pub fn harmonics_error(err: HarmonicsError) -> PyErr {
     match err {
         HarmonicsError::Map(e) => point_map_error(e),
+        HarmonicsError::Resource(e) => resource_error(e),
         other => mesh_error(other.to_string()),
     }
 }

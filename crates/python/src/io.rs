@@ -6,7 +6,9 @@ use pyo3::types::{PyBytes, PyDict};
 use spherify_mesh::io::{self, PlyEncoding, VertexAttributes, WriteOptions};
 
 use crate::convert::{rows, to_numpy};
-use crate::errors::{to_py, unknown_name};
+use spherify_sphere::memory_budget::{self, Application};
+
+use crate::errors::{resource_error, to_py, unknown_name};
 use crate::mesh::CoreMesh;
 
 /// load(path) -> (CoreMesh, notes, attributes): reads OBJ, OFF, PLY or STL.
@@ -15,6 +17,20 @@ pub fn load<'py>(
     py: Python<'py>,
     path: std::path::PathBuf,
 ) -> PyResult<(CoreMesh, Vec<String>, Bound<'py, PyDict>)> {
+    // The memory policy by the file's size, before it is read (a file that
+    // cannot be looked at is left to the reader, which names what is wrong).
+    // A file larger than all that is available is left to the reader too: its
+    // FileError says the file is more than the process can hold; one that can
+    // be held but not parsed is refused here.
+    if let Ok(meta) = std::fs::metadata(&path) {
+        let bytes = usize::try_from(meta.len()).unwrap_or(usize::MAX);
+        let need = memory_budget::application_need(Application::Load, 0, 0, bytes);
+        if let Err(err) = memory_budget::check(&need) {
+            if err.available().is_some_and(|available| meta.len() <= available) {
+                return Err(resource_error(err));
+            }
+        }
+    }
     // Detachable: parsing a large text file takes seconds and cannot poll
     // (issue 13, item 2); after Ctrl-C the parse finishes in the background.
     let loaded = crate::progress::run_detachable(py, None, move |_| io::read(&path))?

@@ -76,6 +76,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(restore::restore_map, m)?)?;
     m.add_function(wrap_pyfunction!(memory::embed_need, m)?)?;
     m.add_function(wrap_pyfunction!(memory::check_memory, m)?)?;
+    m.add_function(wrap_pyfunction!(memory::check_application, m)?)?;
     m.add_function(wrap_pyfunction!(pool::set_num_threads, m)?)?;
     m.add_function(wrap_pyfunction!(pool::get_num_threads, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;

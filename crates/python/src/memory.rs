@@ -1,4 +1,4 @@
-//! `embed_need` and `check_memory`: the core's memory policy
+//! `embed_need`, `check_memory` and `check_application`: the core's memory policy
 //! (`spherify_sphere::memory_budget`) for Python callers that check before
 //! they build a mesh (the command line's generated shapes) or that allocate
 //! in numpy with an estimate of their own (`spherify.datasets`). The
@@ -8,7 +8,7 @@ use std::str::FromStr;
 
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use spherify_sphere::memory_budget::{self, Need};
+use spherify_sphere::memory_budget::{self, Application, Need};
 use spherify_sphere::MethodName;
 
 use crate::errors::{mesh_error, resource_error};
@@ -43,5 +43,25 @@ pub fn embed_need(
 #[pyfunction]
 pub fn check_memory(call: &str, n_vertices: usize, bytes: u64) -> PyResult<()> {
     memory_budget::check(&Need { call: call.to_string(), n_vertices, bytes })
+        .map_err(resource_error)
+}
+
+/// check_application(name, n_vertices, n_faces, items) -> None.
+///
+/// The core's memory check of an application whose work is numpy's
+/// (`geometry_image`, `UVLayout.bake`, `texture.uv`, `remesh`, `morph`,
+/// `register`, `correspond`), by the core's table of rates: ResourceError
+/// naming the call, its items, the vertex count and the bytes when it cannot
+/// fit; MeshError for a name the table does not hold.
+#[pyfunction]
+pub fn check_application(
+    name: &str,
+    n_vertices: usize,
+    n_faces: usize,
+    items: usize,
+) -> PyResult<()> {
+    let app = Application::from_name(name)
+        .ok_or_else(|| mesh_error(format!("no memory rate for the call {name:?}")))?;
+    memory_budget::check(&memory_budget::application_need(app, n_vertices, n_faces, items))
         .map_err(resource_error)
 }

@@ -6,8 +6,17 @@ use pyo3::types::PyDict;
 use spherify_sphere::applications::metrics;
 
 use crate::convert::rows;
-use crate::errors::quality_error;
+use spherify_sphere::memory_budget::{self, Application};
+
+use crate::errors::{quality_error, resource_error};
 use crate::mesh::CoreMesh;
+
+/// The memory policy's check of a measure of `mesh`, before the points are copied.
+fn check_quality(mesh: &CoreMesh) -> PyResult<()> {
+    let (n, f) = (mesh.mesh.n_vertices(), mesh.mesh.n_faces());
+    memory_budget::check(&memory_budget::application_need(Application::Quality, n, f, 0))
+        .map_err(resource_error)
+}
 
 /// quality(mesh, points (n, 3) float64) -> dict of str to float (counts as
 /// int); MeshError for wrong shapes, non-finite points or all faces degenerate.
@@ -17,6 +26,7 @@ pub fn quality<'py>(
     mesh: &CoreMesh,
     points: PyReadonlyArrayDyn<'_, f64>,
 ) -> PyResult<Bound<'py, PyDict>> {
+    check_quality(mesh)?;
     let points = rows::<f64, 3>(&points, "points")?;
     let q = crate::progress::run_on_mesh(py, mesh, move |mesh| metrics::quality(mesh, &points))?
         .map_err(quality_error)?;
@@ -38,6 +48,7 @@ pub fn face_quality<'py>(
     mesh: &CoreMesh,
     points: PyReadonlyArrayDyn<'_, f64>,
 ) -> PyResult<Bound<'py, PyDict>> {
+    check_quality(mesh)?;
     let points = rows::<f64, 3>(&points, "points")?;
     let f =
         crate::progress::run_on_mesh(py, mesh, move |mesh| metrics::face_measures(mesh, &points))?

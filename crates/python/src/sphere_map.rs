@@ -10,11 +10,12 @@ use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArrayDyn};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use spherify_mesh::Mesh;
+use spherify_sphere::memory_budget::{self, Application};
 use spherify_sphere::point_map::PointMap;
 use spherify_sphere::{Details, Embedding};
 
 use crate::convert::{rows, to_numpy};
-use crate::errors::{mesh_error, point_map_error};
+use crate::errors::{mesh_error, point_map_error, resource_error};
 use crate::mesh::CoreMesh;
 
 /// A map of a mesh onto the sphere, with its certificate.
@@ -65,13 +66,25 @@ impl CoreSphereMap {
         &self.embedding
     }
 
+    /// The memory policy's check of `app` on `points` points of this map
+    /// (the locator already built): a ResourceError before they are copied.
+    fn check_points(&self, app: Application, points: usize) -> PyResult<()> {
+        let (n, f) = (self.mesh.n_vertices(), self.mesh.n_faces());
+        let need = memory_budget::application_need(app, n, f, points);
+        memory_budget::check(&need).map_err(resource_error)
+    }
+
     /// Built with the GIL released, outside the `OnceLock`: a thread that
     /// waits on the lock may hold the GIL, which the builder would need back
     /// inside the lock. Two threads racing both build; one result is kept.
+    /// Checked first by the memory policy (a ResourceError, not an abort).
     pub(crate) fn point_map(&self, py: Python<'_>) -> PyResult<&PointMap> {
         if let Some(map) = self.point_map.get() {
             return Ok(map);
         }
+        let (n, f) = (self.mesh.n_vertices(), self.mesh.n_faces());
+        memory_budget::check(&memory_budget::application_need(Application::PointMap, n, f, 0))
+            .map_err(resource_error)?;
         let built = crate::pool::detach(py, || {
             PointMap::new(Arc::clone(&self.mesh), &self.embedding)
                 .in_corner_order_of(self.caller.faces())
@@ -212,9 +225,10 @@ impl CoreSphereMap {
                 ids.shape()
             )));
         }
+        let map = self.point_map(py)?;
+        self.check_points(Application::ToSphere, ids.len())?;
         let ids: Vec<i64> = ids.iter().copied().collect();
         let bary = rows::<f64, 3>(&bary, "bary")?;
-        let map = self.point_map(py)?;
         // Through progress::run so that Ctrl-C stops a long batch.
         let points =
             crate::progress::run(py, None, |go_on| map.to_sphere_with(&ids, &bary, go_on))?
@@ -236,8 +250,10 @@ impl CoreSphereMap {
         Bound<'py, PyArray2<f64>>,
         Bound<'py, PyArray1<f64>>,
     )> {
-        let points = rows::<f64, 3>(&points, "points")?;
         let map = self.point_map(py)?;
+        // Before the rows are copied: a (k, 3) array's elements over 3.
+        self.check_points(Application::ToSurface, points.as_array().len() / 3)?;
+        let points = rows::<f64, 3>(&points, "points")?;
         let out = crate::progress::run(py, None, |go_on| map.to_surface_with(&points, go_on))?
             .map_err(point_map_error)?;
         let faces: Vec<i64> = out.faces.into_iter().map(i64::from).collect();

@@ -6,14 +6,23 @@ use pyo3::types::{PyDict, PyList, PyTuple};
 use spherify_mesh::{orient as orient_mod, validate, weld as weld_mod, MeshReport};
 
 use crate::convert::rows;
-use crate::errors::to_py;
+use spherify_sphere::memory_budget::{self, Application};
+
+use crate::errors::{resource_error, to_py};
 use crate::mesh::CoreMesh;
 
 /// check(mesh) -> MeshReport.
 #[pyfunction]
 pub fn check<'py>(py: Python<'py>, mesh: &CoreMesh) -> PyResult<Bound<'py, PyAny>> {
+    check_memory(mesh.mesh.n_vertices(), mesh.mesh.n_faces())?;
     let report = crate::progress::run_on_mesh(py, mesh, validate::check)?;
     report_to_py(py, &report)
+}
+
+/// The memory policy's check of validating a mesh of this size.
+fn check_memory(n_vertices: usize, n_faces: usize) -> PyResult<()> {
+    let need = memory_budget::application_need(Application::Check, n_vertices, n_faces, 0);
+    memory_budget::check(&need).map_err(resource_error)
 }
 
 /// check_raw(vertices, faces) -> MeshReport for arrays that may hold NaN or
@@ -24,6 +33,8 @@ pub fn check_raw<'py>(
     vertices: PyReadonlyArrayDyn<'_, f64>,
     faces: PyReadonlyArrayDyn<'_, i64>,
 ) -> PyResult<Bound<'py, PyAny>> {
+    // Before the rows are copied (elements over 3).
+    check_memory(vertices.as_array().len() / 3, faces.as_array().len() / 3)?;
     let positions = rows::<f64, 3>(&vertices, "vertices")?;
     let faces = rows::<i64, 3>(&faces, "faces")?;
     let size = faces.len();

@@ -173,6 +173,233 @@ pub fn certify_need(call: &str, n_vertices: usize, n_faces: usize) -> Need {
     Need::new(call.to_string(), CERTIFY, n_vertices, n_faces)
 }
 
+/// The calls that work on a made map or mesh (the applications, the point
+/// map, the measures, the readers), each with its measured peak growth: so
+/// many bytes per vertex of the mesh or map it is given and so many per item
+/// it makes or takes (a point, a pixel, a grid sample, an output vertex).
+/// The calls whose work is in the core are checked by the bindings before
+/// they start; those whose work is numpy's ask the core through
+/// `_core.check_application` with the same names.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Application {
+    /// Building a map's point locator (the first `to_surface`, `to_sphere` or fit).
+    PointMap,
+    /// `SphereMap.to_surface` of some points (the locator built).
+    ToSurface,
+    /// `SphereMap.to_sphere` of some surface points.
+    ToSphere,
+    /// `harmonics.fit`: samples of the Gauss-Legendre grid.
+    HarmonicsFit,
+    /// `Harmonics.evaluate`: sphere points.
+    HarmonicsEvaluate,
+    /// `quality` and `face_quality` of a mesh and its points.
+    Quality,
+    /// `check` (and `check_raw`) of a mesh.
+    Check,
+    /// `load` of a mesh file: per byte of the file.
+    Load,
+    /// `remesh` / `remesh_map`: output vertices (icosphere, to_surface, certificate).
+    Remesh,
+    /// `geometry_image`: pixels.
+    GeometryImage,
+    /// `from_geometry_image`: pixels.
+    FromGeometryImage,
+    /// `texture.uv` with each projection: vertices of the map (the
+    /// octahedral projection tries every octant for the faces it must).
+    TextureUvCube,
+    TextureUvEquirectangular,
+    TextureUvOctahedral,
+    /// `UVLayout.bake`: pixels of the atlas.
+    Bake,
+    /// `morph`: vertices of A and of B.
+    Morph,
+    /// `register` (and so `morph` with a registration): vertices of A and of B.
+    Register,
+    /// `correspond`: vertices of the maps and points of the common grid.
+    Correspond,
+}
+
+/// Peak growth of an [`Application`], before the margin: bytes per vertex (of
+/// the mesh or maps it is given), bytes per item (what it makes or takes),
+/// and bytes per item of the band it works on at a time (the images made in
+/// bands of rows: at most [`BAND_PIXELS`] items; 0 for the calls that work
+/// on all their items at once, whose `per_item` says it all).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ApplicationRate {
+    pub per_vertex: f64,
+    pub per_item: f64,
+    pub per_band_item: f64,
+}
+
+impl Application {
+    /// Every application, in the order of docs/reliability.md's table.
+    pub const ALL: [Application; 18] = [
+        Application::PointMap,
+        Application::ToSurface,
+        Application::ToSphere,
+        Application::HarmonicsFit,
+        Application::HarmonicsEvaluate,
+        Application::Quality,
+        Application::Check,
+        Application::Load,
+        Application::Remesh,
+        Application::GeometryImage,
+        Application::FromGeometryImage,
+        Application::TextureUvCube,
+        Application::TextureUvEquirectangular,
+        Application::TextureUvOctahedral,
+        Application::Bake,
+        Application::Morph,
+        Application::Register,
+        Application::Correspond,
+    ];
+
+    /// The name errors give and `_core.check_application` takes.
+    pub fn name(self) -> &'static str {
+        match self {
+            Application::PointMap => "point locator",
+            Application::ToSurface => "to_surface",
+            Application::ToSphere => "to_sphere",
+            Application::HarmonicsFit => "harmonics.fit",
+            Application::HarmonicsEvaluate => "Harmonics.evaluate",
+            Application::Quality => "quality",
+            Application::Check => "check",
+            Application::Load => "load",
+            Application::Remesh => "remesh",
+            Application::GeometryImage => "geometry_image",
+            Application::FromGeometryImage => "from_geometry_image",
+            Application::TextureUvCube => "texture.uv cube",
+            Application::TextureUvEquirectangular => "texture.uv equirectangular",
+            Application::TextureUvOctahedral => "texture.uv octahedral",
+            Application::Bake => "UVLayout.bake",
+            Application::Morph => "morph",
+            Application::Register => "register",
+            Application::Correspond => "correspond",
+        }
+    }
+
+    /// What one item is, as the error counts them.
+    pub fn item(self) -> &'static str {
+        match self {
+            Application::ToSurface
+            | Application::ToSphere
+            | Application::HarmonicsEvaluate
+            | Application::Correspond => "points",
+            Application::HarmonicsFit => "grid samples",
+            Application::Load => "bytes of file",
+            Application::Remesh => "output vertices",
+            Application::GeometryImage | Application::FromGeometryImage | Application::Bake => {
+                "pixels"
+            }
+            Application::PointMap
+            | Application::Quality
+            | Application::Check
+            | Application::TextureUvCube
+            | Application::TextureUvEquirectangular
+            | Application::TextureUvOctahedral
+            | Application::Morph
+            | Application::Register => "items",
+        }
+    }
+
+    /// The application named `name` (see [`Application::name`]).
+    pub fn from_name(name: &str) -> Option<Application> {
+        Application::ALL.into_iter().find(|a| a.name() == name)
+    }
+
+    /// The measured rate (docs/reliability.md, "Memory"; `benches/memory_rates.py`
+    /// measures them: resident growth, `VmHWM`, in a fresh process at two sizes,
+    /// the larger taken and rounded up).
+    pub fn rate(self) -> ApplicationRate {
+        let (per_vertex, per_item, per_band_item) = match self {
+            // Measured at 100k and 400k (vertices, points, pixels or samples):
+            // 169 and 193 per vertex.
+            Application::PointMap => (200.0, 0.0, 0.0),
+            // 155 and 144 per point (the four returned arrays, the core's copy
+            // of the points and its located rows).
+            Application::ToSurface => (0.0, 160.0, 0.0),
+            // 96 and 90.
+            Application::ToSphere => (0.0, 100.0, 0.0),
+            // 108 per grid sample at both (the samples' surface points; the
+            // transform's tables are O(lmax^2)); the locator is checked apart.
+            Application::HarmonicsFit => (0.0, 120.0, 0.0),
+            // 103 and 120 per point.
+            Application::HarmonicsEvaluate => (0.0, 130.0, 0.0),
+            // 129 and 181 per vertex (per-face measures, sorted for medians).
+            Application::Quality => (200.0, 0.0, 0.0),
+            // 109 at both.
+            Application::Check => (120.0, 0.0, 0.0),
+            // Per byte of the file: the bytes read whole, then the parsed
+            // arrays (see LOAD_BYTES_PER_FILE_BYTE).
+            Application::Load => (0.0, LOAD_BYTES_PER_FILE_BYTE, 0.0),
+            // 507 and 548 per output vertex: the icosphere made, located on
+            // the surface and certified as a map of its own; and the map's
+            // locator, per vertex of the map.
+            Application::Remesh => (200.0, 560.0, 0.0),
+            // Made in bands of rows: the image (24 per pixel) and the
+            // locator; a band of a million pixels is in the fixed part.
+            Application::GeometryImage => {
+                (200.0, GEOMETRY_IMAGE_PER_PIXEL, GEOMETRY_IMAGE_PER_BAND_PIXEL)
+            }
+            // 233 and 215 per pixel (the glued pixel ids, the faces).
+            Application::FromGeometryImage => (0.0, 240.0, 0.0),
+            // 862 and 810 per vertex of the map.
+            Application::TextureUvCube => (900.0, 0.0, 0.0),
+            // 518 and 508.
+            Application::TextureUvEquirectangular => (550.0, 0.0, 0.0),
+            // 3,916 and 3,769: every octant's projection of the faces that need it.
+            Application::TextureUvOctahedral => (4_000.0, 0.0, 0.0),
+            // Made in bands of rows like the geometry image: the atlas alone.
+            Application::Bake => (0.0, BAKE_PER_PIXEL, BAKE_PER_BAND_PIXEL),
+            // Per vertex of A and B together: a registration's (morph's
+            // default aligns through one) and the frames' arrays after it.
+            Application::Morph => (1_100.0, 0.0, 0.0),
+            // Per vertex of A and B together: the warp (the default) 1,050
+            // at 100k + 100k and 625 at 400k + 400k; rotation 383 and 280.
+            Application::Register => (1_100.0, 0.0, 0.0),
+            // The largest registration to the reference (as register), and
+            // per sample of every shape: its surface points and Procrustes'
+            // copies (correspond with rotations measured 419 and 283 per
+            // vertex of the pair).
+            Application::Correspond => (1_100.0, 100.0, 0.0),
+        };
+        ApplicationRate { per_vertex, per_item, per_band_item }
+    }
+}
+
+/// `load`'s peak per byte of the file (the file is read whole, then parsed):
+/// 1.0-1.5 measured on binary PLY and OBJ, 1.9 on binary STL (50 bytes a
+/// face, welded), of icospheres of 100k and 400k vertices.
+const LOAD_BYTES_PER_FILE_BYTE: f64 = 2.5;
+/// Pixels in a band of rows of `geometry_image` and `UVLayout.bake`
+/// (`_BAND_PIXELS` of `_geometry_image.py` and `texture.py`).
+pub const BAND_PIXELS: usize = 1 << 18;
+/// `geometry_image` per pixel of the image (its (n, n, 3) float64) ...
+const GEOMETRY_IMAGE_PER_PIXEL: f64 = 30.0;
+/// ... and per pixel of the band being located: 221 and 208 per pixel when
+/// the image is one band (100k and 400k pixels).
+const GEOMETRY_IMAGE_PER_BAND_PIXEL: f64 = 230.0;
+/// `UVLayout.bake` per pixel of the atlas ...
+const BAKE_PER_PIXEL: f64 = 30.0;
+/// ... and per pixel of the band: 156 and 161 per pixel in one band (the
+/// directions, the checkerboard's colours).
+const BAKE_PER_BAND_PIXEL: f64 = 170.0;
+
+/// What `app` needs on a mesh (or maps) of `n_vertices` and `n_faces` with
+/// `items` of its items, margin and fixed part included. The call is named
+/// with its items ("geometry_image (16,785,409 pixels)").
+pub fn application_need(app: Application, n_vertices: usize, n_faces: usize, items: usize) -> Need {
+    let rate = app.rate();
+    let size = n_vertices.max(n_faces / 2 + 2);
+    let band = rate.per_band_item * items.min(BAND_PIXELS) as f64;
+    let bytes = MARGIN * (rate.per_vertex * size as f64 + rate.per_item * items as f64 + band);
+    let mut call = app.name().to_string();
+    if rate.per_item > 0.0 {
+        call.push_str(&format!(" ({} {})", grouped(items as u64), app.item()));
+    }
+    Need { call, n_vertices, bytes: FIXED_BYTES.saturating_add(bytes.min(u64::MAX as f64) as u64) }
+}
+
 /// Which bound [`available`] found tighter.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Bound {
@@ -230,7 +457,7 @@ fn proc_kb(path: &str, key: &str) -> Option<u64> {
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum ResourceError {
     /// The estimate of the call does not fit in what is available.
-    #[error("{call} of {} vertices needs about {} ({} bytes), but {} ({} bytes) {}; a smaller mesh or more memory is needed", grouped(*n_vertices as u64), human(*needed), grouped(*needed), human(*available), grouped(*available), where_from(bound))]
+    #[error("{call}{} needs about {} ({} bytes), but {} ({} bytes) {}; a smaller mesh or more memory is needed", of_vertices(*n_vertices), human(*needed), grouped(*needed), human(*available), grouped(*available), where_from(bound))]
     Shortfall { call: String, n_vertices: usize, needed: u64, available: u64, bound: Bound },
     /// An allocation the estimate allowed was refused by the system.
     #[error("could not allocate {} ({} bytes) for {what}: the system refused the memory", human(*bytes), grouped(*bytes))]
@@ -252,6 +479,16 @@ impl ResourceError {
             ResourceError::Shortfall { available, .. } => Some(*available),
             ResourceError::Allocation { .. } => None,
         }
+    }
+}
+
+/// " of 2,000 vertices", or nothing for a call that is given no mesh
+/// (`Harmonics.evaluate`, a file not yet read).
+fn of_vertices(n_vertices: usize) -> String {
+    if n_vertices == 0 {
+        String::new()
+    } else {
+        format!(" of {} vertices", grouped(n_vertices as u64))
     }
 }
 
@@ -378,6 +615,38 @@ mod tests {
         }
         let fits = Need { call: "x".into(), n_vertices: 7, bytes: 1 };
         assert_eq!(check(&fits), Ok(()));
+    }
+
+    #[test]
+    fn every_application_is_named_once_and_grows_with_its_size() {
+        for app in Application::ALL {
+            assert_eq!(Application::from_name(app.name()), Some(app));
+            let rate = app.rate();
+            let small = application_need(app, 1_000, 1_996, 1_000);
+            let large = application_need(app, 10_000_000, 19_999_996, 10_000_000);
+            assert!(small.bytes >= FIXED_BYTES, "{}", app.name());
+            assert!(large.bytes > small.bytes, "{}", app.name());
+            // Something grows with the mesh or with the items, at more than
+            // the 24 bytes of a point or pixel (a file's byte is held at least
+            // once while it is read).
+            let floor = if app == Application::Load { 1.0 } else { 24.0 };
+            assert!(rate.per_vertex + rate.per_item >= floor, "{}", app.name());
+            assert!(large.call.starts_with(app.name()));
+        }
+        assert_eq!(Application::from_name("texture.uv"), None);
+    }
+
+    #[test]
+    fn a_banded_image_counts_one_band_and_the_whole_image() {
+        let image = |pixels| application_need(Application::GeometryImage, 0, 0, pixels).bytes;
+        let one_band = image(BAND_PIXELS) - image(BAND_PIXELS / 2);
+        let beyond = image(4 * BAND_PIXELS) - image(3 * BAND_PIXELS);
+        // Beyond one band only the image grows.
+        assert!(beyond < one_band, "{beyond} {one_band}");
+        let text = check(&application_need(Application::GeometryImage, 7, 10, usize::MAX / 64))
+            .map(|()| String::new())
+            .unwrap_or_else(|e| e.to_string());
+        assert!(text.is_empty() || text.starts_with("geometry_image ("), "{text}");
     }
 
     #[test]

@@ -27,6 +27,7 @@ use rayon::prelude::*;
 
 use crate::applications::harmonics::gauss_legendre::gauss_legendre;
 use crate::applications::harmonics::legendre::Legendre;
+use crate::memory_budget::{self, Application, ResourceError};
 use crate::point_map::{PointMap, PointMapError};
 
 /// Largest degree accepted: the grid at this degree already holds 8 million
@@ -50,6 +51,10 @@ pub enum HarmonicsError {
     NotOnSphere { row: usize, point: [f64; 3], norm: f64 },
     #[error(transparent)]
     Map(#[from] PointMapError),
+    /// The grid or the points do not fit in memory (issue 26): refused before
+    /// the work starts, or an allocation the system refused.
+    #[error(transparent)]
+    Resource(#[from] ResourceError),
     /// `progress(0, 0)` asked to stop (Ctrl-C from Python).
     #[error("stopped on request")]
     Cancelled,
@@ -321,12 +326,17 @@ pub fn fit_with(
     }
     let started = std::time::Instant::now();
     let grid = Grid::new(lmax, oversample)?;
+    // Checked once the degree is known to be in range (a degree out of range
+    // is a parameter error, not a memory one), before the grid is made.
+    let samples = grid.x.len() * grid.n_phi;
+    let need = memory_budget::application_need(Application::HarmonicsFit, 0, 0, samples);
+    memory_budget::check(&need)?;
     let points = grid.points();
     let n_theta = grid.x.len();
     let total = 2 * n_theta + lmax + 1;
     // Point location is point by point: pieces give the same samples.
     let rings_per_piece = n_theta.div_ceil(20);
-    let mut xyz = Vec::with_capacity(points.len());
+    let mut xyz = memory_budget::reserved(points.len(), "the harmonic fit's samples")?;
     for (k, piece) in points.chunks(rings_per_piece * grid.n_phi).enumerate() {
         xyz.extend(map.to_surface_with(piece, progress)?.xyz);
         if !progress(((k + 1) * rings_per_piece).min(n_theta), total) {
@@ -378,6 +388,10 @@ pub fn evaluate_with(
             expected: format!("must be at most {MAX_DEGREE}"),
         });
     }
+    // Before the points are copied: the values and the unit points are the
+    // call's memory, per point.
+    let need = memory_budget::application_need(Application::HarmonicsEvaluate, 0, 0, points.len());
+    memory_budget::check(&need)?;
     // Column order: for each m, the cos (m >= 0) and sin (m > 0) rows for
     // l = m..=lmax, next to each other as the recurrence visits them.
     let mut cos_rows = Vec::with_capacity(coefficients.len());

@@ -25,6 +25,7 @@ use rayon::prelude::*;
 use spherify_mesh::Mesh;
 
 use crate::embed::{Details, Embedding};
+use crate::memory_budget::{self, ResourceError};
 use crate::point_map::gc_map::GcMap;
 use crate::point_map::h_map::ThetaPhiMap;
 
@@ -44,6 +45,9 @@ pub enum PointMapError {
     /// The progress closure asked to stop (Ctrl-C in Python).
     #[error("stopped after {done} of {total} points")]
     Cancelled { done: usize, total: usize },
+    /// The memory for the points could not be had (issue 26: an error, not an abort).
+    #[error(transparent)]
+    Resource(#[from] ResourceError),
 }
 
 /// Points per batch between two polls of the progress closure: a few
@@ -58,7 +62,9 @@ fn batched<T: Send>(
     progress: &(dyn Fn(usize, usize) -> bool + Sync),
     f: impl Fn(std::ops::Range<usize>) -> Result<Vec<T>, PointMapError>,
 ) -> Result<Vec<T>, PointMapError> {
-    let mut out = Vec::with_capacity(n);
+    // Reserved fallibly: the output of millions of points is the one large
+    // allocation here, and a refused one is a ResourceError, not an abort.
+    let mut out = memory_budget::reserved(n, "the located points")?;
     for start in (0..n).step_by(BATCH) {
         if !progress(0, 0) {
             return Err(PointMapError::Cancelled { done: start, total: n });
@@ -317,25 +323,24 @@ impl PointMap {
                 })
                 .collect::<Result<_, _>>()
         })?;
-        let xyz = located
-            .par_iter()
-            .map(|&(f, w, _)| {
-                let face = self.mesh.faces()[f as usize];
-                let mut x = [0.0; 3];
-                for k in 0..3 {
-                    let p = self.mesh.positions()[face[k] as usize];
-                    for i in 0..3 {
-                        x[i] += w[k] * p[i];
-                    }
+        let mut xyz = memory_budget::reserved(located.len(), "the surface points")?;
+        xyz.par_extend(located.par_iter().map(|&(f, w, _)| {
+            let face = self.mesh.faces()[f as usize];
+            let mut x = [0.0; 3];
+            for k in 0..3 {
+                let p = self.mesh.positions()[face[k] as usize];
+                for i in 0..3 {
+                    x[i] += w[k] * p[i];
                 }
-                x
-            })
-            .collect();
+            }
+            x
+        }));
+        let n = located.len();
         let mut out = SurfacePoints {
-            faces: Vec::with_capacity(located.len()),
-            bary: Vec::with_capacity(located.len()),
+            faces: memory_budget::reserved(n, "the located faces")?,
+            bary: memory_budget::reserved(n, "the barycentric weights")?,
             xyz,
-            error: Vec::with_capacity(located.len()),
+            error: memory_budget::reserved(n, "the error bounds")?,
         };
         for (f, w, error) in located {
             out.faces.push(f);
