@@ -31,6 +31,7 @@
 //! positive along the straight path, so the covering degree cannot jump).
 
 pub mod authalic_newton;
+pub mod chord_area;
 mod conformal;
 pub mod conformal_start;
 pub mod distortion_energy;
@@ -57,7 +58,7 @@ use crate::memory_budget::filled;
 use crate::methods::progressive::authalic_newton::{
     authalic_newton, authalic_newton_rings, AuthalicSteps,
 };
-use crate::methods::progressive::distortion_energy::Energy;
+use crate::methods::progressive::distortion_energy::{balanced_area_weight, Energy};
 use crate::methods::progressive::flip_free::{check_tolerance, positive_star, Optimised, Problem};
 use crate::methods::progressive::lbfgs::{lbfgs, LbfgsParams, LbfgsRun};
 use conformal::NotUsed;
@@ -139,7 +140,7 @@ impl ProgressiveParams {
             Energy::Stretch | Energy::CoarseStretch => {
                 ProgressiveParams { energy, max_iter: 50, tolerance: 1e-5 }
             }
-            Energy::Balanced | Energy::CoarseBalanced => {
+            Energy::Balanced | Energy::BalancedWeighted(_) | Energy::CoarseBalanced => {
                 ProgressiveParams { energy, max_iter: 20, tolerance: 1e-4 }
             }
             Energy::Conformal => ProgressiveParams { energy, max_iter: 100, tolerance: 1e-5 },
@@ -203,6 +204,15 @@ pub fn progressive(
     };
     insert_levels(&hierarchy, &problem, params, mesh.faces(), &mut rings, &mut points, progress)?;
     seconds.push(("insertion", started.elapsed().as_secs_f64()));
+    // The balanced energy's final area weight, from the stretch of the map
+    // as inserted (see balanced_area_weight).
+    let problem = if params.energy == Energy::Balanced {
+        let stretch = Problem { energy: Energy::Stretch, ..problem };
+        let s = stretch.per_area(&stretch.stars(&rings.rings), &points);
+        Problem { energy: Energy::BalancedWeighted(balanced_area_weight(s)), ..problem }
+    } else {
+        problem
+    };
 
     let started = Instant::now();
     let max_iter = params.max_iter.max(1);
@@ -233,7 +243,7 @@ pub fn progressive(
     progress(total, total);
 
     let status = if end.converged { Status::Converged } else { Status::MaxIterations };
-    let message = message(&hierarchy, params.energy, &end, global, authalic, not_used);
+    let message = message(&hierarchy, problem.energy, &end, global, authalic, not_used);
     Ok(SphereEmbedding { points, iterations: end.sweeps, status, message, seconds })
 }
 
@@ -444,6 +454,9 @@ fn message(
         end.energy,
         end.last_change
     );
+    if let Energy::BalancedWeighted(_) = energy {
+        message.push_str(&format!(" with area weight {:.3}", energy.area_weight()));
+    }
     if let Some(run) = global {
         message.push_str(&format!(
             "; {} global L-BFGS steps took it from {:.4} to {:.4}{} ({} line-search trials, \

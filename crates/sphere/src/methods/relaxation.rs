@@ -139,10 +139,10 @@ pub fn relaxation_with_progress(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::methods::test_support::{assert_converged_and_valid, initial_points};
     use crate::certificate::validity::check_sphere;
     use crate::embedding::Status;
     use crate::methods::relaxation_loop::{enclosing_cap, point_sum};
+    use crate::methods::test_support::{assert_converged_and_valid, initial_points};
     use spherify_mesh::solids::{
         bent_tube, bumpy, capsule, icosphere, octahedron, octasphere, perturbed_octahedron,
         scrambled,
