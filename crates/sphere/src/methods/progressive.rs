@@ -130,7 +130,7 @@ impl ProgressiveParams {
     /// and a hundred sweeps to 1e-5 (measured on the corpus: octopus 2.646 ->
     /// 2.599, spot 1.185 -> 1.177 in L2 stretch; spot 5.7 -> 3.8 and hand
     /// 14.3 -> 11.8 degrees of mean angle distortion). Balanced (the best
-    /// quality; not the default, as its global steps take 3-12 times the
+    /// quality; not the default, as its global steps take 4-15 times the
     /// isometric energy's time at 200k vertices): twenty to 1e-4, as final sweeps are what bring its stretch
     /// to SphereParam's (measured on ten corpus meshes, five sweeps to 1e-3
     /// against these twenty: stretch worse than SphereParam's on 10 and 6,
@@ -459,7 +459,8 @@ fn message(
     }
     if let Some(run) = global {
         message.push_str(&format!(
-            "; {} global L-BFGS steps took it from {:.4} to {:.4}{} ({} line-search trials, \
+            "; {} global L-BFGS steps took it (with its chord-area term) from {:.4} to {:.4}{} \
+             ({} line-search trials, \
              {:.2} s factoring, {:.2} s solving)",
             run.iterations,
             run.start,

@@ -40,7 +40,9 @@ pub enum Energy {
     /// of growth as well as of shrinkage, so that each face also keeps its
     /// share of the sphere (issue 22: stretch alone leaves the area
     /// distortion above SphereParam's on most meshes, the isometric energy
-    /// both stretch and area).
+    /// both stretch and area). The progressive method lowers it with this
+    /// fixed weight only through `improve`; its own final level uses
+    /// [`Energy::BalancedWeighted`].
     Balanced,
     /// Stretch plus [`COARSE_STRETCH_EXPANSION`] times |J|^2: what the coarse
     /// levels of a progressive stretch map lower (see [`Energy::on_coarse_levels`]).

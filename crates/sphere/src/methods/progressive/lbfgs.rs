@@ -91,7 +91,8 @@ pub struct LbfgsParams {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LbfgsRun {
     pub iterations: usize,
-    /// Energy per unit of scaled surface area at the start and at the end.
+    /// Energy per unit of scaled surface area at the start and at the end,
+    /// with the chord-area term where it applies.
     pub start: f64,
     pub end: f64,
     /// The last iteration lowered the energy by less than the tolerance.
@@ -431,23 +432,15 @@ pub fn lbfgs(
     let (faces, surface) = Faces::new(problem, rings);
     let energy = problem.energy;
     let k = faces.area_scale(points, surface);
-    // The chord-area weight, fixed for the run as k is; the energies
-    // reported are the densities' alone.
+    // The chord-area weight, fixed for the run as k is.
     let density = faces.energy(energy, k, 0.0, points);
     let mu = chord_area::weight(chord_area::applies(energy), density, faces.chord_total(points));
     let per_area = |e: f64| e / (k * surface).max(f64::MIN_POSITIVE);
-    let densities = |points: &[[f64; 3]]| {
-        if mu == 0.0 {
-            None
-        } else {
-            Some(faces.energy(energy, k, 0.0, points))
-        }
-    };
     let mut eval = faces.evaluate(energy, k, mu, points);
     let mut run = LbfgsRun {
         iterations: 0,
-        start: per_area(density),
-        end: per_area(density),
+        start: per_area(eval.energy),
+        end: per_area(eval.energy),
         converged: false,
         fell_back: false,
         factor_seconds: 0.0,
@@ -593,7 +586,7 @@ pub fn lbfgs(
         run.fell_back = true;
         eval.energy = faces.energy(energy, k, mu, points);
     }
-    run.end = per_area(densities(points).unwrap_or(eval.energy));
+    run.end = per_area(eval.energy);
     Ok(run)
 }
 
