@@ -182,17 +182,21 @@ def embed(mesh: MeshLike, method: str = "progressive", *, progress: Any = None,
     energy : str
         *Progressive.* ``"isometric"`` (default; symmetric Dirichlet, the
         fastest), ``"balanced"`` (the best quality: Sander's L2 stretch plus
-        0.15 (det J + 1 / det J), so that faces neither shrink nor swell;
-        stretch and area distortion at or below Praun and Hoppe's on most
-        meshes, issue 22; like ``"stretch"``, followed by global L-BFGS steps
+        w (det J + 1 / det J), so that faces neither shrink nor swell, with w
+        from 0.02 on nearly round meshes to 1 on limbed ones, chosen from the
+        map's stretch; stretch and area distortion at or below Praun and
+        Hoppe's on most meshes, issue 22; like ``"stretch"``, it also pays for
+        the chord triangles' total area, by which L2 stretch is normalised,
+        and is followed by global L-BFGS steps
         on the coarse levels and at the end, which ``max_iter`` and ``tol``
-        do not bound; 3-12 times the isometric energy's time), ``"conformal"``
+        do not bound; 4-15 times the isometric energy's time), ``"conformal"``
         (MIPS with a barrier below an area ratio of 1e-5: an exactly
         conformal map of a limbed shape cannot be stored in doubles),
         ``"authalic"`` (area plus a small angle term, followed by global
         Gauss-Newton steps towards equal spherical areas on each level and at
         the end; ``max_iter`` and ``tol`` do not bound those) or
-        ``"stretch"`` (Sander's L2 stretch, as Praun and Hoppe).
+        ``"stretch"`` (Sander's L2 stretch, as Praun and Hoppe, with the
+        chord-area term of ``"balanced"``).
     max_iter : int
         *Progressive.* Sweeps of the final optimisation (default 5 for ``"isometric"``, 20 for
         ``"balanced"``, 10 for ``"authalic"``, 50 for ``"stretch"``, 100 for

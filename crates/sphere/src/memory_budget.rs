@@ -76,9 +76,11 @@ pub fn progressive_rate(energy: Energy) -> Rate {
         Energy::Isometric => PROGRESSIVE,
         // Their global L-BFGS steps keep 2 x 6 curvature pairs and a sparse
         // factor of the preconditioner besides the sweeps' buffers.
-        Energy::Stretch | Energy::CoarseStretch | Energy::Balanced | Energy::CoarseBalanced => {
-            PROGRESSIVE_GLOBAL_STEPS
-        }
+        Energy::Stretch
+        | Energy::CoarseStretch
+        | Energy::Balanced
+        | Energy::BalancedWeighted(_)
+        | Energy::CoarseBalanced => PROGRESSIVE_GLOBAL_STEPS,
         Energy::Conformal => PROGRESSIVE_CONFORMAL,
         Energy::Authalic => PROGRESSIVE_AUTHALIC,
     }

@@ -31,6 +31,7 @@
 //! positive along the straight path, so the covering degree cannot jump).
 
 pub mod authalic_newton;
+pub mod chord_area;
 mod conformal;
 pub mod conformal_start;
 pub mod distortion_energy;
@@ -58,7 +59,7 @@ use crate::memory_budget::filled;
 use crate::methods::progressive::authalic_newton::{
     authalic_newton, authalic_newton_rings, AuthalicSteps,
 };
-use crate::methods::progressive::distortion_energy::Energy;
+use crate::methods::progressive::distortion_energy::{balanced_area_weight, Energy};
 use crate::methods::progressive::flip_free::{
     check_tolerance, flat_rings, positive_star, Optimised, Problem,
 };
@@ -133,7 +134,7 @@ impl ProgressiveParams {
     /// and a hundred sweeps to 1e-5 (measured on the corpus: octopus 2.646 ->
     /// 2.599, spot 1.185 -> 1.177 in L2 stretch; spot 5.7 -> 3.8 and hand
     /// 14.3 -> 11.8 degrees of mean angle distortion). Balanced (the best
-    /// quality; not the default, as its global steps take 3-12 times the
+    /// quality; not the default, as its global steps take 4-15 times the
     /// isometric energy's time at 200k vertices): twenty to 1e-4, as final sweeps are what bring its stretch
     /// to SphereParam's (measured on ten corpus meshes, five sweeps to 1e-3
     /// against these twenty: stretch worse than SphereParam's on 10 and 6,
@@ -143,7 +144,7 @@ impl ProgressiveParams {
             Energy::Stretch | Energy::CoarseStretch => {
                 ProgressiveParams { energy, max_iter: 50, tolerance: 1e-5 }
             }
-            Energy::Balanced | Energy::CoarseBalanced => {
+            Energy::Balanced | Energy::BalancedWeighted(_) | Energy::CoarseBalanced => {
                 ProgressiveParams { energy, max_iter: 20, tolerance: 1e-4 }
             }
             Energy::Conformal => ProgressiveParams { energy, max_iter: 100, tolerance: 1e-5 },
@@ -207,6 +208,15 @@ pub fn progressive(
     };
     insert_levels(&hierarchy, &problem, params, mesh.faces(), &mut rings, &mut points, progress)?;
     seconds.push(("insertion", started.elapsed().as_secs_f64()));
+    // The balanced energy's final area weight, from the stretch of the map
+    // as inserted (see balanced_area_weight).
+    let problem = if params.energy == Energy::Balanced {
+        let stretch = Problem { energy: Energy::Stretch, ..problem };
+        let s = stretch.per_area(&stretch.stars(&rings.rings), &points);
+        Problem { energy: Energy::BalancedWeighted(balanced_area_weight(s)), ..problem }
+    } else {
+        problem
+    };
 
     let started = Instant::now();
     // The hierarchy has been undone: only its size is told from here on.
@@ -247,7 +257,7 @@ pub fn progressive(
     progress(total, total);
 
     let status = if end.converged { Status::Converged } else { Status::MaxIterations };
-    let message = message(undone, params.energy, &end, global, authalic, not_used);
+    let message = message(undone, problem.energy, &end, global, authalic, not_used);
     Ok(SphereEmbedding { points, iterations: end.sweeps, status, message, seconds })
 }
 
@@ -494,9 +504,13 @@ fn message(
         end.energy,
         end.last_change
     );
+    if let Energy::BalancedWeighted(_) = energy {
+        message.push_str(&format!(" with area weight {:.3}", energy.area_weight()));
+    }
     if let Some(run) = global {
         message.push_str(&format!(
-            "; {} global L-BFGS steps took it from {:.4} to {:.4}{} ({} line-search trials, \
+            "; {} global L-BFGS steps took it (with its chord-area term) from {:.4} to {:.4}{} \
+             ({} line-search trials, \
              {:.2} s factoring, {:.2} s solving)",
             run.iterations,
             run.start,

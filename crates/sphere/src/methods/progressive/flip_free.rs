@@ -17,6 +17,7 @@ use spherify_mesh::predicates::{det3_sign, Sign};
 use spherify_mesh::vec3::{add, cross, det3, dot, norm, scale, sub};
 
 use crate::embedding::normalize;
+use crate::methods::progressive::chord_area::{self, chord_area, chord_area_hessian};
 use crate::methods::progressive::distortion_energy::{
     face_energy, face_energy_hessian, Energy, Reference,
 };
@@ -185,8 +186,56 @@ impl Problem<'_> {
         per_vertex.iter().sum::<f64>()
     }
 
+    /// The energy of the current faces per unit of scaled surface area.
+    pub fn per_area(&self, stars: &Stars, points: &[[f64; 3]]) -> f64 {
+        let k = self.area_scale(stars, points);
+        let energy = self.total_energy(k, stars, points);
+        energy / (k * self.surface_area(stars)).max(f64::MIN_POSITIVE)
+    }
+
+    /// The surface area of the faces of `stars` (their references' areas).
+    fn surface_area(&self, stars: &Stars) -> f64 {
+        // Per vertex, then in a fixed order: the same on every thread count.
+        let per_vertex: Vec<f64> = (0..stars.len() as u32)
+            .into_par_iter()
+            .map(|i| stars.refs(i).iter().map(|r| r.area).sum())
+            .collect();
+        per_vertex.iter().sum::<f64>() / 3.0
+    }
+
+    /// Sum of the current faces' chord areas (see
+    /// [`crate::methods::progressive::chord_area`]), each face seen from its
+    /// smallest corner, in a fixed order.
+    pub fn chord_total(&self, stars: &Stars, points: &[[f64; 3]]) -> f64 {
+        let per_vertex: Vec<f64> = (0..stars.len() as u32)
+            .into_par_iter()
+            .map(|i| {
+                let ring = stars.ring(i);
+                let m = ring.len();
+                let p = points[i as usize];
+                (0..m)
+                    .filter(|&j| i < ring[j] && i < ring[(j + 1) % m])
+                    .map(|j| {
+                        chord_area(p, points[ring[j] as usize], points[ring[(j + 1) % m] as usize])
+                    })
+                    .sum::<f64>()
+            })
+            .collect();
+        per_vertex.iter().sum::<f64>()
+    }
+
+    /// The chord-area weight mu of the current state (0 where the energy
+    /// does not pay for chord area), see [`crate::methods::progressive::chord_area`].
+    pub fn chord_weight(&self, energy: f64, stars: &Stars, points: &[[f64; 3]]) -> f64 {
+        if !chord_area::applies(self.energy) {
+            return 0.0;
+        }
+        chord_area::weight(true, energy, self.chord_total(stars, points))
+    }
+
     /// One flip-free move of vertex `i`: the new point, or `None` when no step
-    /// lowers the energy and passes the exact test.
+    /// lowers the energy and passes the exact test. The chord-area term is
+    /// left out (these moves place new or blocked vertices).
     pub fn move_vertex(
         &self,
         k: f64,
@@ -195,15 +244,18 @@ impl Problem<'_> {
         points: &[[f64; 3]],
     ) -> Option<[f64; 3]> {
         let refs = self.references(i, ring);
-        self.step(k, i, ring, &refs, points, &mut Vec::new()).map(|(q, _)| q)
+        self.step(k, 0.0, i, ring, &refs, points, &mut Vec::new()).map(|(q, _)| q)
     }
 
-    /// [`Problem::move_vertex`] with the references of `i`'s faces given and
-    /// a buffer for its ring's points; also returns the length of the
-    /// vertex's shortest edge before the move (which also bounds the step).
+    /// [`Problem::move_vertex`] with the references of `i`'s faces given,
+    /// `chord` times the chord areas added to the energy, and a buffer for
+    /// its ring's points; also returns the length of the vertex's shortest
+    /// edge before the move (which also bounds the step).
+    #[allow(clippy::too_many_arguments)]
     fn step(
         &self,
         k: f64,
+        chord: f64,
         i: u32,
         ring: &[u32],
         refs: &[Reference],
@@ -212,7 +264,7 @@ impl Problem<'_> {
     ) -> Option<([f64; 3], f64)> {
         let p = points[i as usize];
         let star = Star::gather(refs, ring, points, corners);
-        let (e0, g, hess) = star.hessian(self.energy, k, p);
+        let (e0, g, hess) = star.hessian(self.energy, k, chord, p);
         if !e0.is_finite() {
             return None;
         }
@@ -256,7 +308,7 @@ impl Problem<'_> {
         let mut t = (SAFE_FRACTION * t_safe).min(1.0);
         for _ in 0..MAX_HALVINGS {
             if let Some(q) = normalize(add(p, scale(step, t))) {
-                let e = star.energy(self.energy, k, q);
+                let e = star.energy(self.energy, k, chord, q);
                 if e <= e0 + 1e-4 * t * slope && positive_fan(q, star.corners) {
                     return Some((q, reach));
                 }
@@ -267,13 +319,16 @@ impl Problem<'_> {
     }
 
     /// One pass over `classes` (vertex sets of which no two share a face),
+    /// lowering the energy plus `chord` times the chord areas,
     /// class after class, the vertices of a class in parallel, skipping those
     /// not `active` (all, when `None`). Returns the vertices that moved by
     /// more than [`NOTICEABLE`] of their shortest edge; `stop()` is asked
     /// between classes.
+    #[allow(clippy::too_many_arguments)]
     pub fn sweep(
         &self,
         k: f64,
+        chord: f64,
         classes: &[Vec<u32>],
         stars: &Stars,
         points: &mut [[f64; 3]],
@@ -294,7 +349,7 @@ impl Problem<'_> {
                         return None;
                     }
                     let (ring, refs) = (stars.ring(i), stars.refs(i));
-                    let (q, shortest) = self.step(k, i, ring, refs, shared, corners)?;
+                    let (q, shortest) = self.step(k, chord, i, ring, refs, shared, corners)?;
                     Some((q, norm(sub(q, shared[i as usize])) > NOTICEABLE * shortest))
                 })
                 .collect();
@@ -339,14 +394,37 @@ impl<'a> Star<'a> {
             .map(move |(j, r)| (r, self.corners[j], self.corners[(j + 1) % m]))
     }
 
-    fn energy(&self, energy: Energy, k: f64, p: [f64; 3]) -> f64 {
-        self.faces().map(|(r, a, b)| face_energy(energy, r, k, p, a, b)).sum()
+    fn energy(&self, energy: Energy, k: f64, chord: f64, p: [f64; 3]) -> f64 {
+        self.faces()
+            .map(|(r, a, b)| {
+                let e = face_energy(energy, r, k, p, a, b);
+                if chord == 0.0 {
+                    e
+                } else {
+                    e + chord * chord_area(p, a, b)
+                }
+            })
+            .sum()
     }
 
-    fn hessian(&self, energy: Energy, k: f64, p: [f64; 3]) -> (f64, [f64; 3], [[f64; 3]; 3]) {
+    fn hessian(
+        &self,
+        energy: Energy,
+        k: f64,
+        chord: f64,
+        p: [f64; 3],
+    ) -> (f64, [f64; 3], [[f64; 3]; 3]) {
         let mut total = (0.0, [0.0; 3], [[0.0; 3]; 3]);
         for (r, a, b) in self.faces() {
-            let (e, g, h) = face_energy_hessian(energy, r, k, p, a, b);
+            let (mut e, mut g, mut h) = face_energy_hessian(energy, r, k, p, a, b);
+            if chord != 0.0 && e.is_finite() {
+                let (ca, cg, ch) = chord_area_hessian(p, a, b);
+                e += chord * ca;
+                g = add(g, scale(cg, chord));
+                for (row, c_row) in h.iter_mut().zip(ch) {
+                    *row = add(*row, scale(c_row, chord));
+                }
+            }
             total.0 += e;
             total.1 = add(total.1, g);
             for (row, h_row) in total.2.iter_mut().zip(h) {
@@ -516,7 +594,12 @@ impl Problem<'_> {
             Optimised { sweeps: 0, energy, last_change: f64::INFINITY, converged: false, scale: k };
         while result.sweeps < max_sweeps {
             let sweeps = result.sweeps;
-            let moved = self.sweep(k, &classes, stars, points, Some(&active), &|| stop(sweeps))?;
+            // The sweep lowers E + mu C (see chord_area); its change is
+            // measured on that same sum.
+            let mu = self.chord_weight(energy, stars, points);
+            let before = if mu == 0.0 { energy } else { 2.0 * energy };
+            let moved =
+                self.sweep(k, mu, &classes, stars, points, Some(&active), &|| stop(sweeps))?;
             result.sweeps += 1;
             // Only what moved, and its neighbours, can still go down much.
             active.iter_mut().for_each(|a| *a = false);
@@ -526,21 +609,25 @@ impl Problem<'_> {
                     active[r as usize] = free(r);
                 }
             }
+            let after = if mu == 0.0 {
+                0.0
+            } else {
+                self.total_energy(k, stars, points) + mu * self.chord_total(stars, points)
+            };
             k = self.area_scale(stars, points);
             let next = self.total_energy(k, stars, points);
-            result.last_change = (energy - next).abs() / energy.abs().max(f64::MIN_POSITIVE);
+            result.last_change = if mu == 0.0 {
+                (energy - next).abs() / energy.abs().max(f64::MIN_POSITIVE)
+            } else {
+                (before - after).abs() / before.abs().max(f64::MIN_POSITIVE)
+            };
             energy = next;
             if moved.is_empty() || result.last_change < tolerance {
                 result.converged = true;
                 break;
             }
         }
-        // Per vertex, then in a fixed order: the same on every thread count.
-        let per_vertex: Vec<f64> = (0..stars.len() as u32)
-            .into_par_iter()
-            .map(|i| stars.refs(i).iter().map(|r| r.area).sum())
-            .collect();
-        let surface_area = per_vertex.iter().sum::<f64>() / 3.0;
+        let surface_area = self.surface_area(&stars);
         result.energy = energy / (k * surface_area).max(f64::MIN_POSITIVE);
         result.scale = k;
         Ok(result)

@@ -54,6 +54,7 @@ use spherify_sparse::{CsrMatrix, Factorization, SparseError};
 
 use crate::certificate::validity::check_sphere;
 use crate::embedding::normalize;
+use crate::methods::progressive::chord_area::{self, chord_area, chord_area_gradients};
 use crate::methods::progressive::distortion_energy::{
     face_energy, face_energy_gradients, Energy, Reference,
 };
@@ -90,7 +91,8 @@ pub struct LbfgsParams {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LbfgsRun {
     pub iterations: usize,
-    /// Energy per unit of scaled surface area at the start and at the end.
+    /// Energy per unit of scaled surface area at the start and at the end,
+    /// with the chord-area term where it applies.
     pub start: f64,
     pub end: f64,
     /// The last iteration lowered the energy by less than the tolerance.
@@ -188,7 +190,16 @@ impl Faces {
         }
     }
 
-    fn energy(&self, energy: Energy, k: f64, points: &[[f64; 3]]) -> f64 {
+    /// Sum of the faces' chord areas.
+    fn chord_total(&self, points: &[[f64; 3]]) -> f64 {
+        chunked_sum(&self.corners, |&[a, b, c]| {
+            chord_area(points[a as usize], points[b as usize], points[c as usize])
+        })
+    }
+
+    /// The energy plus `mu` times the chord areas (see
+    /// [`crate::methods::progressive::chord_area`]).
+    fn energy(&self, energy: Energy, k: f64, mu: f64, points: &[[f64; 3]]) -> f64 {
         let per_chunk: Vec<f64> = self
             .corners
             .par_chunks(CHUNK)
@@ -198,7 +209,12 @@ impl Faces {
                     .zip(rs)
                     .map(|(&[a, b, c], r)| {
                         let [pa, pb, pc] = [a, b, c].map(|v| points[v as usize]);
-                        face_energy(energy, r, k, pa, pb, pc)
+                        let e = face_energy(energy, r, k, pa, pb, pc);
+                        if mu == 0.0 {
+                            e
+                        } else {
+                            e + mu * chord_area(pa, pb, pc)
+                        }
                     })
                     .sum::<f64>()
             })
@@ -206,7 +222,7 @@ impl Faces {
         per_chunk.iter().sum()
     }
 
-    fn evaluate(&self, energy: Energy, k: f64, points: &[[f64; 3]]) -> Evaluation {
+    fn evaluate(&self, energy: Energy, k: f64, mu: f64, points: &[[f64; 3]]) -> Evaluation {
         let per_face: Vec<(f64, [[f64; 3]; 3], f64)> = self
             .corners
             .par_iter()
@@ -214,7 +230,15 @@ impl Faces {
             .with_min_len(1024)
             .map(|(&[a, b, c], r)| {
                 let [pa, pb, pc] = [a, b, c].map(|v| points[v as usize]);
-                face_energy_gradients(energy, r, k, pa, pb, pc)
+                let (mut e, mut g, f_a) = face_energy_gradients(energy, r, k, pa, pb, pc);
+                if mu != 0.0 && e.is_finite() {
+                    let (area, cg) = chord_area_gradients(pa, pb, pc);
+                    e += mu * area;
+                    for (gi, ci) in g.iter_mut().zip(cg) {
+                        *gi = add(*gi, scale(ci, mu));
+                    }
+                }
+                (e, g, f_a)
             })
             .collect();
         let per_chunk: Vec<f64> =
@@ -408,8 +432,11 @@ pub fn lbfgs(
     let (faces, surface) = Faces::new(problem, rings);
     let energy = problem.energy;
     let k = faces.area_scale(points, surface);
+    // The chord-area weight, fixed for the run as k is.
+    let density = faces.energy(energy, k, 0.0, points);
+    let mu = chord_area::weight(chord_area::applies(energy), density, faces.chord_total(points));
     let per_area = |e: f64| e / (k * surface).max(f64::MIN_POSITIVE);
-    let mut eval = faces.evaluate(energy, k, points);
+    let mut eval = faces.evaluate(energy, k, mu, points);
     let mut run = LbfgsRun {
         iterations: 0,
         start: per_area(eval.energy),
@@ -503,7 +530,7 @@ pub fn lbfgs(
                     },
                 )
                 .collect();
-            let e = faces.energy(energy, k, &trial);
+            let e = faces.energy(energy, k, mu, &trial);
             run.trials += 1;
             if e.is_finite() && e <= eval.energy + ARMIJO * t * slope && faces.all_positive(&trial)
             {
@@ -519,7 +546,7 @@ pub fn lbfgs(
             memory.clear();
             continue;
         };
-        let next = faces.evaluate(energy, k, &trial);
+        let next = faces.evaluate(energy, k, mu, &trial);
         let s: Vec<[f64; 3]> =
             trial.par_iter().zip(points.par_iter()).map(|(a, b)| sub(*a, *b)).collect();
         let y: Vec<[f64; 3]> = next
@@ -557,7 +584,7 @@ pub fn lbfgs(
     if !check_sphere(&faces.corners, &placed).valid {
         points.copy_from_slice(&start_points);
         run.fell_back = true;
-        eval.energy = faces.energy(energy, k, points);
+        eval.energy = faces.energy(energy, k, mu, points);
     }
     run.end = per_area(eval.energy);
     Ok(run)
