@@ -51,6 +51,9 @@ face_ids, bary = np.zeros({n_points}, np.int64), np.full(({n_points}, 3), 1 / 3)
 image = np.zeros(({image_size}, {image_size}, 3))
 small_image = sp.geometry_image(small, 33)
 big = sphere_map(sp.datasets.icosphere({n_big})) if {n_big} else None
+# Disks for tutte: the closed meshes less one face, made before the limit.
+disk = sp.Mesh(big.mesh.vertices, big.mesh.faces[1:]) if big else None
+small_disk = sp.Mesh(small.mesh.vertices, small.mesh.faces[1:])
 path = {path!r}
 if path:
     sp.save(big.mesh, path)
@@ -75,6 +78,8 @@ CALLS = {{
     "point_map": lambda: big.to_surface(np.array([[0, 0, 1.0]])),
     "quality": lambda: sp.quality(big.mesh, big.points),
     "check": lambda: sp.check(big.mesh),
+    "orient": lambda: sp.orient(big.mesh),
+    "tutte": lambda: sp.tutte(disk),
     "load": lambda: sp.load(path),
 }}
 SMALL = {{
@@ -94,6 +99,8 @@ SMALL = {{
     "point_map": lambda: other.to_surface(np.array([[0, 0, 1.0]])),
     "quality": lambda: sp.quality(small.mesh, small.points),
     "check": lambda: sp.check(small.mesh),
+    "orient": lambda: sp.orient(small.mesh),
+    "tutte": lambda: sp.tutte(small_disk),
     "load": lambda: sp.load(path + ".small.obj"),
 }}
 for name in sys.argv[1:]:
@@ -126,6 +133,8 @@ NAMED = {
     "point_map": r"point locator of [\d,]+ vertices",
     "quality": r"quality of [\d,]+ vertices",
     "check": r"check of [\d,]+ vertices",
+    "orient": r"orient of [\d,]+ vertices",
+    "tutte": r"tutte of [\d,]+ vertices",
     "load": r"load \([\d,]+ bytes of file\)",
 }
 
@@ -199,7 +208,7 @@ def test_calls_on_a_map_too_large_for_them_are_refused_and_small_ones_work() -> 
     assert_refused_and_small_works(outcomes, VERTICES)
 
 
-CHEAP = ["point_map", "quality", "check", "load"]
+CHEAP = ["point_map", "quality", "check", "orient", "tutte", "load"]
 
 
 @pytest.mark.slow
@@ -208,7 +217,10 @@ def test_the_cheap_calls_on_a_3m_vertex_mesh_are_refused_and_small_ones_work(
         tmp_path: Path) -> None:
     # The calls of 100-200 bytes a vertex need a larger mesh to outgrow the
     # headroom: the point locator 570 MB, quality 540 MB, check 330 MB and
-    # load of its binary STL (300 MB, read whole, then parsed and welded).
+    # load of its binary STL (300 MB, read whole, then parsed and welded);
+    # orient 600 MB and tutte of the mesh less a face 3.6 GB (before their
+    # checks, orient of this mesh aborted the process: "memory allocation of
+    # 72072960 bytes failed", SIGABRT).
     calls = [f"{size}:{name}" for name in CHEAP for size in ("big", "small")]
     outcomes = run_child(calls, n_big=3_000_000, path=str(tmp_path / "big.stl"))
     assert_refused_and_small_works(outcomes, CHEAP)

@@ -198,6 +198,10 @@ pub enum Application {
     Quality,
     /// `check` (and `check_raw`) of a mesh.
     Check,
+    /// `orient` of a mesh (validation, then the faces made consistent).
+    Orient,
+    /// `tutte` of a disk (the Laplacian, its solver, the boundary).
+    Tutte,
     /// `load` of a mesh file: per byte of the file.
     Load,
     /// `remesh` / `remesh_map`: output vertices (icosphere, to_surface, certificate).
@@ -235,7 +239,7 @@ pub struct ApplicationRate {
 
 impl Application {
     /// Every application, in the order of docs/reliability.md's table.
-    pub const ALL: [Application; 18] = [
+    pub const ALL: [Application; 20] = [
         Application::PointMap,
         Application::ToSurface,
         Application::ToSphere,
@@ -243,6 +247,8 @@ impl Application {
         Application::HarmonicsEvaluate,
         Application::Quality,
         Application::Check,
+        Application::Orient,
+        Application::Tutte,
         Application::Load,
         Application::Remesh,
         Application::GeometryImage,
@@ -266,6 +272,8 @@ impl Application {
             Application::HarmonicsEvaluate => "Harmonics.evaluate",
             Application::Quality => "quality",
             Application::Check => "check",
+            Application::Orient => "orient",
+            Application::Tutte => "tutte",
             Application::Load => "load",
             Application::Remesh => "remesh",
             Application::GeometryImage => "geometry_image",
@@ -296,6 +304,8 @@ impl Application {
             Application::PointMap
             | Application::Quality
             | Application::Check
+            | Application::Orient
+            | Application::Tutte
             | Application::TextureUvCube
             | Application::TextureUvEquirectangular
             | Application::TextureUvOctahedral
@@ -331,6 +341,13 @@ impl Application {
             Application::Quality => (200.0, 0.0, 0.0),
             // 109 at both.
             Application::Check => (120.0, 0.0, 0.0),
+            // 212 and 168 per vertex (icospheres of 400k and 1.6M vertices,
+            // every other face reversed). Before this check, orient of a 3M
+            // mesh with 320 MiB to spare aborted the process.
+            Application::Orient => (250.0, 0.0, 0.0),
+            // 1,120 and 1,212 per vertex (the same icospheres less a face,
+            // default options).
+            Application::Tutte => (1_300.0, 0.0, 0.0),
             // Per byte of the file: the bytes read whole, then the parsed
             // arrays (see LOAD_BYTES_PER_FILE_BYTE).
             Application::Load => (0.0, LOAD_BYTES_PER_FILE_BYTE, 0.0),
