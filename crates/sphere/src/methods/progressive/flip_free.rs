@@ -627,7 +627,7 @@ impl Problem<'_> {
                 break;
             }
         }
-        let surface_area = self.surface_area(&stars);
+        let surface_area = self.surface_area(stars);
         result.energy = energy / (k * surface_area).max(f64::MIN_POSITIVE);
         result.scale = k;
         Ok(result)
