@@ -380,3 +380,37 @@ def test_a_point_that_is_not_finite_or_zero_is_refused(tmp_path: Path, row: List
     with pytest.raises(sp.FormatError, match=f"point 7 .*{what}") as info:
         sp.load_map(path)
     assert info.value.path == str(path)
+
+
+# --- GIfTI: declared arrays checked before nibabel reads them ---------------------------
+
+def gifti_with(tmp_path: Path, old: bytes, new: bytes) -> Path:
+    pytest.importorskip("nibabel")
+    path = tmp_path / "m.surf.gii"
+    sp.save(sp.datasets.icosphere(200), path)
+    data = path.read_bytes()
+    assert old in data
+    damaged = tmp_path / "damaged.surf.gii"
+    damaged.write_bytes(data.replace(old, new, 1))
+    return damaged
+
+
+@pytest.mark.timeout(60)
+@pytest.mark.parametrize("old, new, why", [
+    # Found by the fuzzer: nibabel counted up to the Dimensionality, and a
+    # 180-digit one hung sp.load (it never returned).
+    (b'Dimensionality="2"', b'Dimensionality="' + b"2" * 180 + b'"', "Dimensionality is"),
+    # The same through a character reference, which the XML parser decodes.
+    (b'Dimensionality="2"', b'Dimensionality="&#50;' + b"2" * 180 + b'"', "Dimensionality is"),
+    (b'Dimensionality="2"', b'Dimensionality="7"', "Dimensionality is '7'"),
+    (b'Dim1="3"', b'Dim1="-3"', "Dim1 is '-3', not a count"),
+    (b'Dim0="', b'Dim0="99999999', "elements, more than its"),
+])
+def test_a_gifti_declaring_arrays_no_file_holds_is_refused_at_once(
+        tmp_path: Path, old: bytes, new: bytes, why: str) -> None:
+    path = gifti_with(tmp_path, old, new)
+    started = time.perf_counter()
+    with pytest.raises(sp.FormatError, match=why) as info:
+        sp.load(path)
+    assert time.perf_counter() - started < 5
+    assert info.value.path == str(path)

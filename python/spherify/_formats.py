@@ -21,6 +21,7 @@ import lzma
 import os
 import zipfile
 import zlib
+from xml.parsers import expat
 from pathlib import Path
 from typing import Any, Callable, Dict, List, Optional, Tuple
 
@@ -29,7 +30,7 @@ import numpy as np
 from ._atomic import write_atomically
 from ._errors import FormatError, MeshError
 from ._files import require_regular_file
-from ._npz_check import check_npy, check_npz
+from ._npz_check import DEFLATE_RATIO, DEFLATE_SLACK, MAX_ELEMENTS, check_npy, check_npz
 
 #: What a reader returns: vertices, faces, notes, per-vertex attributes.
 Loaded = Tuple[np.ndarray, np.ndarray, List[str], Dict[str, np.ndarray]]
@@ -264,11 +265,55 @@ def write_freesurfer(path: Path, vertices: np.ndarray, faces: np.ndarray,
         os.fspath(temporary), vertices, faces, create_stamp=FREESURFER_STAMP))
 
 
+#: GIfTI's largest Dimensionality (Dim0 ... Dim5).
+GIFTI_MAX_DIMENSIONS = 6
+
+
+def check_gifti_arrays(data: bytes, path: Path) -> None:
+    """Refuse, before nibabel reads ``data``, a GIfTI file whose data arrays
+    declare what no file of this size holds: a ``Dimensionality`` that is
+    not a number from 0 to 6 (nibabel counts up to it: a mutated file
+    declaring a 180-digit one hung the reader, found by the fuzzer, issue 26),
+    a ``Dim<i>`` that is not a count, or more elements than ``MAX_ELEMENTS`` or
+    than the file's bytes could inflate to (deflate at most 1032 : 1). Reads
+    the XML once with expat, which also decodes the attributes' entities as
+    nibabel's parser will."""
+    def fail(why: str) -> FormatError:
+        return FormatError(f"{path}: not a readable GIfTI file ({why})", str(path))
+
+    most = DEFLATE_RATIO * len(data) + DEFLATE_SLACK
+
+    def start(name: str, attributes: Dict[str, str]) -> None:
+        if name != "DataArray":
+            return
+        text = attributes.get("Dimensionality", "0").strip()
+        if not (text.isdigit() and len(text) < 3 and int(text) <= GIFTI_MAX_DIMENSIONS):
+            raise fail(f"a DataArray's Dimensionality is {text[:40]!r}, not 0 to "
+                       f"{GIFTI_MAX_DIMENSIONS}")
+        elements = 1
+        for i in range(int(text)):
+            dim = attributes.get(f"Dim{i}", "").strip()
+            if not (dim.isdigit() and len(dim) < 20):
+                raise fail(f"a DataArray's Dim{i} is {dim[:40]!r}, not a count")
+            elements *= int(dim)
+        if elements > min(MAX_ELEMENTS, most):
+            raise fail(f"a DataArray declares {elements:,} elements, more than its "
+                       f"{len(data):,}-byte file can hold")
+
+    parser = expat.ParserCreate()
+    parser.StartElementHandler = start
+    try:
+        parser.Parse(data, True)
+    except expat.ExpatError as err:
+        raise fail(f"ExpatError: {err}") from None
+
+
 def read_gifti(path: Path) -> Loaded:
     """A GIfTI surface: its ``NIFTI_INTENT_POINTSET`` and ``NIFTI_INTENT_TRIANGLE`` arrays."""
     gifti = _nibabel(path, "reading a GIfTI surface", "gifti")
     require_regular_file(path)
     data = path.read_bytes()
+    check_gifti_arrays(data, path)
     try:
         image = gifti.GiftiImage.from_bytes(data)
         points = image.get_arrays_from_intent("NIFTI_INTENT_POINTSET")
