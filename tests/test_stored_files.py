@@ -405,6 +405,8 @@ def gifti_with(tmp_path: Path, old: bytes, new: bytes) -> Path:
     (b'Dimensionality="2"', b'Dimensionality="7"', "Dimensionality is '7'"),
     (b'Dim1="3"', b'Dim1="-3"', "Dim1 is '-3', not a count"),
     (b'Dim0="', b'Dim0="99999999', "elements, more than its"),
+    # An encoding Python does not know (LookupError from the XML parser).
+    (b'encoding="UTF-8"', b'encoding="UTF-n"', "LookupError"),
 ])
 def test_a_gifti_declaring_arrays_no_file_holds_is_refused_at_once(
         tmp_path: Path, old: bytes, new: bytes, why: str) -> None:

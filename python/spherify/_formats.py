@@ -304,8 +304,11 @@ def check_gifti_arrays(data: bytes, path: Path) -> None:
     parser.StartElementHandler = start
     try:
         parser.Parse(data, True)
-    except expat.ExpatError as err:
-        raise fail(f"ExpatError: {err}") from None
+    except (expat.ExpatError, LookupError, ValueError) as err:
+        # (LookupError: an encoding the XML declaration names that Python
+        # does not know; ValueError: text that is not in it. Found by the
+        # fuzzer once this check read the file before nibabel.)
+        raise fail(f"{type(err).__name__}: {err}") from None
 
 
 def read_gifti(path: Path) -> Loaded:
