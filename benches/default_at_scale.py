@@ -79,7 +79,7 @@ def worker(shape: str, n: int, threads: Optional[int], cholmod: bool) -> Dict[st
     del m
     sys.path.insert(0, str(HERE))
     from theta_phi_pipeline import cut_system
-    from sksparse.cholmod import cholesky
+    from sksparse.cholmod import cholesky  # type: ignore[import-untyped]
     tp = sp.embed(mesh, method="theta_phi")
     A, B = cut_system(tp)
     del tp
@@ -118,8 +118,8 @@ def row(r: Dict[str, Any]) -> str:
 
 def main() -> int:
     if len(sys.argv) > 1 and sys.argv[1] == "--worker":
-        shape, n, threads, cholmod = sys.argv[2:6]
-        print(json.dumps(worker(shape, int(n), int(threads) or None, cholmod == "1")))
+        shape, size, threads, cholmod = sys.argv[2:6]
+        print(json.dumps(worker(shape, int(size), int(threads) or None, cholmod == "1")))
         return 0
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--shapes", nargs="+",
