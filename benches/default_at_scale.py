@@ -137,8 +137,8 @@ def main() -> int:
     for shape in args.shapes:
         print(row(run(shape, args.n, None, not args.no_cholmod)), flush=True)
     if args.threads:
-        for threads in (1, 2):
-            print(row(run(args.shapes[0], args.n, threads, False)), flush=True)
+        for count in (1, 2):
+            print(row(run(args.shapes[0], args.n, count, False)), flush=True)
     points: List[Any] = []
     for n in args.slope:
         r = run("tentacles", n, None, False)
