@@ -179,6 +179,7 @@ def test_bad_input(blob: sp.SphereMap) -> None:
         sp.register(blob, sp.SphereMap.from_points(ico, points))
 
 
+@pytest.mark.slow  # (about 11 s on a quiet machine; .ci/run runs the slow tests)
 def test_population_mean_and_modes() -> None:
     maps = [sp.embed(sp.datasets.bumpy_blob(800, seed=s)) for s in range(4)]
     pop = sp.correspond(maps, level=3, transform="rotation")
