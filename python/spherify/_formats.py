@@ -23,7 +23,7 @@ import zipfile
 import zlib
 from xml.parsers import expat
 from pathlib import Path
-from typing import Any, Callable, Dict, List, Optional, Tuple
+from typing import IO, Any, Callable, Dict, List, Optional, Tuple
 
 import numpy as np
 
@@ -130,12 +130,22 @@ def _pick(arrays: Any, path: Path, names: Tuple[str, ...]) -> np.ndarray:
 
 def is_zip_archive(path: Path) -> bool:
     """Whether ``path`` is a zip archive as ``np.load`` and ``zipfile`` both
-    read one: ``np.load`` goes by the first bytes, ``zipfile.is_zipfile`` by
-    the end of the file, and an ``.npy`` array with a zip's end record
-    appended passed the one and came back as an array from the other."""
+    read one (see :func:`is_zip_stream`)."""
     with open(path, "rb") as handle:
-        start = handle.read(4)
-    return start in (b"PK\x03\x04", b"PK\x05\x06") and zipfile.is_zipfile(path)
+        return is_zip_stream(handle)
+
+
+def is_zip_stream(handle: IO[bytes]) -> bool:
+    """Whether the open ``handle`` (a file, or bytes in memory) holds a zip
+    archive as ``np.load`` and ``zipfile`` both read one: ``np.load`` goes by
+    the first bytes, ``zipfile.is_zipfile`` by the end, and an ``.npy`` array
+    with a zip's end record appended passed the one and came back as an array
+    from the other. Leaves ``handle`` at its start."""
+    handle.seek(0)
+    start = handle.read(4)
+    found = start in (b"PK\x03\x04", b"PK\x05\x06") and zipfile.is_zipfile(handle)
+    handle.seek(0)
+    return found
 
 
 def damaged_archive(err: BaseException) -> bool:

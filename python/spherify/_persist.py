@@ -32,7 +32,6 @@ from __future__ import annotations
 import io
 import json
 import os
-import zipfile
 from pathlib import Path
 from typing import IO, TYPE_CHECKING, Any, Callable, Dict, List, Optional, Tuple, Union
 
@@ -42,7 +41,7 @@ from . import _core
 from ._atomic import write_atomically
 from ._errors import FormatError, MeshError
 from ._files import file_errors, require_regular_file
-from ._formats import damaged_archive, is_zip_archive
+from ._formats import damaged_archive, is_zip_archive, is_zip_stream
 from ._json_depth import too_deep
 from ._npz_check import check_npz
 
@@ -356,11 +355,8 @@ def unpickle_map(archive: Any, source: str) -> "SphereMap":
         raise FormatError(f"{source}: a pickled map carries bytes, not a "
                           f"{type(archive).__name__}", source)
     handle = io.BytesIO(archive)
-    # Both ends, as is_zip_archive reads a file: np.load goes by the first
-    # bytes, zipfile by the end record.
-    if archive[:4] not in (b"PK\x03\x04", b"PK\x05\x06") or not zipfile.is_zipfile(handle):
+    if not is_zip_stream(handle):
         raise FormatError(f"{source}: not a sphere map archive", source)
-    handle.seek(0)
     return _read_archive(handle, source)
 
 
