@@ -62,6 +62,17 @@ pub fn check_application(
 ) -> PyResult<()> {
     let app = Application::from_name(name)
         .ok_or_else(|| mesh_error(format!("no memory rate for the call {name:?}")))?;
+    check_app(app, n_vertices, n_faces, items)
+}
+
+/// The memory policy's check of `app` on a mesh of this size with `items`
+/// of its items, before it starts: a `ResourceError` when it cannot fit.
+pub fn check_app(
+    app: Application,
+    n_vertices: usize,
+    n_faces: usize,
+    items: usize,
+) -> PyResult<()> {
     memory_budget::check(&memory_budget::application_need(app, n_vertices, n_faces, items))
         .map_err(resource_error)
 }

@@ -37,10 +37,11 @@ pub fn tutte<'py>(
     tol: f64,
     max_iter: usize,
 ) -> PyResult<(Bound<'py, PyArray2<f64>>, Bound<'py, PyDict>)> {
-    crate::validate::check_application_memory(
+    crate::memory::check_app(
         spherify_sphere::memory_budget::Application::Tutte,
         mesh.mesh.n_vertices(),
         mesh.mesh.n_faces(),
+        0,
     )?;
     let boundary = match (boundary, polygon) {
         ("circle", None) => BoundaryShape::Circle,

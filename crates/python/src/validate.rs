@@ -6,9 +6,10 @@ use pyo3::types::{PyDict, PyList, PyTuple};
 use spherify_mesh::{orient as orient_mod, validate, weld as weld_mod, MeshReport};
 
 use crate::convert::rows;
-use spherify_sphere::memory_budget::{self, Application};
+use spherify_sphere::memory_budget::Application;
 
-use crate::errors::{resource_error, to_py};
+use crate::errors::to_py;
+use crate::memory::check_app;
 use crate::mesh::CoreMesh;
 
 /// check(mesh) -> MeshReport.
@@ -21,17 +22,7 @@ pub fn check<'py>(py: Python<'py>, mesh: &CoreMesh) -> PyResult<Bound<'py, PyAny
 
 /// The memory policy's check of validating a mesh of this size.
 fn check_memory(n_vertices: usize, n_faces: usize) -> PyResult<()> {
-    check_application_memory(Application::Check, n_vertices, n_faces)
-}
-
-/// The memory policy's check of `app` on a mesh of this size, before it starts.
-pub fn check_application_memory(
-    app: Application,
-    n_vertices: usize,
-    n_faces: usize,
-) -> PyResult<()> {
-    let need = memory_budget::application_need(app, n_vertices, n_faces, 0);
-    memory_budget::check(&need).map_err(resource_error)
+    check_app(Application::Check, n_vertices, n_faces, 0)
 }
 
 /// check_raw(vertices, faces) -> MeshReport for arrays that may hold NaN or
@@ -55,7 +46,7 @@ pub fn check_raw<'py>(
 /// orient(mesh) -> (CoreMesh, info dict); raises TopologyError.
 #[pyfunction]
 pub fn orient<'py>(py: Python<'py>, mesh: &CoreMesh) -> PyResult<(CoreMesh, Bound<'py, PyDict>)> {
-    check_application_memory(Application::Orient, mesh.mesh.n_vertices(), mesh.mesh.n_faces())?;
+    check_app(Application::Orient, mesh.mesh.n_vertices(), mesh.mesh.n_faces(), 0)?;
     let (oriented, info) = crate::progress::run_on_mesh(py, mesh, orient_mod::orient)?
         .map_err(|e| to_py(py, e.into()))?;
     let dict = PyDict::new(py);
