@@ -229,6 +229,11 @@ pub fn progressive(
     // Only the global steps read the rings again; without them they are
     // let go before the references, the method's largest buffer, are made.
     let rings = global_params.map(|_| rings);
+    // The freed rings and hierarchy (a million small blocks at 1M vertices)
+    // stay resident in the allocator's arenas unless handed back: measured on
+    // the 1M helix tube, about 110 bytes per vertex of the peak that the
+    // references below set.
+    spherify_sparse::release_free_memory();
     let stars = problem.stars_of(start, flat);
     let end = problem
         .optimise_stars(&stars, &mut points, params.max_iter, params.tolerance, None, &stop)
