@@ -122,6 +122,52 @@ mod tests {
         assert_eq!(g.faces(), octahedron().faces());
     }
 
+    /// `half_edges` builds on demand and panics if the build fails: every
+    /// mesh `new` accepts must be one `HalfEdgeMesh::new` accepts.
+    #[test]
+    fn every_accepted_mesh_has_half_edges() {
+        let p = OCTAHEDRON_POSITIONS.to_vec();
+        let f = OCTAHEDRON_FACES.to_vec();
+        let flip = |[a, b, c]: [u32; 3]| [a, c, b];
+        let mut one_flipped = f.clone();
+        one_flipped[3] = flip(one_flipped[3]);
+        let half_flipped: Vec<[u32; 3]> =
+            f.iter().enumerate().map(|(i, &t)| if i % 2 == 0 { flip(t) } else { t }).collect();
+        let mut duplicated = f.clone();
+        duplicated.push(f[0]);
+        let mut extra_vertex = p.clone();
+        extra_vertex.push([2.0, 2.0, 2.0]);
+        // Two octahedra sharing vertex 0: a pinched (non-manifold) vertex.
+        let mut pinched_p = p.clone();
+        pinched_p.extend(p[1..].iter().map(|q| [q[0] + 3.0, q[1], q[2]]));
+        let mut pinched_f = f.clone();
+        pinched_f
+            .extend(f.iter().map(|t| t.map(|v| if v == 0 { 0 } else { v + p.len() as u32 - 1 })));
+        let cases = [
+            (p.clone(), f.clone(), true),
+            (p.clone(), one_flipped, true),
+            (p.clone(), half_flipped, true),
+            (p.clone(), duplicated, false),
+            (extra_vertex, f.clone(), false),
+            (pinched_p, pinched_f, false),
+        ];
+        for (i, (positions, faces, accepted)) in cases.into_iter().enumerate() {
+            let n_faces = faces.len();
+            let Ok(mesh) = Mesh::new(positions, faces) else {
+                assert!(!accepted, "case {i}");
+                continue;
+            };
+            match GenusZeroMesh::new(mesh) {
+                Ok(g) => {
+                    assert!(accepted, "case {i} accepted");
+                    assert!(HalfEdgeMesh::new(g.mesh()).is_ok(), "case {i}");
+                    assert_eq!(g.half_edges().n_faces(), n_faces, "case {i}");
+                }
+                Err(_) => assert!(!accepted, "case {i} refused"),
+            }
+        }
+    }
+
     #[test]
     fn an_open_mesh_is_refused_with_its_report() {
         let mut faces = OCTAHEDRON_FACES.to_vec();
