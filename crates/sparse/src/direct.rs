@@ -272,8 +272,9 @@ const TRIM_FROM_VALUES: usize = 1 << 22;
 /// the 1M helix tube and bumpy blob, 230 MB of free but resident arena memory,
 /// a fifth of the peak. `malloc_trim` returns every free page (not only the
 /// arena's top); it took 7-33 ms there. Elsewhere it is not needed or
-/// not available, and nothing is done.
-fn release_free_memory() {
+/// not available, and nothing is done. Also called by the progressive method
+/// of `spherify-sphere` before its largest buffer.
+pub fn release_free_memory() {
     #[cfg(all(target_os = "linux", target_env = "gnu"))]
     {
         extern "C" {

@@ -32,7 +32,7 @@ mod vector;
 
 pub use csr::CsrMatrix;
 pub use direct::orderings::{ordering_report, OrderingStats};
-pub use direct::Factorization;
+pub use direct::{release_free_memory, Factorization};
 pub use error::SparseError;
 pub use solve::{solve, SolveInfo, SolveParams};
 pub use solver_kind::SolverKind;

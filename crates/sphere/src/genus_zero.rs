@@ -1,14 +1,16 @@
 //! The one door every spherical method comes in by (STYLE 5): a closed,
 //! connected, manifold genus-0 mesh whose faces are consistently oriented and
 //! face outward (thesis Prop. 2.8, Alg. 2.9), with its half-edge connectivity
-//! built once.
+//! built once, when a method first asks for it.
 //!
-//! [`GenusZeroMesh::new`] runs the validation of `spherify_mesh::validate`,
-//! repairs the orientation when the faces are inconsistent or face inward, and
-//! builds the half-edges. The methods of [`crate::embed`] take the result and
-//! never check topology again.
+//! [`GenusZeroMesh::new`] runs the validation of `spherify_mesh::validate`
+//! and repairs the orientation when the faces are inconsistent or face
+//! inward. The methods of [`crate::embed`] take the result and never check
+//! topology again. The half-edges wait for [`GenusZeroMesh::half_edges`]: the
+//! default (progressive) method never reads them, and they are 84 bytes per
+//! vertex that it would otherwise hold through its whole run (issue 27).
 
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 
 use spherify_mesh::orient::orient;
 use spherify_mesh::{validate, HalfEdgeMesh, Mesh, TopologyError, TopologyProblem};
@@ -19,7 +21,7 @@ use spherify_mesh::{validate, HalfEdgeMesh, Mesh, TopologyError, TopologyProblem
 #[derive(Debug, Clone)]
 pub struct GenusZeroMesh {
     mesh: Arc<Mesh>,
-    half_edges: HalfEdgeMesh,
+    half_edges: OnceLock<HalfEdgeMesh>,
     reoriented_faces: usize,
 }
 
@@ -44,8 +46,7 @@ impl GenusZeroMesh {
             let (oriented, info) = orient(&mesh)?;
             (Arc::new(oriented), info.flipped_faces)
         };
-        let half_edges = HalfEdgeMesh::new(&mesh)?;
-        Ok(GenusZeroMesh { mesh, half_edges, reoriented_faces })
+        Ok(GenusZeroMesh { mesh, half_edges: OnceLock::new(), reoriented_faces })
     }
 
     /// The oriented mesh: faces counter-clockwise seen from outside.
@@ -58,8 +59,17 @@ impl GenusZeroMesh {
         Arc::clone(&self.mesh)
     }
 
+    /// The half-edge connectivity, built on the first call. O(F log d).
+    ///
+    /// # Panics
+    /// Never on a mesh that [`GenusZeroMesh::new`] accepted: the validation
+    /// checks every requirement `HalfEdgeMesh::new` has (closed, manifold at
+    /// edges and vertices, no repeated or unreferenced vertex) and the
+    /// orientation is made consistent before.
     pub fn half_edges(&self) -> &HalfEdgeMesh {
-        &self.half_edges
+        self.half_edges.get_or_init(|| {
+            HalfEdgeMesh::new(&self.mesh).expect("a validated, oriented genus-0 mesh")
+        })
     }
 
     pub fn positions(&self) -> &[[f64; 3]] {
@@ -110,6 +120,52 @@ mod tests {
             GenusZeroMesh::new(Mesh::new(OCTAHEDRON_POSITIONS.to_vec(), faces).unwrap()).unwrap();
         assert_eq!(g.reoriented_faces(), 8);
         assert_eq!(g.faces(), octahedron().faces());
+    }
+
+    /// `half_edges` builds on demand and panics if the build fails: every
+    /// mesh `new` accepts must be one `HalfEdgeMesh::new` accepts.
+    #[test]
+    fn every_accepted_mesh_has_half_edges() {
+        let p = OCTAHEDRON_POSITIONS.to_vec();
+        let f = OCTAHEDRON_FACES.to_vec();
+        let flip = |[a, b, c]: [u32; 3]| [a, c, b];
+        let mut one_flipped = f.clone();
+        one_flipped[3] = flip(one_flipped[3]);
+        let half_flipped: Vec<[u32; 3]> =
+            f.iter().enumerate().map(|(i, &t)| if i % 2 == 0 { flip(t) } else { t }).collect();
+        let mut duplicated = f.clone();
+        duplicated.push(f[0]);
+        let mut extra_vertex = p.clone();
+        extra_vertex.push([2.0, 2.0, 2.0]);
+        // Two octahedra sharing vertex 0: a pinched (non-manifold) vertex.
+        let mut pinched_p = p.clone();
+        pinched_p.extend(p[1..].iter().map(|q| [q[0] + 3.0, q[1], q[2]]));
+        let mut pinched_f = f.clone();
+        pinched_f
+            .extend(f.iter().map(|t| t.map(|v| if v == 0 { 0 } else { v + p.len() as u32 - 1 })));
+        let cases = [
+            (p.clone(), f.clone(), true),
+            (p.clone(), one_flipped, true),
+            (p.clone(), half_flipped, true),
+            (p.clone(), duplicated, false),
+            (extra_vertex, f.clone(), false),
+            (pinched_p, pinched_f, false),
+        ];
+        for (i, (positions, faces, accepted)) in cases.into_iter().enumerate() {
+            let n_faces = faces.len();
+            let Ok(mesh) = Mesh::new(positions, faces) else {
+                assert!(!accepted, "case {i}");
+                continue;
+            };
+            match GenusZeroMesh::new(mesh) {
+                Ok(g) => {
+                    assert!(accepted, "case {i} accepted");
+                    assert!(HalfEdgeMesh::new(g.mesh()).is_ok(), "case {i}");
+                    assert_eq!(g.half_edges().n_faces(), n_faces, "case {i}");
+                }
+                Err(_) => assert!(!accepted, "case {i} refused"),
+            }
+        }
     }
 
     #[test]
