@@ -97,14 +97,16 @@ const AUTHALIC_FINAL_WORK: usize = 100_000;
 /// steps after 5 sweeps instead of 20 only to 1.590.
 const GLOBAL_STEPS: usize = 100;
 const GLOBAL_TOLERANCE: f64 = 1e-7;
-/// The final global steps get [`GLOBAL_WORK`] vertex-steps, at least
-/// [`GLOBAL_MIN_STEPS`] and at most [`GLOBAL_STEPS`]: 100 up to 20k
-/// vertices, 10 at 200k. On large meshes a step costs about a sweep and
-/// buys little once the coarse levels had theirs (issue 22, measured on
-/// 200k-vertex `helix_tube`, balanced: 100 steps took L2 stretch from 3.7128
-/// to 3.7023 in 22 of the map's 45 s); nearly round meshes stop after 5-10
-/// steps by the tolerance anyway.
-const GLOBAL_WORK: usize = 2_000_000;
+/// The final global steps: all [`GLOBAL_STEPS`] up to [`GLOBAL_FULL_SIZE`]
+/// vertices, then fewer as the square of the size grows, at least
+/// [`GLOBAL_MIN_STEPS`] (13 at 134k, 10 at 200k). On large meshes a step
+/// costs about a sweep and buys little once the coarse levels had theirs
+/// (issue 22, measured on 200k-vertex `helix_tube`, balanced: 100 steps took
+/// L2 stretch from 3.7128 to 3.7023 in 22 of the map's 45 s); nearly round
+/// meshes stop after 5-10 steps by the tolerance anyway. Horse (48k) needs
+/// its hundred: with 41 its angle distortion was 30.30 degrees, above 1.1
+/// times SphereParam's 27.41; with 100, 29.25.
+const GLOBAL_FULL_SIZE: usize = 50_000;
 const GLOBAL_MIN_STEPS: usize = 10;
 /// Global steps on each coarse level of the stretch and balanced energies
 /// with this many vertices, after its sweeps: there limbs win or lose their
@@ -147,8 +149,8 @@ impl ProgressiveParams {
     /// and a hundred sweeps to 1e-5 (measured on the corpus: octopus 2.646 ->
     /// 2.599, spot 1.185 -> 1.177 in L2 stretch; spot 5.7 -> 3.8 and hand
     /// 14.3 -> 11.8 degrees of mean angle distortion). Balanced (the best
-    /// quality; not the default, as its global steps take 4-15 times the
-    /// isometric energy's time at 200k vertices): twenty to 1e-4, as final sweeps are what bring its stretch
+    /// quality; not the default, as it takes 3.8-5.9 times the isometric
+    /// energy's time at 200k vertices, issue 22 allows 1.5): twenty to 1e-4, as final sweeps are what bring its stretch
     /// to SphereParam's (measured on ten corpus meshes, five sweeps to 1e-3
     /// against these twenty: stretch worse than SphereParam's on 10 and 6,
     /// area on 8 and 5; sword 2.732 and 2.696, octopus 2.816 and 2.613).
@@ -493,7 +495,9 @@ fn optimise_level(
 /// stretch and balanced energies, whose sweeps stall far from the minimum on
 /// tubes and on nearly round meshes (issue 22).
 fn global_steps(energy: Energy, n: usize) -> Option<LbfgsParams> {
-    let max_iter = (GLOBAL_WORK / n.max(1)).clamp(GLOBAL_MIN_STEPS, GLOBAL_STEPS);
+    let shrink = (GLOBAL_FULL_SIZE as f64 / n.max(1) as f64).min(1.0);
+    let max_iter =
+        ((GLOBAL_STEPS as f64 * shrink * shrink) as usize).clamp(GLOBAL_MIN_STEPS, GLOBAL_STEPS);
     match energy {
         Energy::Stretch | Energy::Balanced => {
             Some(LbfgsParams { max_iter, tolerance: GLOBAL_TOLERANCE })
