@@ -97,12 +97,27 @@ const AUTHALIC_FINAL_WORK: usize = 100_000;
 /// steps after 5 sweeps instead of 20 only to 1.590.
 const GLOBAL_STEPS: usize = 100;
 const GLOBAL_TOLERANCE: f64 = 1e-7;
+/// The final global steps: all [`GLOBAL_STEPS`] up to [`GLOBAL_FULL_SIZE`]
+/// vertices, then fewer as the square of the size grows, at least
+/// [`GLOBAL_MIN_STEPS`] (13 at 134k, 10 at 200k). On large meshes a step
+/// costs about a sweep and buys little once the coarse levels had theirs
+/// (issue 22, measured on 200k-vertex `helix_tube`, balanced: 100 steps took
+/// L2 stretch from 3.7128 to 3.7023 in 22 of the map's 45 s); nearly round
+/// meshes stop after 5-10 steps by the tolerance anyway. Horse (48k) needs
+/// its hundred: with 41 its angle distortion was 30.30 degrees, above 1.1
+/// times SphereParam's 27.41; with 100, 29.25.
+const GLOBAL_FULL_SIZE: usize = 50_000;
+const GLOBAL_MIN_STEPS: usize = 10;
 /// Global steps on each coarse level of the stretch and balanced energies
 /// with this many vertices, after its sweeps: there limbs win or lose their
 /// share of the sphere (measured with the weight 0.1, L2 stretch without and
 /// with them: knight 1.7925 / 1.7855, hand 1.4397 / 1.4270, octopus 2.5668
 /// / 2.5393). Levels above 30k vertices are left to the final steps, for time.
-const LEVEL_GLOBAL_STEPS: LbfgsParams = LbfgsParams { max_iter: 30, tolerance: 1e-6 };
+/// A hundred steps rather than thirty, now that a level's steps cost its own
+/// size (see [`optimise_level`]): on 200k-vertex `helix_tube` (balanced, 20
+/// final sweeps, no final global steps) L2 stretch 3.713 with 30 and 3.635
+/// with 100, area 0.783 and 0.776; 20k `tentacles` 3.022 and 2.974.
+const LEVEL_GLOBAL_STEPS: LbfgsParams = LbfgsParams { max_iter: 100, tolerance: 1e-6 };
 const LEVEL_GLOBAL_SIZES: (usize, usize) = (64, 30_000);
 /// Levels of at least this many vertices hand the allocator's free pages
 /// back before they are copied ([`optimise_level`]); below, the call
@@ -138,8 +153,8 @@ impl ProgressiveParams {
     /// and a hundred sweeps to 1e-5 (measured on the corpus: octopus 2.646 ->
     /// 2.599, spot 1.185 -> 1.177 in L2 stretch; spot 5.7 -> 3.8 and hand
     /// 14.3 -> 11.8 degrees of mean angle distortion). Balanced (the best
-    /// quality; not the default, as its global steps take 4-15 times the
-    /// isometric energy's time at 200k vertices): twenty to 1e-4, as final sweeps are what bring its stretch
+    /// quality; not the default, as it takes 3.8-5.9 times the isometric
+    /// energy's time at 200k vertices, issue 22 allows 1.5): twenty to 1e-4, as final sweeps are what bring its stretch
     /// to SphereParam's (measured on ten corpus meshes, five sweeps to 1e-3
     /// against these twenty: stretch worse than SphereParam's on 10 and 6,
     /// area on 8 and 5; sword 2.732 and 2.696, octopus 2.816 and 2.613).
@@ -228,7 +243,7 @@ pub fn progressive(
     drop(hierarchy);
     let max_iter = params.max_iter.max(1);
     let stop = |sweep: usize| !(go_on() && progress(2 * n + n * sweep / max_iter, total));
-    let global_params = global_steps(params.energy);
+    let global_params = global_steps(params.energy, n);
     let (start, flat) = flat_rings(&rings.rings);
     // Only the global steps read the rings again; without them they are
     // let go before the references, the method's largest buffer, are made.
@@ -455,6 +470,14 @@ fn optimise_level(
         area_floor,
         represented: sub.represented.as_deref(),
     };
+    // The level's global steps run on the level copied out too: on the whole
+    // mesh's rings each step walked every slot of the finest mesh (measured
+    // on 200k-vertex `helix_tube`, balanced: 1.5-2.9 s per level for 30
+    // steps from 93 vertices up, 14 of the insertion's 18 s).
+    let global = matches!(params.energy, Energy::Stretch | Energy::Balanced)
+        && (LEVEL_GLOBAL_SIZES.0..=LEVEL_GLOBAL_SIZES.1).contains(&rings.n_alive);
+    let level_rings: Option<Vec<Vec<u32>>> =
+        global.then(|| (0..sub.n_vertices()).map(|j| sub.ring(j).to_vec()).collect());
     // The stars take over the level's rings.
     let stars =
         local_problem.stars_of(std::mem::take(&mut sub.start), std::mem::take(&mut sub.ring));
@@ -463,38 +486,37 @@ fn optimise_level(
         .optimise_stars(&stars, &mut sub.points, sweeps, params.tolerance, None, &|_| !go_on())
         .map_err(|_| cancelled())?;
     drop(stars);
+    if let Some(level_rings) = &level_rings {
+        lbfgs(&local_problem, level_rings, &mut sub.points, &LEVEL_GLOBAL_STEPS, &|| !go_on())
+            .map_err(|_| cancelled())?;
+    }
     sub.scatter(alive, points);
     drop(sub);
-    let mut level = Level { area_floor, represented, scale: 1.0 };
-    let at_level = level.problem(problem);
+    let level = Level { area_floor, represented, scale: end.scale };
     if params.energy == Energy::Authalic && rings.n_alive >= AUTHALIC_LEVEL_MIN {
         authalic_newton_rings(
             &rings.rings,
             problem.surface,
-            at_level.area_floor,
+            area_floor,
             points,
             AUTHALIC_LEVEL_STEPS,
             &|| !go_on(),
         )
         .map_err(|_| cancelled())?;
     }
-    if matches!(params.energy, Energy::Stretch | Energy::Balanced)
-        && (LEVEL_GLOBAL_SIZES.0..=LEVEL_GLOBAL_SIZES.1).contains(&rings.n_alive)
-    {
-        lbfgs(&at_level, &rings.rings, points, &LEVEL_GLOBAL_STEPS, &|| !go_on())
-            .map_err(|_| cancelled())?;
-    }
-    level.scale = end.scale;
     Ok(level)
 }
 
 /// The global L-BFGS steps ([`lbfgs`]) after the final sweeps: for the
 /// stretch and balanced energies, whose sweeps stall far from the minimum on
 /// tubes and on nearly round meshes (issue 22).
-fn global_steps(energy: Energy) -> Option<LbfgsParams> {
+fn global_steps(energy: Energy, n: usize) -> Option<LbfgsParams> {
+    let shrink = (GLOBAL_FULL_SIZE as f64 / n.max(1) as f64).min(1.0);
+    let max_iter =
+        ((GLOBAL_STEPS as f64 * shrink * shrink) as usize).clamp(GLOBAL_MIN_STEPS, GLOBAL_STEPS);
     match energy {
         Energy::Stretch | Energy::Balanced => {
-            Some(LbfgsParams { max_iter: GLOBAL_STEPS, tolerance: GLOBAL_TOLERANCE })
+            Some(LbfgsParams { max_iter, tolerance: GLOBAL_TOLERANCE })
         }
         _ => None,
     }
