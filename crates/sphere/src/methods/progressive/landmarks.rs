@@ -24,6 +24,7 @@
 //! opposite points (their edge would be no minor arc), a face of three
 //! landmarks whose targets are not positively oriented.
 
+pub mod path_layout;
 mod sphere_flow;
 
 use std::time::Instant;
@@ -40,6 +41,8 @@ use crate::methods::progressive::flip_free::{
     check_tolerance, positive_star, tangent_basis, Problem,
 };
 use crate::methods::progressive::{area_floor, rings_of};
+use path_layout::{path_layout, PathLayout};
+use spherify_mesh::Mesh;
 
 /// Vertex ids and the unit directions they are pinned to, checked.
 #[derive(Debug, Clone, PartialEq)]
@@ -441,6 +444,128 @@ pub fn pin_landmarks(
             seconds: vec![("landmarks", started.elapsed().as_secs_f64())],
         },
         info,
+    ))
+}
+
+/// A landmark map on a refined mesh: the input's edges split by
+/// [`path_layout`], the refined mesh (its first vertices are the input's),
+/// and where each of its vertices lies on the input surface.
+#[derive(Debug, Clone)]
+pub struct Refined {
+    pub mesh: GenusZeroMesh,
+    pub layout: PathLayout,
+}
+
+/// [`pin_landmarks`], and where its drag stalls, the constructive layout of
+/// [`path_layout`] on a refined mesh, then energy sweeps with the landmarks
+/// held. Sets no map realises on the mesh as given (neighbours at opposite
+/// points, a face of landmarks upside down) are still refused: the caller
+/// asked for that mesh.
+///
+/// # Errors
+/// As [`pin_landmarks`], except that a stalled drag is laid out instead.
+pub fn pin_or_lay_out(
+    mesh: &GenusZeroMesh,
+    points: &[[f64; 3]],
+    landmarks: &Landmarks,
+    params: &PinParams,
+    progress: &(dyn Fn(usize, usize) -> bool + Sync),
+) -> Result<(SphereEmbedding, Option<Refined>), SphereError> {
+    match pin_landmarks(mesh, points, landmarks, params, progress) {
+        Ok((pinned, _)) => Ok((pinned, None)),
+        Err(SphereError::LandmarkConflict { reason, .. }) if conflicts(mesh, landmarks).is_ok() => {
+            let (embedding, refined) = lay_out(mesh, points, landmarks, params, progress)?;
+            let mut embedding = embedding;
+            embedding.message = format!("the drag stalled ({reason}); {}", embedding.message);
+            Ok((embedding, Some(refined)))
+        }
+        Err(other) => Err(other),
+    }
+}
+
+/// The constructive layout alone ([`path_layout`]), certified, then
+/// `params.max_iter` energy sweeps with the caller's landmarks held (the
+/// auxiliary ones move freely).
+///
+/// # Errors
+/// As [`path_layout`]; [`SphereError::InvalidStart`] if the layout's stored
+/// doubles do not pass the exact test (rounding in a patch's solve).
+pub fn lay_out(
+    mesh: &GenusZeroMesh,
+    points: &[[f64; 3]],
+    landmarks: &Landmarks,
+    params: &PinParams,
+    progress: &(dyn Fn(usize, usize) -> bool + Sync),
+) -> Result<(SphereEmbedding, Refined), SphereError> {
+    check_tolerance(params.tolerance)?;
+    let started = Instant::now();
+    let go_on = || progress(0, 0);
+    let cancelled = |done| SphereError::Cancelled { stage: "landmark layout", done, total: 2 };
+    let rings = rings_of(mesh)?;
+    let layout = path_layout(&rings, mesh.positions(), points, landmarks, &go_on)?;
+    progress(1, 2);
+    let positions = layout.positions(mesh.positions());
+    let refined_mesh =
+        Mesh::new(positions, layout.faces.clone()).map_err(|e| SphereError::LandmarkConflict {
+            ids: vec![],
+            reason: format!("the path layout's refined mesh is not valid: {e}"),
+        })?;
+    let refined = GenusZeroMesh::new(refined_mesh)?;
+    if refined.reoriented_faces() != 0 || refined.faces() != layout.faces.as_slice() {
+        return Err(SphereError::LandmarkConflict {
+            ids: vec![],
+            reason: "the path layout's refined mesh came back reoriented".into(),
+        });
+    }
+    let mut points = layout.points.clone();
+    let laid = check_sphere(refined.faces(), &points);
+    if !laid.valid {
+        return Err(SphereError::InvalidStart {
+            flipped: laid.flipped_faces.len(),
+            degree: laid.covering_degree,
+        });
+    }
+    let n = refined.n_vertices();
+    let held = landmarks.mask(n);
+    let rings = rings_of(&refined)?;
+    let problem = Problem {
+        energy: params.energy,
+        surface: refined.positions(),
+        area_floor: area_floor(&refined),
+        represented: None,
+    };
+    let end = problem
+        .optimise_holding(
+            &rings,
+            &mut points,
+            params.max_iter,
+            params.tolerance,
+            Some(&held),
+            &|_| !go_on(),
+        )
+        .map_err(|_| cancelled(1))?;
+    progress(2, 2);
+    let message = format!(
+        "{} landmarks laid out by paths ({} auxiliary, {} patches, {} vertices added by edge \
+         splits), then {} sweeps of the {} energy with them held, {:.4} per unit area",
+        landmarks.len(),
+        layout.auxiliary.len(),
+        layout.patches,
+        n - mesh.n_vertices(),
+        end.sweeps,
+        params.energy.name(),
+        end.energy
+    );
+    let status = if end.converged { Status::Converged } else { Status::MaxIterations };
+    Ok((
+        SphereEmbedding {
+            points,
+            iterations: end.sweeps,
+            status,
+            message,
+            seconds: vec![("landmarks", started.elapsed().as_secs_f64())],
+        },
+        Refined { mesh: refined, layout },
     ))
 }
 
