@@ -408,13 +408,14 @@ fn shortest(
     Some(path)
 }
 
+/// Landmark vertex ids (the caller's, then the auxiliary ones), their
+/// targets, T's triangles (indices into both) and the auxiliary count.
+type Triangulated = (Vec<u32>, Vec<[f64; 3]>, Vec<[usize; 3]>, usize);
+
 /// Picks auxiliary landmarks when the targets alone do not triangulate the
 /// sphere: octahedron directions (in a fixed tilted frame) far from every
 /// target, each at the free vertex whose start point is nearest.
-fn with_auxiliary(
-    start: &[[f64; 3]],
-    landmarks: &Landmarks,
-) -> Result<(Vec<u32>, Vec<[f64; 3]>, Vec<[usize; 3]>, usize), SphereError> {
+fn with_auxiliary(start: &[[f64; 3]], landmarks: &Landmarks) -> Result<Triangulated, SphereError> {
     let mut ids = landmarks.ids.clone();
     let mut targets = landmarks.targets.clone();
     if let Some(t) = covering(&targets) {
@@ -425,9 +426,9 @@ fn with_auxiliary(
         ids.truncate(landmarks.len());
         targets.truncate(landmarks.len());
         let clearance = AUX_CLEARANCE / (1 + attempt) as f64;
-        let (ca, sa) = (angles[0] as f64).sin_cos();
-        let (cb, sb) = (angles[1] as f64).sin_cos();
-        let (cc, sc) = (angles[2] as f64).sin_cos();
+        let (ca, sa) = angles[0].sin_cos();
+        let (cb, sb) = angles[1].sin_cos();
+        let (cc, sc) = angles[2].sin_cos();
         // Columns of a rotation: three turns, fixed, so the result is too.
         let rx = |v: [f64; 3]| [v[0], ca * v[1] - sa * v[2], sa * v[1] + ca * v[2]];
         let ry = |v: [f64; 3]| [cb * v[0] + sb * v[2], v[1], -sb * v[0] + cb * v[2]];
