@@ -421,14 +421,15 @@ fn with_auxiliary(start: &[[f64; 3]], landmarks: &Landmarks) -> Result<Triangula
     if let Some(t) = covering(&targets) {
         return Ok((ids, targets, t, 0));
     }
-    let frames = [[0.3, 0.5, 0.2], [1.1, -0.4, 0.7], [-0.6, 0.9, 1.3], [0.2, 1.7, -0.8]];
+    let frames: [[f64; 3]; 4] =
+        [[0.3, 0.5, 0.2], [1.1, -0.4, 0.7], [-0.6, 0.9, 1.3], [0.2, 1.7, -0.8]];
     for (attempt, angles) in frames.iter().enumerate() {
         ids.truncate(landmarks.len());
         targets.truncate(landmarks.len());
         let clearance = AUX_CLEARANCE / (1 + attempt) as f64;
-        let (ca, sa) = angles[0].sin_cos();
-        let (cb, sb) = angles[1].sin_cos();
-        let (cc, sc) = angles[2].sin_cos();
+        let (sa, ca) = angles[0].sin_cos();
+        let (sb, cb) = angles[1].sin_cos();
+        let (sc, cc) = angles[2].sin_cos();
         // Columns of a rotation: three turns, fixed, so the result is too.
         let rx = |v: [f64; 3]| [v[0], ca * v[1] - sa * v[2], sa * v[1] + ca * v[2]];
         let ry = |v: [f64; 3]| [cb * v[0] + sb * v[2], v[1], -sb * v[0] + cb * v[2]];
