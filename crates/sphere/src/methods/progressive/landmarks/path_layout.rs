@@ -71,11 +71,21 @@ impl PathLayout {
         self.origin.iter().map(|o| position(o, positions)).collect()
     }
 
-    /// Per refined vertex: an input face holding it and its barycentric
-    /// coordinates in that face's corner order. `faces` are the input's
-    /// faces (any orientation: only their vertex sets are read).
-    pub fn barycentric(&self, n_input: usize, faces: &[[u32; 3]]) -> Vec<(u32, [f64; 3])> {
-        let mut around: Vec<Vec<u32>> = vec![Vec::new(); n_input];
+    /// Per refined vertex: a face of the original mesh holding it and its
+    /// barycentric coordinates in that face's corner order. `faces` are the
+    /// original faces (any orientation: only their vertex sets are read);
+    /// `earlier`, when the mesh laid out was itself refined from the
+    /// original, is its own map back (a face and weights per vertex), which
+    /// this one is composed with. Each refined triangle lies in one triangle
+    /// of the mesh it refines, so the weights of a vertex always fall on the
+    /// corners of one original face.
+    pub fn barycentric(
+        &self,
+        faces: &[[u32; 3]],
+        earlier: Option<(&[u32], &[[f64; 3]])>,
+    ) -> (Vec<u32>, Vec<[f64; 3]>) {
+        let n = faces.iter().flatten().map(|&v| v as usize + 1).max().unwrap_or(0);
+        let mut around: Vec<Vec<u32>> = vec![Vec::new(); n];
         for (f, face) in faces.iter().enumerate() {
             for &v in face {
                 around[v as usize].push(f as u32);
@@ -84,7 +94,27 @@ impl PathLayout {
         self.origin
             .iter()
             .map(|o| {
-                let used: Vec<(u32, f64)> = o.iter().copied().filter(|&(_, w)| w > 0.0).collect();
+                let mut used: Vec<(u32, f64)> = Vec::with_capacity(3);
+                let mut add_weight = |v: u32, w: f64| {
+                    if w <= 0.0 {
+                        return;
+                    }
+                    match used.iter_mut().find(|s| s.0 == v) {
+                        Some(slot) => slot.1 += w,
+                        None => used.push((v, w)),
+                    }
+                };
+                for &(u, w) in o.iter().filter(|&&(_, w)| w > 0.0) {
+                    match earlier {
+                        None => add_weight(u, w),
+                        Some((ef, eb)) => {
+                            let corners = faces[ef[u as usize] as usize];
+                            for j in 0..3 {
+                                add_weight(corners[j], w * eb[u as usize][j]);
+                            }
+                        }
+                    }
+                }
                 let face = around[used[0].0 as usize]
                     .iter()
                     .copied()
@@ -99,7 +129,7 @@ impl PathLayout {
                 }
                 (face, bary)
             })
-            .collect()
+            .unzip()
     }
 }
 
@@ -210,6 +240,10 @@ struct Rotation {
     rings: Vec<Vec<u32>>,
     origin: Vec<Origin>,
     position: Vec<[f64; 3]>,
+    /// The start map, refined with the mesh: a split vertex goes to the
+    /// middle of its edge's arc, which keeps a valid map valid (both halves
+    /// of each split triangle keep their orientation).
+    sphere: Vec<[f64; 3]>,
 }
 
 impl Rotation {
@@ -240,6 +274,8 @@ impl Rotation {
         self.rings.push(vec![u, x, v, w]);
         self.origin.push(midpoint(&self.origin[u as usize], &self.origin[v as usize]));
         self.position.push(scale(add(self.position[u as usize], self.position[v as usize]), 0.5));
+        let (a, b) = (self.sphere[u as usize], self.sphere[v as usize]);
+        self.sphere.push(normalize(add(a, b)).unwrap_or(a));
         m
     }
 
@@ -488,6 +524,7 @@ pub fn path_layout(
         rings: rings.to_vec(),
         origin: (0..n as u32).map(|v| [(v, 1.0), (0, 0.0), (0, 0.0)]).collect(),
         position: positions.to_vec(),
+        sphere: start.to_vec(),
     };
     let mut traced = Traced { taken: vec![false; n], path_edges: HashSet::new() };
     for &v in &ids {
@@ -604,12 +641,52 @@ pub fn path_layout(
     })
 }
 
-/// The Tutte embedding of every free vertex (uniform weights) with the
-/// path vertices fixed on the hull's facets: x, y and z share one matrix.
+/// Floater's mean value weights (2003, "Mean value coordinates") of the ring
+/// of a vertex at `p` in the start map, its ring projected onto the plane
+/// tangent at `p` (gnomonic). Positive for a ring whose kernel holds `p`,
+/// which a valid map guarantees; `None` (uniform weights instead) where
+/// rounding or a ring beyond the hemisphere leaves one not positive.
+///
+/// Uniform weights squash long limbs exponentially (a Tutte map of a tube
+/// is harmonic): measured on a tentacled shape, faces rounded to det 0.
+/// Weights read from the start map, which keeps areas in proportion,
+/// reproduce it where the boundary agrees and spread the moves smoothly.
+fn mean_value_weights(p: [f64; 3], ring: &[u32], sphere: &[[f64; 3]]) -> Option<Vec<f64>> {
+    let m = ring.len();
+    let mut d = Vec::with_capacity(m);
+    for &j in ring {
+        let q = sphere[j as usize];
+        let h = dot(q, p);
+        if h <= 0.0 {
+            return None;
+        }
+        d.push(sub(scale(q, 1.0 / h), p));
+    }
+    let half_tan: Vec<f64> = (0..m)
+        .map(|j| {
+            let (a, b) = (d[j], d[(j + 1) % m]);
+            let theta = norm(cross(a, b)).atan2(dot(a, b));
+            (0.5 * theta).tan()
+        })
+        .collect();
+    let w: Vec<f64> =
+        (0..m).map(|j| (half_tan[(j + m - 1) % m] + half_tan[j]) / norm(d[j])).collect();
+    let ok = w.iter().all(|&x| x > 0.0 && x.is_finite())
+        && (0..m).all(|j| dot(p, cross(d[j], d[(j + 1) % m])) > 0.0);
+    ok.then_some(w)
+}
+
+/// The Tutte embedding of every free vertex (mean value weights of the
+/// start map) with the path vertices fixed on the hull's facets: x, y and z
+/// share one matrix.
 fn tutte_on_hull(rot: &Rotation, fixed: &[Option<[f64; 3]>]) -> Result<Vec<[f64; 3]>, SphereError> {
     let solver_error = |e: String| failed(vec![], format!("the patches' Tutte solve: {e}"));
     let edges = |i: u32, out: &mut Vec<(u32, f64)>| {
-        out.extend(rot.rings[i as usize].iter().map(|&j| (j, 1.0)));
+        let ring = &rot.rings[i as usize];
+        match mean_value_weights(rot.sphere[i as usize], ring, &rot.sphere) {
+            Some(w) => out.extend(ring.iter().copied().zip(w)),
+            None => out.extend(ring.iter().map(|&j| (j, 1.0))),
+        }
     };
     let xy: Vec<Option<[f64; 2]>> = fixed.iter().map(|p| p.map(|p| [p[0], p[1]])).collect();
     let z: Vec<Option<[f64; 2]>> = fixed.iter().map(|p| p.map(|p| [p[2], 0.0])).collect();

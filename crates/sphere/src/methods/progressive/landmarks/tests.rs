@@ -270,8 +270,8 @@ fn assert_laid_out(
     }
     let n = mesh.n_vertices();
     assert_eq!(&refined.mesh.positions()[..n], mesh.positions());
-    let bary = refined.layout.barycentric(n, mesh.faces());
-    for (v, &(f, w)) in bary.iter().enumerate() {
+    let (faces, weights) = refined.layout.barycentric(mesh.faces(), None);
+    for (v, (&f, &w)) in faces.iter().zip(&weights).enumerate() {
         let face = mesh.faces()[f as usize];
         let p =
             (0..3).fold([0.0; 3], |s, j| add(s, scale(mesh.positions()[face[j] as usize], w[j])));
