@@ -458,12 +458,15 @@ pub struct Refined {
 
 /// [`pin_landmarks`], and where its drag stalls, the constructive layout of
 /// [`path_layout`] on a refined mesh, then energy sweeps with the landmarks
-/// held. Sets no map realises on the mesh as given (neighbours at opposite
-/// points, a face of landmarks upside down) are still refused: the caller
-/// asked for that mesh.
+/// held. A face of three landmarks upside down at their targets, which no
+/// map of the mesh as given realises, goes to the layout directly: its
+/// first splits take every edge between two landmarks apart (issue 23:
+/// "either split edges and return the refined mesh ... or raise").
+/// Neighbours at opposite points are still refused.
 ///
 /// # Errors
-/// As [`pin_landmarks`], except that a stalled drag is laid out instead.
+/// Bad parameters, an invalid start, cancellation; a layout that failed
+/// (see [`path_layout`]).
 pub fn pin_or_lay_out(
     mesh: &GenusZeroMesh,
     points: &[[f64; 3]],
@@ -471,16 +474,32 @@ pub fn pin_or_lay_out(
     params: &PinParams,
     progress: &(dyn Fn(usize, usize) -> bool + Sync),
 ) -> Result<(SphereEmbedding, Option<Refined>), SphereError> {
-    match pin_landmarks(mesh, points, landmarks, params, progress) {
-        Ok((pinned, _)) => Ok((pinned, None)),
-        Err(SphereError::LandmarkConflict { reason, .. }) if conflicts(mesh, landmarks).is_ok() => {
-            let (embedding, refined) = lay_out(mesh, points, landmarks, params, progress)?;
-            let mut embedding = embedding;
-            embedding.message = format!("the drag stalled ({reason}); {}", embedding.message);
-            Ok((embedding, Some(refined)))
+    let started = Instant::now();
+    let why = match conflicts(mesh, landmarks) {
+        // Neighbours at exactly opposite points stay refused: the set is
+        // most likely a mistake, and T would need an edge through the centre.
+        Err(conflict @ SphereError::LandmarkConflict { .. }) if opposite(&conflict) => {
+            return Err(conflict)
         }
-        Err(other) => Err(other),
-    }
+        Err(conflict) => format!("no map of the mesh as given realises them: {conflict}"),
+        Ok(()) => match pin_landmarks(mesh, points, landmarks, params, progress) {
+            Ok((pinned, _)) => return Ok((pinned, None)),
+            Err(SphereError::LandmarkConflict { reason, .. }) => {
+                format!("the drag stalled: {reason}")
+            }
+            Err(other) => return Err(other),
+        },
+    };
+    let (mut embedding, refined) = lay_out(mesh, points, landmarks, params, progress)?;
+    embedding.message = format!("{why}; {}", embedding.message);
+    // The stage's time includes the drag that stalled.
+    embedding.seconds = vec![("landmarks", started.elapsed().as_secs_f64())];
+    Ok((embedding, Some(refined)))
+}
+
+/// Whether a conflict of [`conflicts`] is two neighbours at opposite points.
+fn opposite(conflict: &SphereError) -> bool {
+    matches!(conflict, SphereError::LandmarkConflict { ids, .. } if ids.len() == 2)
 }
 
 /// The constructive layout alone ([`path_layout`]), certified, then
