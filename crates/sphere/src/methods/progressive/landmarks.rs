@@ -142,11 +142,19 @@ pub struct PinParams {
     /// Most energy sweeps with the landmarks held, at the end.
     pub max_iter: usize,
     pub tolerance: f64,
+    /// Lay out at once, without trying the drag, when the landmarks' cyclic
+    /// order is scrambled ([`path_layout::scrambled`]).
+    pub layout_when_scrambled: bool,
 }
 
 impl Default for PinParams {
     fn default() -> Self {
-        PinParams { energy: Energy::Isometric, max_iter: 30, tolerance: 1e-3 }
+        PinParams {
+            energy: Energy::Isometric,
+            max_iter: 30,
+            tolerance: 1e-3,
+            layout_when_scrambled: true,
+        }
     }
 }
 
@@ -482,6 +490,9 @@ pub fn pin_or_lay_out(
             return Err(conflict)
         }
         Err(conflict) => format!("no map of the mesh as given realises them: {conflict}"),
+        Ok(()) if params.layout_when_scrambled && path_layout::scrambled(points, landmarks) => {
+            "their cyclic order at the start differs from their targets'".into()
+        }
         Ok(()) => match pin_landmarks(mesh, points, landmarks, params, progress) {
             Ok((pinned, _)) => return Ok((pinned, None)),
             Err(SphereError::LandmarkConflict { reason, .. }) => {

@@ -37,6 +37,7 @@
 use std::cmp::Reverse;
 use std::collections::{BinaryHeap, HashSet};
 
+use spherify_mesh::predicates::{det3_sign, Sign};
 use spherify_mesh::vec3::{add, cross, dot, norm, scale, sub};
 use spherify_sparse::tutte::FixedSystem;
 use spherify_sparse::{solve, SolveParams, SolverKind};
@@ -499,6 +500,20 @@ fn with_auxiliary(start: &[[f64; 3]], landmarks: &Landmarks) -> Result<Triangula
         landmarks.ids.iter().map(|&i| i as usize).collect(),
         "no auxiliary landmarks made the targets' hull hold the centre".into(),
     ))
+}
+
+/// Whether the landmarks' cyclic order at their start points differs from
+/// their targets': some triangle of T (the targets' hull) is not positive at
+/// the start points. Then the flip-free drag, which keeps the order, cannot
+/// finish without passing one landmark across another's paths, and mostly
+/// stalls (measured in docs/correspondence.md). False when T needs
+/// auxiliary landmarks (few landmarks: the drag is tried first).
+pub fn scrambled(start: &[[f64; 3]], landmarks: &Landmarks) -> bool {
+    let Some(tris) = covering(&landmarks.targets) else {
+        return false;
+    };
+    let at = |j: usize| start[landmarks.ids[j] as usize];
+    tris.iter().any(|&[a, b, c]| det3_sign(at(a), at(b), at(c)) != Sign::Positive)
 }
 
 /// Builds the map of the module documentation. `rings` is the input mesh's

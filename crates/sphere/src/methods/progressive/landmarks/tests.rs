@@ -294,6 +294,11 @@ fn a_scrambled_set_the_drag_cannot_pin_is_laid_out_exactly() {
         pin(&mesh, &points, &ids, &targets),
         Err(SphereError::LandmarkConflict { .. })
     ));
+    let landmarks = Landmarks::new(mesh.n_vertices(), &ids, &targets).unwrap();
+    assert!(path_layout::scrambled(&points, &landmarks));
+    let unmoved: Vec<[f64; 3]> = ids.iter().map(|&i| points[i as usize]).collect();
+    let still = Landmarks::new(mesh.n_vertices(), &ids, &unmoved).unwrap();
+    assert!(!path_layout::scrambled(&points, &still));
     let refined = assert_laid_out(&mesh, &points, &ids, &targets);
     assert!(refined.mesh.n_vertices() > mesh.n_vertices(), "paths split edges");
     assert_eq!(refined.layout.patches, 2 * 32 - 4);
