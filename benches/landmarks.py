@@ -12,8 +12,10 @@ random direction (for many landmarks, moves larger than their spacing
 scramble their order); ``swirl``, the landmarks' points under one smooth
 warp of the sphere (a turn about a random axis growing along it) whose
 largest displacement is ``--degrees``. Prints validity, the largest angle
-from a landmark to its target, the smallest triangle over the mean, and the
-time against the plain map (and the "landmarks" stage alone), or the error.
+from a landmark to its target, the smallest triangle over the mean, the time
+against the plain map (and the "landmarks" stage alone) and the vertices
+added by the path layout's edge splits (0: the drag pinned them on the mesh
+as given), or the error.
 """
 
 from __future__ import annotations
@@ -68,7 +70,7 @@ def main() -> int:
                if e.get("genus") == 0 and e["V"] <= args.max_vertices
                and (args.only is None or e["name"] in args.only)]
     print(f"{'mesh':28} {'V':>7} {'k':>3} {'valid':>5} {'max angle':>9} {'min tri':>8} "
-          f"{'plain s':>7} {'with s':>7} {'ratio':>5} {'pin s':>6}")
+          f"{'plain s':>7} {'with s':>7} {'ratio':>5} {'pin s':>6} {'added':>6}")
     for entry in entries:
         mesh = sp.load(root / entry["path"])
         started = time.perf_counter()
@@ -90,7 +92,8 @@ def main() -> int:
             angle = np.arctan2(np.linalg.norm(np.cross(got, unit), axis=1), (got * unit).sum(1))
             print(f"{entry['name']:28} {entry['V']:7} {k:3} {str(m.valid):>5} "
                   f"{angle.max():9.1e} {m.margin:8.1e} {plain_s:7.2f} {with_s:7.2f} "
-                  f"{with_s / plain_s:5.2f} {m.seconds.get('landmarks', 0.0):6.2f}", flush=True)
+                  f"{with_s / plain_s:5.2f} {m.seconds.get('landmarks', 0.0):6.2f} "
+                  f"{len(m.mesh.vertices) - len(mesh.vertices):6}", flush=True)
     return 0
 
 

@@ -73,6 +73,19 @@ def assert_pinned(m: sp.SphereMap, ids: np.ndarray, targets: np.ndarray) -> None
     assert np.array_equal(got_ids, ids) and np.array_equal(got_points, m.points[ids])
 
 
+def assert_refinement_maps_back(m: sp.SphereMap, mesh: sp.Mesh) -> None:
+    """A map on a refined mesh: the input's vertices first, unchanged, and
+    every vertex the barycentric combination of an input face it names."""
+    assert m.refinement is not None
+    faces, weights = m.refinement
+    n = len(mesh.vertices)
+    assert len(faces) == len(m.mesh.vertices) > n
+    assert np.array_equal(m.mesh.vertices[:n], mesh.vertices)
+    assert (weights >= 0).all() and np.allclose(weights.sum(1), 1.0, atol=1e-14, rtol=0)
+    back = (weights[:, :, None] * mesh.vertices[mesh.faces[faces]]).sum(1)
+    assert np.abs(back - m.mesh.vertices).max() < 1e-12 * np.abs(mesh.vertices).max()
+
+
 @pytest.fixture(scope="module")
 def tentacles() -> sp.SphereMap:
     return sp.embed(sp.datasets.make("tentacles", n_vertices=2000))
@@ -140,6 +153,20 @@ def test_bad_landmarks_are_mesh_errors_naming_them(tentacles: sp.SphereMap) -> N
     for landmarks, named in cases:
         with pytest.raises(sp.MeshError, match=named):
             sp.embed(mesh, method="radial", landmarks=landmarks)
+
+
+def test_a_face_of_landmarks_upside_down_is_laid_out_on_a_refined_mesh(
+        tentacles: sp.SphereMap) -> None:
+    # No map of the mesh as given has the face (a, b, c) upside down; after
+    # its edges are split, one does (it used to raise MapError).
+    a, b, c = (int(v) for v in tentacles.mesh.faces[0])
+    p = tentacles.points
+    ids = np.array([a, b, c])
+    targets = np.array([p[a], p[c], p[b]])
+    m = sp.embed(tentacles.mesh, landmarks=(ids, targets))
+    assert_pinned(m, ids, targets)
+    assert exact_verdict(m.points, m.mesh.faces).valid
+    assert_refinement_maps_back(m, tentacles.mesh)
 
 
 def test_impossible_sets_and_invalid_maps_are_map_errors(tentacles: sp.SphereMap) -> None:
@@ -227,6 +254,50 @@ def test_random_meshes_and_random_landmarks(surface: mg.Surface, k: int, degrees
         assert "same direction" in str(err)
         return
     assert m.valid and angles(m.points[ids], targets).max() < 1e-14
+
+
+def test_a_scrambled_45_degree_set_is_laid_out_on_a_refined_mesh(
+        tentacles: sp.SphereMap) -> None:
+    # 32 landmarks each moved 45 degrees its own way scramble their order:
+    # the drag stalls (this raised MapError), the path layout does not.
+    ids = sp.datasets.farthest_points(tentacles.points, 32)
+    targets = turned(tentacles.points[ids], np.full(32, 45.0), seed=32)
+    m = sp.embed(tentacles.mesh, landmarks=(ids, targets))
+    assert_pinned(m, ids, targets)
+    assert exact_verdict(m.points, m.mesh.faces).valid
+    assert_refinement_maps_back(m, tentacles.mesh)
+    assert any("edge splits" in note for note in m.mesh.notes)
+    # improve keeps the landmarks on the refined mesh, and the map back.
+    again = sp.improve(m, landmarks=m.landmarks, max_iter=2)
+    assert_pinned(again, ids, targets)
+    assert np.array_equal(again.refinement[0], m.refinement[0])
+
+
+@pytest.mark.slow
+@settings(max_examples=15, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(surface=mg.surfaces(min_vertices=20, max_vertices=300), k=st.integers(4, 24),
+       seed=st.integers(0, 2**16))
+def test_random_meshes_and_scrambled_landmarks_are_laid_out(surface: mg.Surface, k: int,
+                                                            seed: int) -> None:
+    # Moves of 45 degrees each its own way: most sets need the path layout.
+    start = sp.embed((surface.V, surface.F))
+    k = min(k, len(surface.V))
+    ids = np.random.default_rng(seed).choice(len(surface.V), size=k,
+                                             replace=False).astype(np.int64)
+    targets = turned(start.points[ids], np.full(k, 45.0), seed)
+    try:
+        m = sp.embed((surface.V, surface.F), landmarks=(ids, targets))
+    except sp.MapError as err:
+        # Only neighbours sent to opposite points are refused.
+        assert "opposite points" in str(err)
+        return
+    except sp.MeshError as err:
+        assert "same direction" in str(err)
+        return
+    assert m.valid and angles(m.points[ids], targets).max() < 1e-14
+    assert exact_verdict(m.points, m.mesh.faces).valid
+    if m.refinement is not None:
+        assert_refinement_maps_back(m, sp.Mesh(surface.V, surface.F))
 
 
 @pytest.mark.parametrize("suffix", [".json", ".csv", ".npz"])

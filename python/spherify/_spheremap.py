@@ -94,6 +94,21 @@ class SphereMap:
         self._core = core
         if core.reoriented_faces:
             mesh = Mesh._from_core(core.mesh, list(mesh.notes), dict(mesh.attributes))
+        refinement = core.refinement
+        if refinement is not None:
+            # Landmarks laid out on a refined mesh (edge splits): the map's
+            # mesh is the refined one; per-vertex attributes are carried
+            # over through the barycentric map back.
+            faces = mesh.faces[refinement[0]]
+            carried = {name: np.einsum("nk,nkd->nd", refinement[1], values[faces])
+                       for name, values in mesh.attributes.items()
+                       if getattr(values, "ndim", 0) == 2 and len(values) == len(mesh.vertices)}
+            note = (f"refined by {len(refinement[0]) - len(mesh.vertices)} edge splits "
+                    "to lay out landmarks (SphereMap.refinement maps it back)")
+            mesh = Mesh._from_core(core.mesh, list(mesh.notes) + [note], carried)
+            for array in refinement:
+                array.flags.writeable = False
+        self._refinement: Optional[Tuple[np.ndarray, np.ndarray]] = refinement
         self._mesh = mesh
         self._points = _read_only(core.points())
         self._report: SphereReport = core.report()
@@ -247,6 +262,21 @@ class SphereMap:
         normalised target, exactly the map's point for that id; None
         without landmarks."""
         return self._landmarks
+
+    @property
+    def refinement(self) -> Optional[Tuple[np.ndarray, np.ndarray]]:
+        """The map back to the input mesh when landmarks were laid out on a
+        refined mesh, else None.
+
+        ``(faces (n,) int64, barycentric (n, 3) float64)``, read-only, one row
+        per vertex of :attr:`mesh`: the input face ``F[faces[i]]`` that holds
+        vertex ``i`` and its barycentric weights in that face's corner order,
+        so ``(barycentric[:, :, None] * V[F[faces]]).sum(1)`` gives
+        ``mesh.vertices``. Edge splits only append vertices: the first
+        ``len(V)`` rows are the input's own vertices (weight 1 at a corner),
+        with their ids unchanged. See docs/correspondence.md.
+        """
+        return self._refinement
 
     @property
     def report(self) -> SphereReport:

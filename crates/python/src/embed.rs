@@ -16,15 +16,15 @@ use spherify_sphere::method_options::{OptionDefault, OptionKind, OptionValue};
 use spherify_sphere::methods::theta_phi::{PoleChoice, ThetaPhiParams};
 use spherify_sphere::point_map::from_points::from_points as core_from_points;
 use spherify_sphere::{
-    embed as core_embed, improve_embedding, pin_embedding, GenusZeroMesh, Method, MethodName,
-    SphereError,
+    embed as core_embed, improve_embedding, pin_or_refine_embedding, GenusZeroMesh, Method,
+    MethodName, SphereError,
 };
 
 use crate::convert::rows;
 use crate::errors::{mesh_error, sphere_error};
 use crate::mesh::CoreMesh;
 use crate::options::Options;
-use crate::sphere_map::CoreSphereMap;
+use crate::sphere_map::{CoreSphereMap, Refinement};
 
 /// methods() -> list of the method names `embed` accepts, from the core.
 #[pyfunction]
@@ -128,7 +128,8 @@ pub(crate) fn method(name: MethodName, options: &Options<'_>) -> PyResult<Method
 /// -> CoreSphereMap.
 ///
 /// Validates and orients the mesh once (`GenusZeroMesh`), runs the method,
-/// pins the landmarks when given (`spherify_sphere::pin_embedding`) and
+/// pins the landmarks when given (`spherify_sphere::pin_or_refine_embedding`:
+/// on a refined mesh, recorded in `refinement`, where the drag stalls) and
 /// certifies the points, all in the core with the GIL released. `progress`
 /// receives `(done, total)` from the stages that report; Ctrl-C stops them.
 #[pyfunction]
@@ -158,15 +159,40 @@ pub fn embed(
         let landmarks =
             given.as_ref().map(|g| crate::landmarks::landmarks(&mesh, g)).transpose()?;
         let mut embedding = core_embed(&mesh, &method, report)?;
+        let mut refined = None;
         if let Some(landmarks) = landmarks {
             let params = crate::landmarks::pin_params(&method);
-            embedding = pin_embedding(&mesh, &embedding, &landmarks, &params, report)?;
+            (embedding, refined) =
+                pin_or_refine_embedding(&mesh, &embedding, &landmarks, &params, report)?;
         }
-        Ok::<_, SphereError>((mesh, embedding))
+        Ok::<_, SphereError>((mesh, embedding, refined))
     })?;
-    let (mesh, embedding) = result.map_err(|e| sphere_error(py, e))?;
+    let (mesh, embedding, refined) = result.map_err(|e| sphere_error(py, e))?;
     let caller = Arc::clone(&mesh_arg.mesh);
-    Ok(CoreSphereMap::new(mesh.shared_mesh(), caller, embedding, mesh.reoriented_faces()))
+    Ok(match refined {
+        None => CoreSphereMap::new(mesh.shared_mesh(), caller, embedding, mesh.reoriented_faces()),
+        Some(refined) => refined_map(caller, None, embedding, refined),
+    })
+}
+
+/// A map on the refined mesh of a landmark layout. The refined mesh is built
+/// from the oriented input: its faces are its own corner order, and it
+/// reorients nothing. `input`: the mesh as the caller first gave it;
+/// `before`: the map back of an input that was itself refined.
+fn refined_map(
+    input: Arc<spherify_mesh::Mesh>,
+    before: Option<&Refinement>,
+    embedding: spherify_sphere::Embedding,
+    refined: spherify_sphere::methods::progressive::landmarks::Refined,
+) -> CoreSphereMap {
+    let earlier = before.map(|r| (r.faces.as_slice(), r.barycentric.as_slice()));
+    let (faces, barycentric) = refined.layout.barycentric(input.faces(), earlier);
+    let shared = refined.mesh.shared_mesh();
+    CoreSphereMap::new(Arc::clone(&shared), shared, embedding, 0).with_refinement(Refinement {
+        input,
+        faces,
+        barycentric,
+    })
 }
 
 /// improve(sphere_map, options: dict | None, progress, landmark_ids,
@@ -199,14 +225,23 @@ pub fn improve(
         let landmarks =
             given.as_ref().map(|g| crate::landmarks::landmarks(&mesh, g)).transpose()?;
         let mut embedding = improve_embedding(&mesh, &start, &params, report)?;
+        let mut refined = None;
         if let Some(landmarks) = landmarks {
             let pin = crate::landmarks::pin_params_for(params.energy);
-            embedding = pin_embedding(&mesh, &embedding, &landmarks, &pin, report)?;
+            (embedding, refined) =
+                pin_or_refine_embedding(&mesh, &embedding, &landmarks, &pin, report)?;
         }
-        Ok::<_, SphereError>(embedding)
+        Ok::<_, SphereError>((mesh, embedding, refined))
     })?;
-    let embedding = result.map_err(|e| sphere_error(py, e))?;
-    Ok(sphere_map.with_embedding(embedding))
+    let (_, embedding, refined) = result.map_err(|e| sphere_error(py, e))?;
+    Ok(match refined {
+        None => sphere_map.with_embedding(embedding),
+        Some(refined) => {
+            let before = sphere_map.refinement();
+            let input = before.map_or_else(|| sphere_map.caller_mesh(), |r| Arc::clone(&r.input));
+            refined_map(input, before, embedding, refined)
+        }
+    })
 }
 
 /// from_points(mesh, points (n, 3) float64) -> CoreSphereMap.

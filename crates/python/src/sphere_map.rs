@@ -30,6 +30,20 @@ pub struct CoreSphereMap {
     reoriented_faces: usize,
     /// Built on first use (O(F log F)).
     point_map: OnceLock<PointMap>,
+    /// For a map whose landmarks were laid out on a refined mesh: per vertex
+    /// of `mesh`, a face of the input mesh (caller's faces) and barycentric
+    /// weights in its corner order.
+    refinement: Option<Arc<Refinement>>,
+}
+
+/// The map back from a refined mesh to the input: per refined vertex, an
+/// input face and barycentric weights in that face's corner order.
+#[derive(Debug, Clone)]
+pub struct Refinement {
+    /// The input mesh as the caller gave it (before any refinement).
+    pub input: Arc<Mesh>,
+    pub faces: Vec<u32>,
+    pub barycentric: Vec<[f64; 3]>,
 }
 
 impl CoreSphereMap {
@@ -41,19 +55,44 @@ impl CoreSphereMap {
         embedding: Embedding,
         reoriented_faces: usize,
     ) -> CoreSphereMap {
-        CoreSphereMap { mesh, caller, embedding, reoriented_faces, point_map: OnceLock::new() }
+        CoreSphereMap {
+            mesh,
+            caller,
+            embedding,
+            reoriented_faces,
+            point_map: OnceLock::new(),
+            refinement: None,
+        }
+    }
+
+    /// The same map recording that its mesh refines the input's.
+    pub fn with_refinement(mut self, refinement: Refinement) -> CoreSphereMap {
+        self.refinement = Some(Arc::new(refinement));
+        self
     }
 
     /// A map of the same meshes with other points (improved, pinned or moved
     /// from this one's): the caller's corner order and the count of turned
     /// faces carry over; the certificate is `embedding`'s own.
     pub fn with_embedding(&self, embedding: Embedding) -> CoreSphereMap {
-        CoreSphereMap::new(
+        let mut map = CoreSphereMap::new(
             Arc::clone(&self.mesh),
             Arc::clone(&self.caller),
             embedding,
             self.reoriented_faces,
-        )
+        );
+        map.refinement = self.refinement.clone();
+        map
+    }
+
+    /// The map back to the input, for a map on a refined mesh.
+    pub fn refinement(&self) -> Option<&Refinement> {
+        self.refinement.as_deref()
+    }
+
+    /// The mesh as the caller gave it.
+    pub fn caller_mesh(&self) -> Arc<Mesh> {
+        Arc::clone(&self.caller)
     }
 
     /// The oriented mesh, shared.
@@ -109,6 +148,21 @@ impl CoreSphereMap {
     /// (n, 3) float64: a new copy on every call.
     fn points<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
         to_numpy(py, &self.embedding.result.points)
+    }
+
+    /// `(faces (n,) int64, barycentric (n, 3) float64)` for a map laid out
+    /// on a refined mesh (one row per vertex of `mesh`; the input's faces and
+    /// their corner order), or None.
+    #[getter(refinement)]
+    #[allow(clippy::type_complexity)]
+    fn refinement_arrays<'py>(
+        &self,
+        py: Python<'py>,
+    ) -> Option<(Bound<'py, PyArray1<i64>>, Bound<'py, PyArray2<f64>>)> {
+        self.refinement.as_ref().map(|r| {
+            let faces: Vec<i64> = r.faces.iter().map(|&f| f as i64).collect();
+            (PyArray1::from_vec(py, faces), to_numpy(py, &r.barycentric))
+        })
     }
 
     #[getter]

@@ -15,7 +15,9 @@ use crate::genus_zero::GenusZeroMesh;
 use crate::methods::alexa::{alexa_with_progress, AlexaParams};
 use crate::methods::gotsman::{gotsman_with_progress, GotsmanParams};
 use crate::methods::progressive::improve::{improve, ImproveParams};
-use crate::methods::progressive::landmarks::{pin_landmarks, Landmarks, PinParams};
+use crate::methods::progressive::landmarks::{
+    pin_landmarks, pin_or_lay_out, Landmarks, PinParams, Refined,
+};
 use crate::methods::progressive::move_towards::{move_towards, TowardsParams};
 use crate::methods::progressive::{progressive, ProgressiveParams};
 use crate::methods::radial::kernel::KernelPoint;
@@ -290,6 +292,36 @@ pub fn pin_embedding(
         other => (start.method, other.clone()),
     };
     Ok(Embedding::certified(mesh, method, result, details))
+}
+
+/// [`pin_embedding`], except that where the drag stalls the landmarks are
+/// laid out constructively on a refined mesh
+/// ([`crate::methods::progressive::landmarks::path_layout`]): the map is
+/// then certified on that mesh, returned with it.
+///
+/// # Errors
+/// As [`pin_embedding`], less the stalled drag.
+pub fn pin_or_refine_embedding(
+    mesh: &GenusZeroMesh,
+    start: &Embedding,
+    landmarks: &Landmarks,
+    params: &PinParams,
+    progress: &(dyn Fn(usize, usize) -> bool + Sync),
+) -> Result<(Embedding, Option<Refined>), SphereError> {
+    require_valid_start(start)?;
+    let (pinned, refined) =
+        pin_or_lay_out(mesh, &start.result.points, landmarks, params, progress)?;
+    let mut result = start.result.clone();
+    result.seconds.retain(|(stage, _)| *stage != "certify");
+    result.seconds.extend(pinned.seconds);
+    result.points = pinned.points;
+    result.message = format!("{}; {}", start.result.message, pinned.message);
+    let (method, details) = match (&start.details, &refined) {
+        (Details::ThetaPhi(_), _) | (_, Some(_)) => (MethodName::Improve, Details::None),
+        (other, None) => (start.method, other.clone()),
+    };
+    let on = refined.as_ref().map_or(mesh, |r| &r.mesh);
+    Ok((Embedding::certified(on, method, result, details), refined))
 }
 
 /// `Ok` when `start` is a certified GC-embedding: improving or pinning moves

@@ -87,8 +87,8 @@ pub struct ReadmeSnippets;
 
 pub use certificate::validity::{check_sphere, SphereReport};
 pub use embed::{
-    embed, improve_embedding, move_towards_embedding, pin_embedding, Details, Embedding, Method,
-    MethodName, UnknownMethod,
+    embed, improve_embedding, move_towards_embedding, pin_embedding, pin_or_refine_embedding,
+    Details, Embedding, Method, MethodName, UnknownMethod,
 };
 pub use embedding::{SphereEmbedding, Status};
 pub use error::SphereError;

@@ -24,6 +24,7 @@
 //! opposite points (their edge would be no minor arc), a face of three
 //! landmarks whose targets are not positively oriented.
 
+pub mod path_layout;
 mod sphere_flow;
 
 use std::time::Instant;
@@ -40,6 +41,8 @@ use crate::methods::progressive::flip_free::{
     check_tolerance, positive_star, tangent_basis, Problem,
 };
 use crate::methods::progressive::{area_floor, rings_of};
+use path_layout::{path_layout, PathLayout};
+use spherify_mesh::Mesh;
 
 /// Vertex ids and the unit directions they are pinned to, checked.
 #[derive(Debug, Clone, PartialEq)]
@@ -139,11 +142,19 @@ pub struct PinParams {
     /// Most energy sweeps with the landmarks held, at the end.
     pub max_iter: usize,
     pub tolerance: f64,
+    /// Lay out at once, without trying the drag, when the landmarks' cyclic
+    /// order is scrambled ([`path_layout::scrambled`]).
+    pub layout_when_scrambled: bool,
 }
 
 impl Default for PinParams {
     fn default() -> Self {
-        PinParams { energy: Energy::Isometric, max_iter: 30, tolerance: 1e-3 }
+        PinParams {
+            energy: Energy::Isometric,
+            max_iter: 30,
+            tolerance: 1e-3,
+            layout_when_scrambled: true,
+        }
     }
 }
 
@@ -441,6 +452,163 @@ pub fn pin_landmarks(
             seconds: vec![("landmarks", started.elapsed().as_secs_f64())],
         },
         info,
+    ))
+}
+
+/// A landmark map on a refined mesh: the input's edges split by
+/// [`path_layout`], the refined mesh (its first vertices are the input's),
+/// and where each of its vertices lies on the input surface.
+#[derive(Debug, Clone)]
+pub struct Refined {
+    pub mesh: GenusZeroMesh,
+    pub layout: PathLayout,
+}
+
+/// [`pin_landmarks`], and where its drag stalls, the constructive layout of
+/// [`path_layout`] on a refined mesh, then energy sweeps with the landmarks
+/// held. A face of three landmarks upside down at their targets, which no
+/// map of the mesh as given realises, goes to the layout directly: its
+/// first splits take every edge between two landmarks apart (issue 23:
+/// "either split edges and return the refined mesh ... or raise").
+/// Neighbours at opposite points are still refused.
+///
+/// # Errors
+/// Bad parameters, an invalid start, cancellation; a layout that failed
+/// (see [`path_layout`]).
+pub fn pin_or_lay_out(
+    mesh: &GenusZeroMesh,
+    points: &[[f64; 3]],
+    landmarks: &Landmarks,
+    params: &PinParams,
+    progress: &(dyn Fn(usize, usize) -> bool + Sync),
+) -> Result<(SphereEmbedding, Option<Refined>), SphereError> {
+    let started = Instant::now();
+    let why = match conflicts(mesh, landmarks) {
+        // Neighbours at exactly opposite points stay refused: the set is
+        // most likely a mistake, and T would need an edge through the centre.
+        Err(conflict @ SphereError::LandmarkConflict { .. }) if opposite(&conflict) => {
+            return Err(conflict)
+        }
+        Err(conflict) => format!("no map of the mesh as given realises them: {conflict}"),
+        Ok(()) if params.layout_when_scrambled && path_layout::scrambled(points, landmarks) => {
+            "their cyclic order at the start differs from their targets'".into()
+        }
+        Ok(()) => match pin_landmarks(mesh, points, landmarks, params, progress) {
+            Ok((pinned, _)) => {
+                // A drag can crush a face to nothing between landmarks pinned
+                // close together (measured: 64 swirled landmarks on the
+                // 112-vertex blub left a face at 0 of the mean); the layout
+                // refines there instead.
+                let floor = check_sphere(mesh.faces(), &pinned.points).min_area_ratio;
+                if floor >= MIN_AREA_RATIO {
+                    return Ok((pinned, None));
+                }
+                format!("the drag left a face at {floor:.1e} of the mean area")
+            }
+            Err(SphereError::LandmarkConflict { reason, .. }) => {
+                format!("the drag stalled: {reason}")
+            }
+            Err(other) => return Err(other),
+        },
+    };
+    let (mut embedding, refined) = lay_out(mesh, points, landmarks, params, progress)?;
+    embedding.message = format!("{why}; {}", embedding.message);
+    // The stage's time includes the drag that stalled.
+    embedding.seconds = vec![("landmarks", started.elapsed().as_secs_f64())];
+    Ok((embedding, Some(refined)))
+}
+
+/// The smallest face over the mean a pinned map must keep (issue 23).
+const MIN_AREA_RATIO: f64 = 1e-12;
+
+/// Whether a conflict of [`conflicts`] is two neighbours at opposite points.
+fn opposite(conflict: &SphereError) -> bool {
+    matches!(conflict, SphereError::LandmarkConflict { ids, .. } if ids.len() == 2)
+}
+
+/// The constructive layout alone ([`path_layout`]), certified, then
+/// `params.max_iter` energy sweeps with the caller's landmarks held (the
+/// auxiliary ones move freely).
+///
+/// # Errors
+/// As [`path_layout`]; [`SphereError::InvalidStart`] if the layout's stored
+/// doubles do not pass the exact test (rounding in a patch's solve).
+pub fn lay_out(
+    mesh: &GenusZeroMesh,
+    points: &[[f64; 3]],
+    landmarks: &Landmarks,
+    params: &PinParams,
+    progress: &(dyn Fn(usize, usize) -> bool + Sync),
+) -> Result<(SphereEmbedding, Refined), SphereError> {
+    check_tolerance(params.tolerance)?;
+    let started = Instant::now();
+    let go_on = || progress(0, 0);
+    let cancelled = |done| SphereError::Cancelled { stage: "landmark layout", done, total: 2 };
+    let rings = rings_of(mesh)?;
+    let layout = path_layout(&rings, mesh.positions(), points, landmarks, &go_on)?;
+    progress(1, 2);
+    let positions = layout.positions(mesh.positions());
+    let refined_mesh =
+        Mesh::new(positions, layout.faces.clone()).map_err(|e| SphereError::LandmarkConflict {
+            ids: vec![],
+            reason: format!("the path layout's refined mesh is not valid: {e}"),
+        })?;
+    let refined = GenusZeroMesh::new(refined_mesh)?;
+    if refined.reoriented_faces() != 0 || refined.faces() != layout.faces.as_slice() {
+        return Err(SphereError::LandmarkConflict {
+            ids: vec![],
+            reason: "the path layout's refined mesh came back reoriented".into(),
+        });
+    }
+    let mut points = layout.points.clone();
+    let laid = check_sphere(refined.faces(), &points);
+    if !laid.valid {
+        return Err(SphereError::InvalidStart {
+            flipped: laid.flipped_faces.len(),
+            degree: laid.covering_degree,
+        });
+    }
+    let n = refined.n_vertices();
+    let held = landmarks.mask(n);
+    let rings = rings_of(&refined)?;
+    let problem = Problem {
+        energy: params.energy,
+        surface: refined.positions(),
+        area_floor: area_floor(&refined),
+        represented: None,
+    };
+    let end = problem
+        .optimise_holding(
+            &rings,
+            &mut points,
+            params.max_iter,
+            params.tolerance,
+            Some(&held),
+            &|_| !go_on(),
+        )
+        .map_err(|_| cancelled(1))?;
+    progress(2, 2);
+    let message = format!(
+        "{} landmarks laid out by paths ({} auxiliary, {} patches, {} vertices added by edge \
+         splits), then {} sweeps of the {} energy with them held, {:.4} per unit area",
+        landmarks.len(),
+        layout.auxiliary.len(),
+        layout.patches,
+        n - mesh.n_vertices(),
+        end.sweeps,
+        params.energy.name(),
+        end.energy
+    );
+    let status = if end.converged { Status::Converged } else { Status::MaxIterations };
+    Ok((
+        SphereEmbedding {
+            points,
+            iterations: end.sweeps,
+            status,
+            message,
+            seconds: vec![("landmarks", started.elapsed().as_secs_f64())],
+        },
+        Refined { mesh: refined, layout },
     ))
 }
 

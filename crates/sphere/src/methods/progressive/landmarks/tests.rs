@@ -247,3 +247,122 @@ fn repeated_soft_moves_never_shrink_the_smallest_face() {
     assert!(report.valid);
     assert!(report.min_area_ratio >= 0.5 * start.min(1e-2), "{start} -> {}", report.min_area_ratio);
 }
+
+// The path layout (path_layout.rs).
+
+/// Lays `ids` out at `targets` and checks what the module promises: a
+/// certified map of the refined mesh, landmarks exactly at their targets,
+/// the input's vertices first and every vertex on the input surface.
+fn assert_laid_out(
+    mesh: &GenusZeroMesh,
+    points: &[[f64; 3]],
+    ids: &[i64],
+    targets: &[[f64; 3]],
+) -> Refined {
+    let landmarks = Landmarks::new(mesh.n_vertices(), ids, targets).unwrap();
+    let (e, refined) =
+        lay_out(mesh, points, &landmarks, &PinParams::default(), &|_, _| true).unwrap();
+    let report = check_sphere(refined.mesh.faces(), &e.points);
+    assert!(report.valid, "{report:?}");
+    assert!(report.min_area_ratio > 1e-12, "{}", report.min_area_ratio);
+    for (&i, &t) in ids.iter().zip(targets) {
+        assert_eq!(e.points[i as usize], normalize(t).unwrap(), "landmark {i}");
+    }
+    let n = mesh.n_vertices();
+    assert_eq!(&refined.mesh.positions()[..n], mesh.positions());
+    let (faces, weights) = refined.layout.barycentric(mesh.faces(), None);
+    for (v, (&f, &w)) in faces.iter().zip(&weights).enumerate() {
+        let face = mesh.faces()[f as usize];
+        let p =
+            (0..3).fold([0.0; 3], |s, j| add(s, scale(mesh.positions()[face[j] as usize], w[j])));
+        let q = refined.mesh.positions()[v];
+        assert!(norm(sub(p, q)) < 1e-12, "vertex {v}: {p:?} != {q:?}");
+        assert!(w.iter().all(|&x| x >= 0.0) && (w.iter().sum::<f64>() - 1.0).abs() < 1e-12);
+    }
+    refined
+}
+
+#[test]
+fn a_scrambled_set_the_drag_cannot_pin_is_laid_out_exactly() {
+    // 32 landmarks each turned 45 degrees its own way: their order around
+    // each other is scrambled, so no flip-free drag passes them.
+    let (mesh, points) = mapped(bumpy(2));
+    let ids = spread(&points, 32);
+    let targets: Vec<[f64; 3]> =
+        ids.iter().enumerate().map(|(j, &i)| turned(points[i as usize], 45.0, j)).collect();
+    assert!(matches!(
+        pin(&mesh, &points, &ids, &targets),
+        Err(SphereError::LandmarkConflict { .. })
+    ));
+    let landmarks = Landmarks::new(mesh.n_vertices(), &ids, &targets).unwrap();
+    assert!(path_layout::scrambled(&points, &landmarks));
+    let unmoved: Vec<[f64; 3]> = ids.iter().map(|&i| points[i as usize]).collect();
+    let still = Landmarks::new(mesh.n_vertices(), &ids, &unmoved).unwrap();
+    assert!(!path_layout::scrambled(&points, &still));
+    let refined = assert_laid_out(&mesh, &points, &ids, &targets);
+    assert!(refined.mesh.n_vertices() > mesh.n_vertices(), "paths split edges");
+    assert_eq!(refined.layout.patches, 2 * 32 - 4);
+}
+
+#[test]
+fn three_landmarks_get_auxiliary_ones_that_are_not_held() {
+    let (mesh, points) = mapped(icosphere(3));
+    let ids = spread(&points, 3);
+    let targets: Vec<[f64; 3]> =
+        ids.iter().enumerate().map(|(j, &i)| turned(points[i as usize], 40.0, j)).collect();
+    let refined = assert_laid_out(&mesh, &points, &ids, &targets);
+    assert!(!refined.layout.auxiliary.is_empty());
+    assert!(refined.layout.auxiliary.iter().all(|a| !ids.contains(&(*a as i64))));
+}
+
+#[test]
+fn a_vertex_sent_across_its_pinned_ring_is_laid_out_by_splitting() {
+    // The set the drag refuses above (a_crossing_that_no_map_realises...):
+    // on the mesh as given no map has it, after edge splits one does.
+    let (mesh, points) = mapped(icosphere(2));
+    let rings = rings_of(&mesh).unwrap();
+    let v = 0u32;
+    let mut ids: Vec<i64> = rings[v as usize].iter().map(|&r| r as i64).collect();
+    let mut targets: Vec<[f64; 3]> =
+        rings[v as usize].iter().map(|&r| points[r as usize]).collect();
+    ids.push(v as i64);
+    targets.push(scale(points[v as usize], -1.0));
+    assert_laid_out(&mesh, &points, &ids, &targets);
+}
+
+#[test]
+fn the_hull_of_cocircular_targets_is_one_triangulation() {
+    // A cube's corners: each face is four co-circular points, fanned once.
+    let s = 1.0 / 3f64.sqrt();
+    let corners: Vec<[f64; 3]> = (0..8)
+        .map(|c| {
+            let b = |k: usize| if c >> k & 1 == 1 { s } else { -s };
+            [b(0), b(1), b(2)]
+        })
+        .collect();
+    let tris = path_layout::hull(&corners).unwrap();
+    assert_eq!(tris.len(), 12);
+    for &[a, b, c] in &tris {
+        let n = cross(sub(corners[b], corners[a]), sub(corners[c], corners[a]));
+        assert!(dot(n, corners[a]) > 0.0, "outward");
+    }
+}
+
+#[test]
+fn the_layout_gives_the_same_bits_on_one_and_two_threads() {
+    let (mesh, points) = mapped(bumpy(2));
+    let ids = spread(&points, 16);
+    let targets: Vec<[f64; 3]> =
+        ids.iter().enumerate().map(|(j, &i)| turned(points[i as usize], 45.0, j)).collect();
+    let landmarks = Landmarks::new(mesh.n_vertices(), &ids, &targets).unwrap();
+    let run = |threads| {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+        pool.install(|| {
+            lay_out(&mesh, &points, &landmarks, &PinParams::default(), &|_, _| true)
+                .unwrap()
+                .0
+                .points
+        })
+    };
+    assert_eq!(run(1), run(2));
+}
