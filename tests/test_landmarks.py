@@ -12,6 +12,8 @@ from __future__ import annotations
 
 from typing import Tuple
 
+import re
+
 import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
@@ -321,3 +323,19 @@ def test_the_command_line_pins_landmarks_from_a_file(tmp_path, suffix: str) -> N
     assert main(["map", str(tmp_path / "e.obj"), "-o", str(out), "--landmarks", str(path)]) == 0
     m = sp.load_map(out.with_suffix(".npz"))
     assert m.valid and list(m.landmarks[0]) == [0, 100]
+
+
+def test_a_set_too_scrambled_to_lay_out_on_a_mesh_of_sensible_size_is_a_map_error() -> None:
+    # 64 landmarks each turned 45 degrees its own way on a 1,744-vertex
+    # tentacles: the paths would wind round each other until the mesh had
+    # 9.6M vertices (197 s). Past 16 times the input or 200k added vertices
+    # the layout stops at once and names the landmarks out of order.
+    start = sp.embed(sp.datasets.make("tentacles", 1000))
+    ids = sp.datasets.farthest_points(start.points, 64)
+    targets = turned(start.points[ids], np.full(64, 45.0), seed=64)
+    with pytest.raises(sp.MapError, match="too far from the targets' order") as err:
+        sp.embed(start.mesh, landmarks=(ids, targets))
+    listed = re.match(r"landmarks ([\d, ]+)", str(err.value))
+    assert listed, str(err.value)
+    named = [int(t) for t in listed.group(1).replace(",", " ").split()]
+    assert named and set(named) <= set(ids.tolist())

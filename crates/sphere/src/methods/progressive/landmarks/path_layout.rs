@@ -45,6 +45,8 @@ use spherify_sparse::{solve, SolveParams, SolverKind};
 use super::{angle, Landmarks};
 use crate::embedding::normalize;
 use crate::error::SphereError;
+use crate::memory_budget::{check, progressive_rate, Need};
+use crate::methods::progressive::distortion_energy::Energy;
 
 /// A vertex of the refined mesh as a point of the input surface: up to three
 /// input vertices (unused slots have weight 0) and convex weights.
@@ -155,6 +157,17 @@ fn failed(ids: Vec<usize>, reason: String) -> SphereError {
 const MIN_FACET_DEPTH: f64 = 1e-3;
 /// Auxiliary directions closer than this (radians) to a target are left out.
 const AUX_CLEARANCE: f64 = 0.35;
+/// The refined mesh may hold at most this many times the input's vertices,
+/// or the input's plus [`MAX_ADDED`], whichever is more; beyond, the set is
+/// refused. Paths that must wind round each other to realise a badly
+/// scrambled order split the corridors between them again at every pass:
+/// 64 landmarks each moved 45 degrees its own way took a 1,744-vertex
+/// `tentacles` to 9.6M vertices in 197 s and a 22k-vertex `sword` to 7.5M,
+/// while a 1,002-vertex `bumpy_blob` needed 69k and the corpus's `blub`
+/// (112 vertices) 93k. A map thousands of times finer than its mesh serves no
+/// one, so the caller hears which landmarks are out of order instead.
+const MAX_GROWTH: usize = 16;
+const MAX_ADDED: usize = 200_000;
 
 /// The convex hull of unit vectors as counter-clockwise triangles (outward
 /// normals), or `None` when it is degenerate. Brute force over triples
@@ -508,6 +521,23 @@ fn with_auxiliary(start: &[[f64; 3]], landmarks: &Landmarks) -> Result<Triangula
 /// finish without passing one landmark across another's paths, and mostly
 /// stalls (measured in docs/correspondence.md). False when T needs
 /// auxiliary landmarks (few landmarks: the drag is tried first).
+/// The caller's landmarks (vertex ids, sorted) on a triangle of `tris`
+/// that is not positive at the start points: the ones out of order. `ids`
+/// may end with auxiliary landmarks (from index `n_user` on), left out.
+fn out_of_order(start: &[[f64; 3]], ids: &[u32], tris: &[[usize; 3]], n_user: usize) -> Vec<usize> {
+    let at = |j: usize| start[ids[j] as usize];
+    let mut out: Vec<usize> = tris
+        .iter()
+        .filter(|&&[a, b, c]| det3_sign(at(a), at(b), at(c)) != Sign::Positive)
+        .flat_map(|t| t.iter().copied())
+        .filter(|&j| j < n_user)
+        .map(|j| ids[j] as usize)
+        .collect();
+    out.sort_unstable();
+    out.dedup();
+    out
+}
+
 pub fn scrambled(start: &[[f64; 3]], landmarks: &Landmarks) -> bool {
     let Some(tris) = covering(&landmarks.targets) else {
         return false;
@@ -523,7 +553,10 @@ pub fn scrambled(start: &[[f64; 3]], landmarks: &Landmarks) -> bool {
 ///
 /// # Errors
 /// [`SphereError::Cancelled`]; [`SphereError::LandmarkConflict`] if a step
-/// that cannot fail in exact arithmetic failed.
+/// that cannot fail in exact arithmetic failed; [`SphereError::Resource`]
+/// when the refined mesh grows past what the memory policy can map (checked
+/// each time it doubles: heavily scrambled sets refine far more than the
+/// input, 22k vertices to 7.5M on `sword` with 64 landmarks).
 pub fn path_layout(
     rings: &[Vec<u32>],
     positions: &[[f64; 3]],
@@ -596,6 +629,7 @@ pub fn path_layout(
     // first[a][t]: the neighbour of landmark a's vertex its path to T-vertex t leaves by.
     let mut first: Vec<Vec<Option<u32>>> = vec![vec![None; k]; k];
     let mut paths: Vec<(usize, usize, Vec<u32>)> = Vec::new();
+    let mut next_check = 2 * n;
     for (a, b) in tree.into_iter().chain(rest) {
         if !go_on() {
             return Err(cancelled());
@@ -616,6 +650,30 @@ pub fn path_layout(
         }
         split_chords(&mut rot, &mut traced, &path);
         paths.push((a, b, path));
+        if rot.rings.len() > (MAX_GROWTH * n).max(n + MAX_ADDED) {
+            return Err(SphereError::LandmarkConflict {
+                ids: out_of_order(start, &ids, &tris, landmarks.len()),
+                reason: format!(
+                    "their order on the sphere is too far from the targets' order: laying \
+                     them out would refine the {n}-vertex mesh past {} vertices; move them \
+                     less, or in steps",
+                    rot.rings.len()
+                ),
+            });
+        }
+        if rot.rings.len() >= next_check {
+            // The refined mesh is what the layout solves and then relaxes
+            // with the landmarks held: asked of the memory policy before it
+            // grows further, as every other allocation of a map's size is.
+            let size = rot.rings.len();
+            check(&Need::new(
+                "embed with landmarks (the landmark layout's refined mesh)".into(),
+                progressive_rate(Energy::Isometric),
+                size,
+                2 * size - 4,
+            ))?;
+            next_check = 2 * size;
+        }
     }
 
     // Path vertices on the hull's straight sides, by length along the path.
