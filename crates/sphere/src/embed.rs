@@ -19,7 +19,7 @@ use crate::methods::progressive::landmarks::{
     pin_landmarks, pin_or_lay_out, Landmarks, PinParams, Refined,
 };
 use crate::methods::progressive::move_towards::{move_towards, TowardsParams};
-use crate::methods::progressive::{progressive, ProgressiveParams};
+use crate::methods::progressive::{progressive, require_valid_start, ProgressiveParams};
 use crate::methods::radial::kernel::KernelPoint;
 use crate::methods::radial::{radial_map, Center};
 use crate::methods::relaxation::{relaxation_with_progress, RelaxationParams};
@@ -241,7 +241,7 @@ pub fn improve_embedding(
     params: &ImproveParams,
     progress: &(dyn Fn(usize, usize) -> bool + Sync),
 ) -> Result<Embedding, SphereError> {
-    require_valid_start(start)?;
+    require_valid_start(&start.certificate)?;
     let mut result = improve(mesh, &start.result.points, params, progress)?;
     result.message = format!("improved from {}: {}", start.method, result.message);
     let improved = Embedding::certified(mesh, MethodName::Improve, result, Details::None);
@@ -280,7 +280,7 @@ pub fn pin_embedding(
     params: &PinParams,
     progress: &(dyn Fn(usize, usize) -> bool + Sync),
 ) -> Result<Embedding, SphereError> {
-    require_valid_start(start)?;
+    require_valid_start(&start.certificate)?;
     let (pinned, _) = pin_landmarks(mesh, &start.result.points, landmarks, params, progress)?;
     let mut result = start.result.clone();
     result.seconds.retain(|(stage, _)| *stage != "certify");
@@ -308,7 +308,7 @@ pub fn pin_or_refine_embedding(
     params: &PinParams,
     progress: &(dyn Fn(usize, usize) -> bool + Sync),
 ) -> Result<(Embedding, Option<Refined>), SphereError> {
-    require_valid_start(start)?;
+    require_valid_start(&start.certificate)?;
     let (pinned, refined) =
         pin_or_lay_out(mesh, &start.result.points, landmarks, params, progress)?;
     let mut result = start.result.clone();
@@ -322,19 +322,6 @@ pub fn pin_or_refine_embedding(
     };
     let on = refined.as_ref().map_or(mesh, |r| &r.mesh);
     Ok((Embedding::certified(on, method, result, details), refined))
-}
-
-/// `Ok` when `start` is a certified GC-embedding: improving or pinning moves
-/// its points with flip-free steps, which keep a valid map valid but cannot
-/// make an invalid one valid.
-fn require_valid_start(start: &Embedding) -> Result<(), SphereError> {
-    if start.certificate.valid {
-        return Ok(());
-    }
-    Err(SphereError::InvalidStart {
-        flipped: start.certificate.flipped_faces.len(),
-        degree: start.certificate.covering_degree,
-    })
 }
 
 /// [`move_towards`] from `start`'s points, certified as a plain GC-embedding

@@ -52,6 +52,7 @@ use rayon::prelude::*;
 use spherify_mesh::predicates::{det3_sign, Sign};
 use spherify_mesh::vec3::triangle_area;
 
+use crate::certificate::validity::SphereReport;
 use crate::embedding::{normalize, SphereEmbedding, Status};
 use crate::error::SphereError;
 use crate::genus_zero::GenusZeroMesh;
@@ -219,12 +220,7 @@ pub fn progressive(
     let started = Instant::now();
     let mut points = filled(n, [0.0; 3], "the progressive method's points")?;
     place_tetrahedron(&rings, &mut points);
-    let problem = Problem {
-        energy: params.energy,
-        surface: positions,
-        area_floor: area_floor(mesh),
-        represented: None,
-    };
+    let problem = whole_mesh_problem(params.energy, mesh);
     insert_levels(&hierarchy, &problem, params, mesh.faces(), &mut rings, &mut points, progress)?;
     seconds.push(("insertion", started.elapsed().as_secs_f64()));
     // The balanced energy's final area weight, from the stretch of the map
@@ -572,6 +568,29 @@ fn message(
         message.push_str(&format!("; the global conformal start was not used: {}", why.reason));
     }
     message
+}
+
+/// The energy of `energy` on the whole of `mesh` (no coarse level): what
+/// the method's insertion, `improve`, the landmarks and `move_towards` all
+/// optimise.
+pub(crate) fn whole_mesh_problem(energy: Energy, mesh: &GenusZeroMesh) -> Problem<'_> {
+    Problem { energy, surface: mesh.positions(), area_floor: area_floor(mesh), represented: None }
+}
+
+/// `Ok` when `report` certifies a GC-embedding: improving, pinning or moving
+/// a map takes flip-free steps, which keep a valid map valid but cannot make
+/// an invalid one valid.
+///
+/// # Errors
+/// [`SphereError::InvalidStart`] with the flipped faces and covering degree.
+pub(crate) fn require_valid_start(report: &SphereReport) -> Result<(), SphereError> {
+    if report.valid {
+        return Ok(());
+    }
+    Err(SphereError::InvalidStart {
+        flipped: report.flipped_faces.len(),
+        degree: report.covering_degree,
+    })
 }
 
 /// Surface triangles below a millionth of the mean area count as that large.

@@ -10,9 +10,9 @@ use crate::certificate::validity::check_sphere;
 use crate::embedding::{SphereEmbedding, Status};
 use crate::error::SphereError;
 use crate::genus_zero::GenusZeroMesh;
-use crate::methods::progressive::area_floor;
 use crate::methods::progressive::distortion_energy::Energy;
-use crate::methods::progressive::flip_free::{check_tolerance, Problem};
+use crate::methods::progressive::flip_free::check_tolerance;
+use crate::methods::progressive::{require_valid_start, whole_mesh_problem};
 
 #[derive(Debug, Clone, PartialEq)]
 pub struct ImproveParams {
@@ -48,21 +48,10 @@ pub fn improve(
             expected: "one point per vertex of the mesh",
         });
     }
-    let start = check_sphere(mesh.faces(), points);
-    if !start.valid {
-        return Err(SphereError::InvalidStart {
-            flipped: start.flipped_faces.len(),
-            degree: start.covering_degree,
-        });
-    }
+    require_valid_start(&check_sphere(mesh.faces(), points))?;
     let started = Instant::now();
     let rings = crate::methods::progressive::rings_of(mesh)?;
-    let problem = Problem {
-        energy: params.energy,
-        surface: mesh.positions(),
-        area_floor: area_floor(mesh),
-        represented: None,
-    };
+    let problem = whole_mesh_problem(params.energy, mesh);
     let mut points = points.to_vec();
     let total = params.max_iter.max(1);
     let end = problem

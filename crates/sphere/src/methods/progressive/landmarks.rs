@@ -40,7 +40,7 @@ use crate::methods::progressive::distortion_energy::Energy;
 use crate::methods::progressive::flip_free::{
     check_tolerance, positive_star, tangent_basis, Problem,
 };
-use crate::methods::progressive::{area_floor, rings_of};
+use crate::methods::progressive::{require_valid_start, rings_of, whole_mesh_problem};
 use path_layout::{path_layout, PathLayout};
 use spherify_mesh::Mesh;
 
@@ -364,13 +364,7 @@ pub fn pin_landmarks(
             reason: format!("not vertices of the mesh (it has {n} vertices)"),
         });
     }
-    let start = check_sphere(mesh.faces(), points);
-    if !start.valid {
-        return Err(SphereError::InvalidStart {
-            flipped: start.flipped_faces.len(),
-            degree: start.covering_degree,
-        });
-    }
+    require_valid_start(&check_sphere(mesh.faces(), points))?;
     conflicts(mesh, landmarks)?;
     let started = Instant::now();
     let total = 3 * landmarks.len().max(1);
@@ -388,12 +382,7 @@ pub fn pin_landmarks(
 
     let rings = rings_of(mesh)?;
     let held = landmarks.mask(n);
-    let problem = Problem {
-        energy: params.energy,
-        surface: mesh.positions(),
-        area_floor: area_floor(mesh),
-        represented: None,
-    };
+    let problem = whole_mesh_problem(params.energy, mesh);
     let mut relax = |points: &mut [[f64; 3]]| {
         problem
             .optimise_holding(&rings, points, FLOW_SWEEPS, 0.0, Some(&held), &|_| !go_on())
@@ -561,22 +550,11 @@ pub fn lay_out(
         });
     }
     let mut points = layout.points.clone();
-    let laid = check_sphere(refined.faces(), &points);
-    if !laid.valid {
-        return Err(SphereError::InvalidStart {
-            flipped: laid.flipped_faces.len(),
-            degree: laid.covering_degree,
-        });
-    }
+    require_valid_start(&check_sphere(refined.faces(), &points))?;
     let n = refined.n_vertices();
     let held = landmarks.mask(n);
     let rings = rings_of(&refined)?;
-    let problem = Problem {
-        energy: params.energy,
-        surface: refined.positions(),
-        area_floor: area_floor(&refined),
-        represented: None,
-    };
+    let problem = whole_mesh_problem(params.energy, &refined);
     let end = problem
         .optimise_holding(
             &rings,

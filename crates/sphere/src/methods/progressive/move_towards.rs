@@ -17,9 +17,9 @@ use crate::embedding::{normalize, SphereEmbedding, Status};
 use crate::error::SphereError;
 use crate::genus_zero::GenusZeroMesh;
 use crate::methods::progressive::distortion_energy::Energy;
-use crate::methods::progressive::flip_free::{colour_classes, Problem};
+use crate::methods::progressive::flip_free::colour_classes;
 use crate::methods::progressive::landmarks::{angle, drag_above, slerp};
-use crate::methods::progressive::{area_floor, rings_of};
+use crate::methods::progressive::{require_valid_start, rings_of, whole_mesh_problem};
 use spherify_mesh::vec3::det3;
 
 #[derive(Debug, Clone, PartialEq)]
@@ -108,13 +108,7 @@ pub fn move_towards(
             goals[i] = Some(if weights[i] >= 1.0 { t } else { slerp(points[i], t, weights[i]) });
         }
     }
-    let start = check_sphere(mesh.faces(), points);
-    if !start.valid {
-        return Err(SphereError::InvalidStart {
-            flipped: start.flipped_faces.len(),
-            degree: start.covering_degree,
-        });
-    }
+    require_valid_start(&check_sphere(mesh.faces(), points))?;
     let started = Instant::now();
     let total = params.passes + params.energy_sweeps;
     let cancelled = |done: usize| SphereError::Cancelled { stage: "move_towards", done, total };
@@ -166,12 +160,7 @@ pub fn move_towards(
         (0..n).filter_map(|i| goals[i].map(|g| angle(points[i], g))).fold(0.0, f64::max);
     let mut sweeps = 0;
     if params.energy_sweeps > 0 {
-        let problem = Problem {
-            energy: params.energy,
-            surface: mesh.positions(),
-            area_floor: area_floor(mesh),
-            represented: None,
-        };
+        let problem = whole_mesh_problem(params.energy, mesh);
         let end = problem
             .optimise_holding(&rings, &mut points, params.energy_sweeps, 0.0, Some(&held), &|_| {
                 !progress(0, 0)

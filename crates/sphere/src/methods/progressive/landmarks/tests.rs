@@ -174,12 +174,7 @@ fn pinning_stops_when_the_callback_says_so() {
 fn holding_nothing_is_optimise_move_for_move() {
     let (mesh, points) = mapped(bumpy(2));
     let rings = rings_of(&mesh).unwrap();
-    let problem = Problem {
-        energy: Energy::Isometric,
-        surface: mesh.positions(),
-        area_floor: area_floor(&mesh),
-        represented: None,
-    };
+    let problem = whole_mesh_problem(Energy::Isometric, &mesh);
     let (mut a, mut b) = (points.clone(), points.clone());
     problem.optimise(&rings, &mut a, 5, 0.0, &|_| false).unwrap();
     problem.optimise_holding(&rings, &mut b, 5, 0.0, None, &|_| false).unwrap();
