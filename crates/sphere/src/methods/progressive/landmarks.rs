@@ -38,7 +38,7 @@ use crate::error::SphereError;
 use crate::genus_zero::GenusZeroMesh;
 use crate::methods::progressive::distortion_energy::Energy;
 use crate::methods::progressive::flip_free::{
-    check_tolerance, positive_star, tangent_basis, Problem,
+    check_tolerance, positive_star, tangent_basis, Optimised, Problem,
 };
 use crate::methods::progressive::{require_valid_start, rings_of, whole_mesh_problem};
 use path_layout::{path_layout, PathLayout};
@@ -431,17 +431,25 @@ pub fn pin_landmarks(
         params.energy.name(),
         end.energy
     );
+    Ok((held_map(points, &end, message, started), info))
+}
+
+/// The map the landmark paths end with: the points after their final
+/// sweeps with the landmarks held, timed as one "landmarks" stage.
+fn held_map(
+    points: Vec<[f64; 3]>,
+    end: &Optimised,
+    message: String,
+    started: Instant,
+) -> SphereEmbedding {
     let status = if end.converged { Status::Converged } else { Status::MaxIterations };
-    Ok((
-        SphereEmbedding {
-            points,
-            iterations: end.sweeps,
-            status,
-            message,
-            seconds: vec![("landmarks", started.elapsed().as_secs_f64())],
-        },
-        info,
-    ))
+    SphereEmbedding {
+        points,
+        iterations: end.sweeps,
+        status,
+        message,
+        seconds: vec![("landmarks", started.elapsed().as_secs_f64())],
+    }
 }
 
 /// A landmark map on a refined mesh: the input's edges split by
@@ -577,17 +585,7 @@ pub fn lay_out(
         params.energy.name(),
         end.energy
     );
-    let status = if end.converged { Status::Converged } else { Status::MaxIterations };
-    Ok((
-        SphereEmbedding {
-            points,
-            iterations: end.sweeps,
-            status,
-            message,
-            seconds: vec![("landmarks", started.elapsed().as_secs_f64())],
-        },
-        Refined { mesh: refined, layout },
-    ))
+    Ok((held_map(points, &end, message, started), Refined { mesh: refined, layout }))
 }
 
 /// Step 2 and 3 of the module documentation: rounds of drags, with local
