@@ -26,7 +26,7 @@ status is 1 when there is any. ``--only`` fuzzes some seeds (by name).
 
     python benches/fuzz_python_readers.py --inputs 20000 --seed 1
     python benches/fuzz_python_readers.py --inputs 600000 --seed 3 \
-        --only mesh.npz,tp.spheremap.npz,pm.spheremap.npz,tp.pickle,pm.pickle,journal.jsonl
+        --only mesh.npz,tp.spheremap.npz,pm.spheremap.npz,lm.spheremap.npz,tp.pickle,pm.pickle,journal.jsonl
 """
 
 from __future__ import annotations
@@ -165,6 +165,20 @@ def seed_batch(folder: Path) -> Tuple[bytes, List[Task]]:
     return (out / _batch.JOURNAL).read_bytes(), tasks
 
 
+def refined_map(mesh: sp.Mesh, m: sp.SphereMap) -> sp.SphereMap:
+    """A map whose 8 landmarks, each turned 0.8 radians its own way, are laid
+    out on a refined mesh (112 vertices from 42): its file holds the map back
+    (format 2), which the reader checks row by row."""
+    ids = sp.datasets.farthest_points(m.points, 8)
+    points = m.points[ids]
+    tangent = np.random.default_rng(3).normal(size=points.shape)
+    tangent -= (tangent * points).sum(1, keepdims=True) * points
+    tangent /= np.linalg.norm(tangent, axis=1, keepdims=True)
+    refined = sp.embed(mesh, landmarks=(ids, np.cos(0.8) * points + np.sin(0.8) * tangent))
+    assert refined.refinement is not None, "the seed must be a refined map"
+    return refined
+
+
 def seed_files(folder: Path) -> Dict[str, Tuple[bytes, Callable[[Path], object]]]:
     """Valid files of every Python-read format, with the call that reads each."""
     mesh = sp.datasets.make("bumpy_blob", 60)
@@ -179,8 +193,10 @@ def seed_files(folder: Path) -> Dict[str, Tuple[bytes, Callable[[Path], object]]
     tp, pm = sp.embed(mesh, "theta_phi"), sp.embed(mesh)
     tp.save(folder / "tp.spheremap.npz")
     pm.save(folder / "pm.spheremap.npz")
+    refined_map(mesh, pm).save(folder / "lm.spheremap.npz")
     sp.save_geometry_image(np.random.default_rng(0).random((9, 9, 3)), folder / "image.png")
     files.update({"tp.spheremap.npz": sp.load_map, "pm.spheremap.npz": sp.load_map,
+                  "lm.spheremap.npz": sp.load_map,
                   "image.png": sp.load_geometry_image})
     seeds = {name: ((folder / name).read_bytes(), read) for name, read in files.items()}
     for name, m in (("tp.pickle", tp), ("pm.pickle", pm)):

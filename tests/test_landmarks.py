@@ -258,13 +258,22 @@ def test_random_meshes_and_random_landmarks(surface: mg.Surface, k: int, degrees
     assert m.valid and angles(m.points[ids], targets).max() < 1e-14
 
 
-def test_a_scrambled_45_degree_set_is_laid_out_on_a_refined_mesh(
-        tentacles: sp.SphereMap) -> None:
-    # 32 landmarks each moved 45 degrees its own way scramble their order:
-    # the drag stalls (this raised MapError), the path layout does not.
+@pytest.fixture(scope="module")
+def scrambled(tentacles: sp.SphereMap) -> Tuple[sp.SphereMap, np.ndarray, np.ndarray]:
+    """A map on a refined mesh: 32 landmarks each moved 45 degrees its own
+    way scramble their order, the drag stalls (this raised MapError), the
+    path layout does not. The input carries a per-vertex attribute."""
     ids = sp.datasets.farthest_points(tentacles.points, 32)
     targets = turned(tentacles.points[ids], np.full(32, 45.0), seed=32)
-    m = sp.embed(tentacles.mesh, landmarks=(ids, targets))
+    mesh = sp.Mesh(tentacles.mesh.vertices, tentacles.mesh.faces)
+    mesh.attributes["uv"] = mesh.vertices[:, :2].copy()
+    return sp.embed(mesh, landmarks=(ids, targets)), ids, targets
+
+
+def test_a_scrambled_45_degree_set_is_laid_out_on_a_refined_mesh(
+        tentacles: sp.SphereMap, scrambled: Tuple[sp.SphereMap, np.ndarray, np.ndarray]
+        ) -> None:
+    m, ids, targets = scrambled
     assert_pinned(m, ids, targets)
     assert exact_verdict(m.points, m.mesh.faces).valid
     assert_refinement_maps_back(m, tentacles.mesh)
@@ -273,6 +282,62 @@ def test_a_scrambled_45_degree_set_is_laid_out_on_a_refined_mesh(
     again = sp.improve(m, landmarks=m.landmarks, max_iter=2)
     assert_pinned(again, ids, targets)
     assert np.array_equal(again.refinement[0], m.refinement[0])
+    # The input mesh stays reachable, and per-vertex attributes follow the
+    # map back (a linear attribute is reproduced) before and after improve.
+    for refined in (m, again):
+        assert np.array_equal(refined.input_mesh.faces, tentacles.mesh.faces)
+        assert np.array_equal(refined.input_mesh.vertices, tentacles.mesh.vertices)
+        assert np.allclose(refined.mesh.attributes["uv"], refined.mesh.vertices[:, :2],
+                           rtol=0, atol=1e-12)
+    assert sum("edge splits" in note for note in again.mesh.notes) == 1
+
+
+def test_a_refined_map_survives_save_load_and_pickle_with_its_map_back(
+        tentacles: sp.SphereMap, scrambled: Tuple[sp.SphereMap, np.ndarray, np.ndarray],
+        tmp_path) -> None:
+    import pickle
+    m, ids, targets = scrambled
+    path = tmp_path / "refined.spheremap.npz"
+    m.save(path)
+    for back in (sp.load_map(path), pickle.loads(pickle.dumps(m))):
+        assert back.valid and np.array_equal(back.points, m.points)
+        assert_pinned(back, ids, targets)
+        assert_refinement_maps_back(back, tentacles.mesh)
+        assert np.array_equal(back.refinement[1], m.refinement[1])
+        assert np.array_equal(back.input_mesh.faces, tentacles.mesh.faces)
+        assert np.array_equal(back.mesh.attributes["uv"], m.mesh.attributes["uv"])
+    with np.load(path) as stored:
+        arrays = dict(stored)
+    assert int(arrays["spherify_map_format"]) == 2
+    # A plain map is still format 1, which earlier readers read.
+    tentacles.save(tmp_path / "plain.spheremap.npz")
+    with np.load(tmp_path / "plain.spheremap.npz") as stored:
+        assert int(stored["spherify_map_format"]) == 1 and "refinement_faces" not in stored
+
+    def refused(change: str, value: np.ndarray, match: str) -> None:
+        bad = dict(arrays, **{change: value})
+        np.savez(tmp_path / "bad.spheremap.npz", **bad)
+        with pytest.raises(sp.FormatError, match=match):
+            sp.load_map(tmp_path / "bad.spheremap.npz")
+
+    n_input = len(tentacles.mesh.vertices)
+    weights = arrays["refinement_barycentric"].copy()
+    weights[n_input + 5] = weights[n_input + 5][[1, 2, 0]]
+    refused("refinement_barycentric", weights, f"refined vertex {n_input + 5} is not where")
+    weights = arrays["refinement_barycentric"].copy()
+    weights[7] = [0.5, 0.6, -0.1]
+    refused("refinement_barycentric", weights, "row 7 has weights")
+    faces = arrays["refinement_faces"].copy()
+    faces[3] = len(tentacles.mesh.faces)
+    refused("refinement_faces", faces, "row 3 names face")
+    faces = arrays["refinement_faces"].copy()
+    faces[0] = faces[1]  # vertex 0 is no corner of that face: its id would change
+    refused("refinement_faces", faces, "refined vertex 0 is not where")
+    refused("input_faces", arrays["input_faces"][:-1], "not a closed genus-0 mesh")
+    del arrays["input_faces"]
+    np.savez(tmp_path / "bad.spheremap.npz", **arrays)
+    with pytest.raises(sp.FormatError, match="stored together"):
+        sp.load_map(tmp_path / "bad.spheremap.npz")
 
 
 @pytest.mark.slow

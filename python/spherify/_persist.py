@@ -7,7 +7,12 @@ message, seconds, notes and details, for theta-phi the poles, the cut
 path and the rectangle, and for a map pinned to landmarks ``landmark_ids``
 and ``landmark_points`` (each point must be the map's own point for its id,
 bit for bit, or the file is refused: an older spherify, which does not read
-them, loads the map without its landmarks). It holds no verdict that is believed: rebuilding a
+them, loads the map without its landmarks), and for a map whose landmarks
+were laid out on a refined mesh its map back: ``input_faces`` (the input is
+the first ``input_vertices`` vertices with them), ``refinement_faces`` and
+``refinement_barycentric``, checked on load to reproduce every vertex (such
+a file is format 2, which earlier readers refuse rather than lose the map
+back). It holds no verdict that is believed: rebuilding a
 map sends the mesh through the core's validation and the parts through
 ``_core.restore_map``, which certifies the points (``valid``, thesis 3.4) and
 for theta-phi makes the cut again and checks the rectangle (``tp_valid``)
@@ -51,7 +56,12 @@ if TYPE_CHECKING:
 PathLike = Union[str, "os.PathLike[str]"]
 
 #: Bumped when the layout changes; a reader refuses files newer than itself.
-FORMAT_VERSION = 1
+#: Version 2 adds the map back of a refined landmark map (``input_faces``,
+#: ``refinement_faces``, ``refinement_barycentric``); maps without one are
+#: still written as version 1, which every earlier reader reads.
+FORMAT_VERSION = 2
+#: The version written for a map without a refinement.
+PLAIN_VERSION = 1
 VERSION_KEY = "spherify_map_format"
 
 Record = Dict[str, np.ndarray]
@@ -114,13 +124,17 @@ def record(m: "SphereMap") -> Record:
         "mesh_attributes": _encode(dict(m.mesh.attributes), arrays),
     }
     arrays.update({
-        VERSION_KEY: np.array(FORMAT_VERSION),
+        VERSION_KEY: np.array(PLAIN_VERSION if m.refinement is None else FORMAT_VERSION),
         "vertices": m.mesh.vertices,
         "faces": m.mesh.faces,
         "points": m.points,
     })
     if m.landmarks is not None:
         arrays.update(landmark_ids=m.landmarks[0], landmark_points=m.landmarks[1])
+    if m.refinement is not None:
+        arrays.update(input_faces=m.input_mesh.faces, refinement_faces=m.refinement[0],
+                      refinement_barycentric=m.refinement[1])
+        meta["input_vertices"] = len(m.input_mesh.vertices)
     if isinstance(m, ThetaPhiMap):
         arrays.update(poles=np.array(m.poles, dtype=np.int64), cut_path=m.cut_path,
                       theta_phi=m.theta_phi)
@@ -250,8 +264,11 @@ def rebuild(arrays: Any, source: str) -> "SphereMap":
         raise fail(f"malformed record ({type(err).__name__}: {err})") from None
     try:
         mesh = Mesh(arrays["vertices"], arrays["faces"])
+        refinement = None
+        if {"input_faces", "refinement_faces", "refinement_barycentric"} & names:
+            refinement = _refinement(arrays, names, meta, mesh.vertices, fail)
         core = _core.restore_map(mesh._core, method, points, iterations, status, message,
-                                 **theta_phi)
+                                 **theta_phi, refinement=refinement)
     except (ValueError, TypeError, OverflowError) as err:
         # MeshError and TopologyError (the stored mesh is not genus 0)
         # included, and UnicodeEncodeError: a JSON "\udf63" escape gives a
@@ -267,6 +284,63 @@ def rebuild(arrays: Any, source: str) -> "SphereMap":
     if "landmark_ids" in names or "landmark_points" in names:
         m._landmarks = _landmarks(arrays, names, m.points, fail)
     return m
+
+
+#: How far a refined vertex may lie from the point its stored face and
+#: weights give, relative to the input's largest coordinate (the layout
+#: computes both the same way; a file is data, not proof).
+REFINEMENT_TOLERANCE = 1e-12
+
+
+def _refinement(arrays: Any, names: Any, meta: Dict[str, Any], vertices: np.ndarray,
+                fail: Callable[[str], FormatError]) -> Tuple[Any, np.ndarray, np.ndarray]:
+    """A refined map's stored map back, checked against the stored mesh:
+    the input is the first ``input_vertices`` vertices with ``input_faces``,
+    every vertex has a face of the input and weights (non-negative, summing
+    to 1) that reproduce it, and the input's own vertices keep their ids
+    (weight 1 at their own corner). Returns ``(input CoreMesh, faces,
+    weights)`` for the core, or a :class:`FormatError` naming the row."""
+    from ._mesh import Mesh
+
+    if not {"input_faces", "refinement_faces", "refinement_barycentric"} <= set(names):
+        raise fail("input_faces, refinement_faces and refinement_barycentric are stored together")
+    if "input_vertices" not in meta:
+        raise fail("a refined map's record names its input_vertices")
+    n_input = _count(meta["input_vertices"], "input_vertices")
+    if not 4 <= n_input <= len(vertices):
+        raise fail(f"input_vertices {n_input} does not fit a refined mesh of "
+                   f"{len(vertices)} vertices")
+    input_mesh = Mesh(vertices[:n_input], arrays["input_faces"])
+    if not _core.check(input_mesh._core).is_sphere_topology:
+        raise fail("input_faces are not a closed genus-0 mesh on the first "
+                   f"{n_input} vertices (the input a refinement maps back to)")
+    faces = np.asarray(arrays["refinement_faces"])
+    weights = np.asarray(arrays["refinement_barycentric"])
+    if faces.shape != (len(vertices),) or faces.dtype.kind not in "iu" \
+            or weights.shape != (len(vertices), 3) or weights.dtype != np.float64:
+        raise fail(f"the refinement must be int faces ({len(vertices)},) and float64 weights "
+                   f"({len(vertices)}, 3), got {faces.dtype}{faces.shape} and "
+                   f"{weights.dtype}{weights.shape}")
+    n_faces = len(input_mesh.faces)
+    if len(faces) and (faces.min() < 0 or faces.max() >= n_faces):
+        row = int(np.argmax((faces < 0) | (faces >= n_faces)))
+        raise fail(f"refinement row {row} names face {int(faces[row])}; the input has {n_faces}")
+    bad = ~np.isfinite(weights).all(axis=1) | (weights < 0).any(axis=1) \
+        | (np.abs(weights.sum(axis=1) - 1.0) > 1e-12)
+    if bad.any():
+        row = int(np.argmax(bad))
+        raise fail(f"refinement row {row} has weights {weights[row].tolist()}: not barycentric")
+    corners = input_mesh.faces[faces]
+    back = np.einsum("nk,nkd->nd", weights, input_mesh.vertices[corners])
+    scale = max(float(np.abs(input_mesh.vertices).max()), np.finfo(np.float64).tiny)
+    off = np.abs(back - vertices).max(axis=1) > REFINEMENT_TOLERANCE * scale
+    own = np.arange(n_input)
+    off[:n_input] |= weights[own, np.argmax(corners[:n_input] == own[:, None], axis=1)] != 1.0
+    if off.any():
+        row = int(np.argmax(off))
+        raise fail(f"refined vertex {row} is not where refinement row {row} puts it "
+                   f"(face {int(faces[row])} of the input, weights {weights[row].tolist()})")
+    return input_mesh._core, faces.astype(np.int64), np.ascontiguousarray(weights)
 
 
 def _landmarks(arrays: Any, names: Any, points: np.ndarray,

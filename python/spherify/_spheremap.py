@@ -48,6 +48,26 @@ def _read_only(array: np.ndarray) -> np.ndarray:
     return array
 
 
+def _refined_mesh(given: Mesh, core: _core.CoreSphereMap,
+                  refinement: Tuple[np.ndarray, np.ndarray]) -> Mesh:
+    """The refined mesh of a landmark layout, as a :class:`Mesh` whose
+    per-vertex attributes are carried over from ``given`` through the map
+    back. ``given`` is the input or an earlier refinement of it (an
+    ``improve`` that refined again): edge splits only append vertices, so
+    its first rows are the input's own, which the map back names."""
+    source = core.refinement_input
+    assert source is not None
+    input_faces = Mesh._from_core(source, [], {}).faces[refinement[0]]
+    n_input = source.n_vertices
+    carried = {name: np.einsum("nk,nkd->nd", refinement[1], values[:n_input][input_faces])
+               for name, values in given.attributes.items()
+               if getattr(values, "ndim", 0) == 2 and len(values) == len(given.vertices)}
+    added = len(refinement[0]) - len(given.vertices)
+    note = (f"refined by {added} edge splits to lay out landmarks "
+            "(SphereMap.refinement maps it back to SphereMap.input_mesh)")
+    return Mesh._from_core(core.mesh, list(given.notes) + [note], carried)
+
+
 class SphereMap:
     """Points on the unit sphere, one per vertex, and the verdict on them.
 
@@ -96,18 +116,10 @@ class SphereMap:
             mesh = Mesh._from_core(core.mesh, list(mesh.notes), dict(mesh.attributes))
         refinement = core.refinement
         if refinement is not None:
-            # Landmarks laid out on a refined mesh (edge splits): the map's
-            # mesh is the refined one; per-vertex attributes are carried
-            # over through the barycentric map back.
-            faces = mesh.faces[refinement[0]]
-            carried = {name: np.einsum("nk,nkd->nd", refinement[1], values[faces])
-                       for name, values in mesh.attributes.items()
-                       if getattr(values, "ndim", 0) == 2 and len(values) == len(mesh.vertices)}
-            note = (f"refined by {len(refinement[0]) - len(mesh.vertices)} edge splits "
-                    "to lay out landmarks (SphereMap.refinement maps it back)")
-            mesh = Mesh._from_core(core.mesh, list(mesh.notes) + [note], carried)
             for array in refinement:
                 array.flags.writeable = False
+            if len(mesh.vertices) != len(refinement[0]):
+                mesh = _refined_mesh(mesh, core, refinement)
         self._refinement: Optional[Tuple[np.ndarray, np.ndarray]] = refinement
         self._mesh = mesh
         self._points = _read_only(core.points())
@@ -277,6 +289,20 @@ class SphereMap:
         with their ids unchanged. See docs/correspondence.md.
         """
         return self._refinement
+
+    @property
+    def input_mesh(self) -> Mesh:
+        """The mesh the map was asked for: :attr:`mesh` itself, or for a map
+        whose landmarks were laid out on a refined mesh the input before
+        the edge splits (its vertices are the first rows of :attr:`mesh`;
+        :attr:`refinement` names its faces). Saved and loaded with the map."""
+        source = self._core.refinement_input
+        if source is None:
+            return self._mesh
+        n_input = source.n_vertices
+        attributes = {name: values[:n_input] for name, values in self._mesh.attributes.items()
+                      if getattr(values, "ndim", 0) >= 1 and len(values) == len(self._mesh.vertices)}
+        return Mesh._from_core(source, [], attributes)
 
     @property
     def report(self) -> SphereReport:

@@ -16,7 +16,7 @@ use spherify_sphere::{GenusZeroMesh, MethodName, SphereError};
 use crate::convert::rows;
 use crate::errors::{mesh_error, sphere_error};
 use crate::mesh::CoreMesh;
-use crate::sphere_map::CoreSphereMap;
+use crate::sphere_map::{CoreSphereMap, Refinement};
 
 /// The mesh is not genus 0, or the parts do not fit it.
 enum Failed {
@@ -37,13 +37,17 @@ fn vertex_ids(array: &PyReadonlyArrayDyn<'_, i64>, what: &str) -> PyResult<Vec<u
 }
 
 /// restore_map(mesh, method, points, iterations, status, message, poles=None,
-/// cut_path=None, theta_phi=None, refinements=0, re_embedded=(False, False))
-/// -> CoreSphereMap. The theta-phi parts are given exactly for a theta-phi
-/// map. TopologyError when the mesh is not genus 0; MeshError when the parts
-/// do not fit the mesh or each other.
+/// cut_path=None, theta_phi=None, refinements=0, re_embedded=(False, False),
+/// refinement=None) -> CoreSphereMap. The theta-phi parts are given exactly
+/// for a theta-phi map. `refinement`: (input mesh, faces (n,) int64,
+/// barycentric (n, 3) float64) for a map laid out on a refined mesh, checked
+/// against the mesh by `spherify._persist` before it comes here; only the
+/// sizes are checked again. TopologyError when the mesh is not genus 0;
+/// MeshError when the parts do not fit the mesh or each other.
 #[pyfunction]
 #[pyo3(signature = (mesh, method, points, iterations, status, message, poles=None, cut_path=None,
-                    theta_phi=None, refinements=0, re_embedded=(false, false)))]
+                    theta_phi=None, refinements=0, re_embedded=(false, false),
+                    refinement=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn restore_map(
     py: Python<'_>,
@@ -58,6 +62,7 @@ pub fn restore_map(
     theta_phi: Option<PyReadonlyArrayDyn<'_, f64>>,
     refinements: usize,
     re_embedded: (bool, bool),
+    refinement: Option<StoredRefinement<'_>>,
 ) -> PyResult<CoreSphereMap> {
     // "points" (a map given to from_points) is no method embed runs, so
     // from_str does not know it; it is stored all the same.
@@ -87,6 +92,9 @@ pub fn restore_map(
     };
     let stored = StoredMap { method, points, iterations, status, message, theta_phi };
     let caller = Arc::clone(&mesh.mesh);
+    let refinement = refinement
+        .map(|(input, faces, barycentric)| refinement_of(mesh, input, &faces, &barycentric))
+        .transpose()?;
     let shared = Arc::clone(&mesh.mesh);
     let restored = crate::pool::detach(py, || {
         let need =
@@ -100,5 +108,40 @@ pub fn restore_map(
         Failed::Mesh(err) => sphere_error(py, err),
         Failed::Parts(err) => mesh_error(err.to_string()),
     })?;
-    Ok(CoreSphereMap::new(mesh.shared_mesh(), caller, embedding, mesh.reoriented_faces()))
+    let map = CoreSphereMap::new(mesh.shared_mesh(), caller, embedding, mesh.reoriented_faces());
+    Ok(match refinement {
+        None => map,
+        Some(refinement) => map.with_refinement(refinement),
+    })
+}
+
+/// The stored map back to the input: (input mesh, faces, barycentric).
+type StoredRefinement<'py> =
+    (PyRef<'py, CoreMesh>, PyReadonlyArrayDyn<'py, i64>, PyReadonlyArrayDyn<'py, f64>);
+
+/// A stored refinement whose sizes fit the refined mesh and the input: one
+/// row per refined vertex, each naming a face of the input.
+fn refinement_of(
+    refined: &CoreMesh,
+    input: PyRef<'_, CoreMesh>,
+    faces: &PyReadonlyArrayDyn<'_, i64>,
+    barycentric: &PyReadonlyArrayDyn<'_, f64>,
+) -> PyResult<Refinement> {
+    let faces = vertex_ids(faces, "refinement faces")?;
+    let barycentric = rows::<f64, 3>(barycentric, "refinement barycentric")?;
+    let n = refined.mesh.n_vertices();
+    if faces.len() != n || barycentric.len() != n {
+        return Err(mesh_error(format!(
+            "the refinement has {} faces and {} weights for {n} vertices",
+            faces.len(),
+            barycentric.len()
+        )));
+    }
+    let input_faces = input.mesh.n_faces();
+    if let Some(&f) = faces.iter().find(|&&f| f as usize >= input_faces) {
+        return Err(mesh_error(format!(
+            "the refinement names face {f}; the input has {input_faces}"
+        )));
+    }
+    Ok(Refinement { input: Arc::clone(&input.mesh), faces, barycentric })
 }

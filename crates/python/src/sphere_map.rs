@@ -165,6 +165,13 @@ impl CoreSphereMap {
         })
     }
 
+    /// The mesh the caller gave before the landmark layout refined it (the
+    /// faces `refinement` names), or None for a map on the input mesh.
+    #[getter]
+    fn refinement_input(&self) -> Option<CoreMesh> {
+        self.refinement.as_ref().map(|r| CoreMesh { mesh: Arc::clone(&r.input) })
+    }
+
     #[getter]
     fn iterations(&self) -> usize {
         self.embedding.result.iterations
