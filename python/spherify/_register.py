@@ -27,7 +27,7 @@ from typing import Any, Dict, Optional, Tuple
 import numpy as np
 import numpy.typing as npt
 
-from . import _align, _core, _landmarks, _warp
+from . import _align, _blas, _core, _landmarks, _warp
 from ._embed import improve
 from ._errors import MapError, MeshError
 from ._progress import as_callback
@@ -340,6 +340,15 @@ def register(m_a: SphereMap, m_b: SphereMap, *, landmarks: Any = None,
     _check_maps(m_a, m_b)
     pairs = landmark_pairs(landmarks, len(m_a.points), len(m_b.points))
     check_memory("register", m_a, m_b)
+    # numpy's BLAS on one thread: faster on busy cores and the same bits
+    # whatever BLAS's thread count (spherify._blas).
+    with _blas.one_blas_thread():
+        return _registered(m_a, m_b, pairs, transform, progress)
+
+
+def _registered(m_a: SphereMap, m_b: SphereMap, pairs: np.ndarray, transform: str,
+                progress: Any) -> Correspondence:
+    """:func:`register` after its checks."""
     report = as_callback(progress, "register")
     seconds: Dict[str, float] = {}
     details: Dict[str, Any] = {}
