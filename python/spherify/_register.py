@@ -318,7 +318,9 @@ def register(m_a: SphereMap, m_b: SphereMap, *, landmarks: Any = None,
     -------
     Correspondence
         Cost: a few dozen ``to_surface`` calls on 2000 points for the
-        rotation and the Möbius fit; for the warp, 15 least-squares fits of
+        rotation and the Möbius fit, and about 50 closest-point searches of
+        600 points each way for the rigid ICP that checks the rotation's pose
+        in space (without landmarks); for the warp, 15 least-squares fits of
         304 unknowns on at most 3000 of A's vertices, each with a
         closest-point search on B, one closest-point search for every vertex
         of A and 10 rounds of flip-free moves of all.
