@@ -52,6 +52,9 @@ RANKING_ITERATIONS = 4
 SAMPLE = 600
 ITERATIONS = 10
 REFINED_STARTS = 2
+# Poses closer than this angle (radians) are the same pose: a start that
+# comes this close to the map pose is not polished.
+SAME_POSE = 0.2
 
 
 @dataclass(frozen=True)
@@ -134,7 +137,10 @@ def best_pose(a: np.ndarray, a_faces: np.ndarray, b: np.ndarray, b_faces: np.nda
                                   (-1.0, -1.0, 1.0))]
     rough = [pair.icp(vb @ g @ va.T, zero, RANKING_SAMPLE, RANKING_ITERATIONS) for g in signs]
     order = np.argsort([p.residual for p in rough], kind="stable")[:REFINED_STARTS]
-    polished = [pair.icp(rough[i].rotation, rough[i].shift, SAMPLE, ITERATIONS) for i in order]
     from_map = pair.icp(map_rotation, zero, SAMPLE, ITERATIONS)
+    # A start that has already come to the map pose is not polished again: it
+    # would only polish the same pose (on most shapes the best start does).
+    polished = [pair.icp(rough[i].rotation, rough[i].shift, SAMPLE, ITERATIONS) for i in order
+                if pose_angle(rough[i].rotation, from_map.rotation) > SAME_POSE]
     best = min(polished + [from_map], key=lambda p: p.residual)
     return best, from_map
