@@ -18,6 +18,10 @@ frame of A's degree-1 spherical harmonics (the best-fitting ellipsoid, thesis
 landmarks onto B's on the sphere in least squares (Kabsch on the sphere); the
 best starts are refined by Gauss-Newton on the rotation (central differences
 through ``to_surface``), on at most 1000 of A's vertices (:func:`best_rotation`).
+The winner is checked in space (:mod:`spherify._rigid_icp`): where rigid
+ICP finds a clearly better pose of the shapes that is not a polish of the
+winner's (another of a near-symmetric shape's poses, as human_man's front
+and back), the rotation is taken from that pose.
 
 Möbius transformations (the conformal automorphisms of the sphere; Baden,
 Crane and Kazhdan 2018 register shapes with them): T = R o B_b, a rotation
@@ -37,7 +41,7 @@ from typing import Callable, List, Optional, Tuple
 
 import numpy as np
 
-from . import harmonics
+from . import _nearest, _rigid_icp, harmonics
 from ._spheremap import SphereMap
 
 __all__ = ["boost", "kabsch", "normalised", "best_rotation", "best_moebius"]
@@ -50,6 +54,17 @@ REFINED_STARTS = 3
 # The largest |b| a Möbius fit may reach: beyond it the boost squeezes half
 # the sphere into a cap too small for the map's triangles.
 MAX_BOOST = 0.9
+# Gauss-Newton stops when a step lowers the cost by less than this fraction.
+# At 1e-6 (before) horse's three refined starts ended 8-11 steps later within
+# 2e-7 of each other; 1e-4 stops them a few steps earlier (issue 23, speed).
+TOLERANCE = 1e-4
+# The rigid ICP's pose in space replaces the map rotation's
+# (:func:`_pose_in_space`) when they differ by more than this angle (radians)
+# and its symmetric closest-point residual is below this fraction of the map
+# pose's. human_man's true pose is 0.962 of its front-to-back one; the other
+# corpus pairs' best poses are within a degree of their map poses.
+SWITCH_ANGLE = 0.5
+SWITCH_RATIO = 0.98
 
 
 def kabsch(p: np.ndarray, q: np.ndarray) -> np.ndarray:
@@ -109,6 +124,18 @@ class Cost:
         r = self.residual(transform)
         return float(r @ r)
 
+    def residuals_of(self, transforms: List[Callable[[np.ndarray], np.ndarray]]) -> np.ndarray:
+        """The residuals of several transformations with one ``to_surface``
+        call (each point is located on its own, so the bits are those of
+        one call per transformation): (k, 3 * points)."""
+        n = len(self.p)
+        _, _, xyz = self.m_b.to_surface(np.concatenate([t(self.p) for t in transforms]))
+        out = np.empty((len(transforms), 3 * n))
+        for i in range(len(transforms)):
+            b = normalised(xyz[i * n:(i + 1) * n])
+            out[i] = (self.a @ kabsch(self.a, b).T - b).ravel()
+        return out
+
     def residuals_of_rotations(self, rotations: np.ndarray) -> np.ndarray:
         """The residuals of many rotations (k, 3, 3) with one ``to_surface``
         call: (k, 3 * points)."""
@@ -162,14 +189,15 @@ def _gauss_newton(cost: Cost, params: np.ndarray,
     cost does not fall); ``transform(params)`` is the sphere map they stand for."""
     current = cost(transform(params))
     h = 1e-6
+    steps = np.eye(len(params)) * h
     for iteration in range(1, max_iter + 1):
-        r = cost.residual(transform(params))
-        jac = np.empty((len(r), len(params)))
-        for k in range(len(params)):
-            e = np.zeros(len(params))
-            e[k] = h
-            jac[:, k] = (cost.residual(transform(params + e))
-                         - cost.residual(transform(params - e))) / (2 * h)
+        # The residual and both probes of every parameter in one call
+        # (each ``to_surface`` call costs about a millisecond besides its points).
+        probes = [transform(params)] + [transform(params + sign * e)
+                                        for e in steps for sign in (1.0, -1.0)]
+        rows = cost.residuals_of(probes)
+        r = rows[0]
+        jac = ((rows[1::2] - rows[2::2]) / (2 * h)).T
         step = -np.linalg.lstsq(jac, r, rcond=None)[0]
         for _ in range(30):
             trial = params + step
@@ -180,7 +208,7 @@ def _gauss_newton(cost: Cost, params: np.ndarray,
         else:
             return params, iteration
         params, previous, current = trial, current, value
-        if np.linalg.norm(step) < 1e-9 or previous - current <= 1e-6 * max(previous, 1e-300):
+        if np.linalg.norm(step) < 1e-9 or previous - current <= TOLERANCE * max(previous, 1e-300):
             return params, iteration
     return params, max_iter
 
@@ -240,7 +268,9 @@ def best_rotation(m_a: SphereMap, m_b: SphereMap,
     and the landmarks' rotation, each harmonic frame turned by the 24
     rotations of the octahedral group is a start: the frame of a shape with
     a near-symmetric ellipsoid (an octopus, whose eight arms make it round)
-    says little, and the cost has a minimum near each turn of it."""
+    says little, and the cost has a minimum near each turn of it. The
+    winner is then checked in space (:func:`_pose_in_space`): its start is
+    named ``"rigid ICP in space"`` where that check replaced it."""
     if landmark_rotation is not None:
         # Landmarks say which of a symmetric shape's equally good rotations is
         # meant: only their rotation is refined.
@@ -266,7 +296,39 @@ def best_rotation(m_a: SphereMap, m_b: SphereMap,
         if best is None or value < best[0]:
             best = (value, rotation, name, iterations)
     assert best is not None
-    return best[1], best[2], best[3]
+    rotation, name, iterations = best[1], best[2], best[3]
+    switched = _pose_in_space(m_a, m_b, rotation, cost)
+    if switched is not None:
+        rotation, iterations = switched
+        name = "rigid ICP in space"
+    return rotation, name, iterations
+
+
+def _pose_in_space(m_a: SphereMap, m_b: SphereMap, rotation: np.ndarray,
+                   cost: Cost) -> Optional[Tuple[np.ndarray, int]]:
+    """The sphere rotation of a better pose in space (:mod:`spherify._rigid_icp`),
+    or None where the map rotation's own pose is as good.
+
+    The switch needs the two poses to differ by more than :data:`SWITCH_ANGLE`
+    (another of a near-symmetric shape's poses, not a polish of the same one)
+    and the other's symmetric closest-point residual to be below
+    :data:`SWITCH_RATIO` of the map pose's. The new sphere rotation sends A's
+    sphere points onto the sphere points (in B's map) of their closest points
+    on B in that pose, and is refined by the map cost's Gauss-Newton."""
+    a, b = m_a.mesh, m_b.mesh
+    a_n, b_n = normalised(a.vertices), normalised(b.vertices)
+    _, _, xyz = m_b.to_surface(cost.p @ rotation.T)
+    # The spatial pose the map rotation implies: A's subsample onto its images.
+    map_pose = kabsch(cost.a, normalised(xyz))
+    best, from_map = _rigid_icp.best_pose(a_n, a.faces, b_n, b.faces, map_pose)
+    if (_rigid_icp.pose_angle(best.rotation, from_map.rotation) <= SWITCH_ANGLE
+            or best.residual >= SWITCH_RATIO * from_map.residual):
+        return None
+    pick = np.unique(np.linspace(0, len(m_a.points) - 1, SUBSAMPLE).astype(np.int64))
+    faces, bary, _ = _nearest.NearestOnSurface(b_n, b.faces)(
+        a_n[pick] @ best.rotation.T + best.shift)
+    start = kabsch(m_a.points[pick], m_b.to_sphere(faces, bary))
+    return refine_rotation(cost, start)
 
 
 def best_moebius(m_a: SphereMap, m_b: SphereMap, rotation: np.ndarray,

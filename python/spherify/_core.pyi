@@ -8,7 +8,7 @@ import numpy.typing as npt
 
 from ._report import MeshReport, SphereReport
 
-__all__ = ["AtomicWrite", "CoreMesh", "CoreSphereMap", "__version__", "boundary_loop", "check", "check_application", "check_memory", "check_raw", "check_sphere", "choices", "dijkstra", "embed", "embed_need", "encode", "face_quality", "from_points", "get_num_threads", "harmonics_evaluate", "harmonics_fit", "improve", "is_stale_temporary", "is_temporary", "load", "method_options", "methods", "move_towards", "orient", "quality", "remove_stale_temporaries", "require_regular_file", "restore_map", "save", "save_textured_obj", "set_num_threads", "shortest_path", "special_kind", "temporary_path", "tutte", "weld", "write_atomic"]
+__all__ = ["AtomicWrite", "CoreClosestPoints", "CoreMesh", "CoreSphereMap", "__version__", "boundary_loop", "check", "check_application", "check_memory", "check_raw", "check_sphere", "choices", "dijkstra", "embed", "embed_need", "encode", "face_quality", "from_points", "get_num_threads", "harmonics_evaluate", "harmonics_fit", "improve", "is_stale_temporary", "is_temporary", "load", "method_options", "methods", "move_towards", "orient", "quality", "remove_stale_temporaries", "require_regular_file", "restore_map", "save", "save_textured_obj", "set_num_threads", "shortest_path", "special_kind", "temporary_path", "tutte", "weld", "write_atomic"]
 
 __version__: str
 
@@ -21,6 +21,14 @@ class CoreMesh:
     def n_vertices(self) -> int: ...
     @property
     def n_faces(self) -> int: ...
+
+@final
+class CoreClosestPoints:
+    def __new__(cls, vertices: npt.NDArray[np.float64], faces: npt.NDArray[np.int64]) -> CoreClosestPoints: ...
+    def closest(
+        self, points: npt.NDArray[np.float64]
+    ) -> Tuple[npt.NDArray[np.int64], npt.NDArray[np.float64], npt.NDArray[np.float64]]: ...
+    def __len__(self) -> int: ...
 
 @final
 class CoreSphereMap:

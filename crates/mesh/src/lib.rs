@@ -10,6 +10,7 @@
 //! * [`predicates`]: exact orientation signs on which every validity decision rests.
 //! * [`lcg`]: the deterministic generator of the tests of every crate.
 
+pub mod closest_point;
 pub mod cut;
 pub mod dijkstra;
 pub mod edge_table;

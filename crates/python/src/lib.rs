@@ -4,6 +4,7 @@
 
 use pyo3::prelude::*;
 
+mod closest_point;
 mod convert;
 mod embed;
 mod errors;
@@ -39,6 +40,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     let _ = numpy::PyArray1::<f64>::zeros(m.py(), [0], false);
     m.add_class::<mesh::CoreMesh>()?;
     m.add_class::<sphere_map::CoreSphereMap>()?;
+    m.add_class::<closest_point::CoreClosestPoints>()?;
     m.add_function(wrap_pyfunction!(io::load, m)?)?;
     m.add_function(wrap_pyfunction!(io::save, m)?)?;
     m.add_function(wrap_pyfunction!(io::write_atomic, m)?)?;

@@ -1,0 +1,72 @@
+//! `CoreClosestPoints`: the core's closest-point tree
+//! (`spherify_mesh::closest_point`) held for `spherify._nearest`.
+
+use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArrayDyn};
+use pyo3::prelude::*;
+use spherify_mesh::closest_point::ClosestPoints;
+
+use crate::convert::{rows, to_numpy};
+use crate::errors::mesh_error;
+
+/// Closest points of one triangle mesh's surface (any vertex positions: the
+/// registration's normalised shapes are not a `CoreMesh`).
+#[pyclass(frozen, module = "spherify._core")]
+pub struct CoreClosestPoints {
+    tree: ClosestPoints,
+}
+
+#[pymethods]
+impl CoreClosestPoints {
+    /// CoreClosestPoints(vertices (n, 3) float64, faces (m, 3) int64).
+    #[new]
+    fn new(
+        vertices: PyReadonlyArrayDyn<'_, f64>,
+        faces: PyReadonlyArrayDyn<'_, i64>,
+    ) -> PyResult<Self> {
+        let positions = rows::<f64, 3>(&vertices, "vertices")?;
+        let corners = rows::<i64, 3>(&faces, "faces")?;
+        if let Some(bad) = positions.iter().position(|p| !p.iter().all(|x| x.is_finite())) {
+            return Err(mesh_error(format!("vertex {bad} is not finite")));
+        }
+        let n = positions.len() as i64;
+        let mut out = Vec::with_capacity(corners.len());
+        for (k, f) in corners.iter().enumerate() {
+            if f.iter().any(|&v| v < 0 || v >= n) {
+                return Err(mesh_error(format!(
+                    "face {k} names a vertex out of range 0..{}",
+                    n - 1
+                )));
+            }
+            out.push([f[0] as u32, f[1] as u32, f[2] as u32]);
+        }
+        let tree = ClosestPoints::new(positions, out);
+        Ok(CoreClosestPoints { tree })
+    }
+
+    /// closest(points (k, 3) float64) -> (face ids (k,) int64, bary (k, 3),
+    /// points (k, 3)): the exact closest point of the surface to each row;
+    /// face -1 and NaN for a row that is not finite.
+    #[allow(clippy::type_complexity)]
+    fn closest<'py>(
+        &self,
+        py: Python<'py>,
+        points: PyReadonlyArrayDyn<'_, f64>,
+    ) -> PyResult<(Bound<'py, PyArray1<i64>>, Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<f64>>)>
+    {
+        let points = rows::<f64, 3>(&points, "points")?;
+        let tree = &self.tree;
+        // Through progress::run so that Ctrl-C stops a long search.
+        let hits = crate::progress::run(py, None, |go_on| tree.closest_many(&points, go_on))?
+            .ok_or_else(|| mesh_error("the closest-point search was stopped"))?;
+        let faces: Vec<i64> =
+            hits.iter().map(|h| if h.face == u32::MAX { -1 } else { i64::from(h.face) }).collect();
+        let bary: Vec<[f64; 3]> = hits.iter().map(|h| h.bary).collect();
+        let xyz: Vec<[f64; 3]> = hits.iter().map(|h| h.point).collect();
+        Ok((faces.into_pyarray(py), to_numpy(py, &bary), to_numpy(py, &xyz)))
+    }
+
+    /// The number of triangles.
+    fn __len__(&self) -> usize {
+        self.tree.len()
+    }
+}

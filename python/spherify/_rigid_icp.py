@@ -1,0 +1,146 @@
+"""Rigid ICP in space over several starts: which of a near-symmetric shape's
+poses is meant (registration's check of the sphere rotation).
+
+The rotation of :mod:`spherify._align` compares the shapes *through their
+sphere maps*. Where two maps differ by more than a rotation (a human whose
+arms and legs the two maps place differently), the map-based cost can prefer
+a pose that is a symmetry of the silhouette but not of the shape: measured on
+issue 23's human_man pair, the front-to-back pose costs 75 and the true one
+91, and the registration was 25% of the diagonal off. In space the two poses
+differ: a face, the toes, the heels. So the poses are also compared by
+rigid ICP in space (Besl and McKay 1992), which needs no maps:
+
+1. Both shapes are centred and scaled to unit rms radius. Starts: the map
+   rotation's own spatial pose, and the four proper rotations carrying A's
+   principal axes (of its vertices' covariance) onto B's with every choice
+   of signs (a front-to-back turn is one of them).
+2. Each start is polished by symmetric rigid ICP: closest points of B's
+   surface to A's sample and of A's surface to B's sample, one rotation and
+   translation fitted to both sets of pairs (Kabsch 1976) per iteration. The
+   symmetric residual is what a pose is ranked by: A's sample on B alone is
+   small whenever A sits inside B.
+3. Every start takes :data:`RANKING_ITERATIONS` iterations on a small sample;
+   the best :data:`REFINED_STARTS` and the map rotation's pose are polished
+   on a larger one.
+
+Measured on issue 23's pairs (symmetric rms residual, unit rms radius): on
+human_man the map pose (front to back) 0.158, the true pose 0.152, which the
+search finds; on the other 13 corpus pairs the best pose is within 1 degree
+of the map pose (so nothing changes), including the sword and the soccer
+ball, whose map poses are a near-symmetric turn off the truth (the sword
+0.0739 against the true pose's 0.0751: its geometry does not say which).
+
+:func:`best_pose` returns the best polished pose and the map rotation's own,
+with their residuals; the caller decides whether they disagree enough to
+switch (:func:`spherify._align.best_rotation`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Tuple
+
+import numpy as np
+
+from ._nearest import NearestOnSurface
+
+__all__ = ["Pose", "best_pose", "pose_angle"]
+
+# Sample sizes and iterations of the ranking and of the polish.
+RANKING_SAMPLE = 300
+RANKING_ITERATIONS = 4
+SAMPLE = 600
+ITERATIONS = 10
+REFINED_STARTS = 2
+# Poses closer than this angle (radians) are the same pose: a start that
+# comes this close to the map pose is not polished.
+SAME_POSE = 0.2
+
+
+@dataclass(frozen=True)
+class Pose:
+    """x -> rotation @ x + shift on the normalised shapes, and the symmetric
+    rms closest-point distance it leaves (unit rms radius)."""
+
+    rotation: np.ndarray
+    shift: np.ndarray
+    residual: float
+
+
+def _kabsch(p: np.ndarray, q: np.ndarray) -> np.ndarray:
+    u, _, vt = np.linalg.svd(q.T @ p)
+    d = np.sign(np.linalg.det(u @ vt)) or 1.0
+    out: np.ndarray = u @ np.diag([1.0, 1.0, d]) @ vt
+    return out
+
+
+def pose_angle(r: np.ndarray, s: np.ndarray) -> float:
+    """The angle (radians) of the rotation between ``r`` and ``s``."""
+    return float(np.arccos(np.clip((np.trace(r.T @ s) - 1.0) / 2.0, -1.0, 1.0)))
+
+
+class _Pair:
+    """The two normalised shapes, their samples and closest-point searches."""
+
+    def __init__(self, a: np.ndarray, a_faces: np.ndarray, b: np.ndarray,
+                 b_faces: np.ndarray) -> None:
+        self.a, self.b = a, b
+        self.on_a = NearestOnSurface(a, a_faces)
+        self.on_b = NearestOnSurface(b, b_faces)
+
+    @staticmethod
+    def sample(x: np.ndarray, k: int) -> np.ndarray:
+        out: np.ndarray = x[np.unique(np.linspace(0, len(x) - 1, min(k, len(x))).astype(np.int64))]
+        return out
+
+    def icp(self, rotation: np.ndarray, shift: np.ndarray, sample: int,
+            iterations: int) -> Pose:
+        a_s, b_s = self.sample(self.a, sample), self.sample(self.b, sample)
+        residual = np.inf
+        for _ in range(iterations + 1):
+            moved = a_s @ rotation.T + shift
+            on_b = self.on_b(moved)[2]
+            # B's sample carried back into A's frame, its closest points on A
+            # carried forward again.
+            on_a = self.on_a((b_s - shift) @ rotation)[2]
+            src = np.vstack([a_s, on_a])
+            dst = np.vstack([on_b, b_s])
+            d = np.vstack([on_b - moved, b_s - (on_a @ rotation.T + shift)])
+            residual = float(np.sqrt((d * d).sum(axis=1).mean()))
+            if _ == iterations:
+                break
+            cs, cd = src.mean(axis=0), dst.mean(axis=0)
+            rotation = _kabsch(src - cs, dst - cd)
+            shift = cd - rotation @ cs
+        return Pose(rotation, shift, residual)
+
+
+def _principal_frame(x: np.ndarray) -> np.ndarray:
+    _, vectors = np.linalg.eigh(x.T @ x)
+    return vectors
+
+
+def best_pose(a: np.ndarray, a_faces: np.ndarray, b: np.ndarray, b_faces: np.ndarray,
+              map_rotation: np.ndarray) -> Tuple[Pose, Pose]:
+    """The best rigid pose of A on B in space over the module doc's starts,
+    and the pose polished from ``map_rotation`` (the spatial rotation the
+    sphere maps' alignment implies). ``a`` and ``b`` are normalised (centred,
+    unit rms radius)."""
+    pair = _Pair(a, a_faces, b, b_faces)
+    va, vb = _principal_frame(a), _principal_frame(b)
+    if np.linalg.det(va) < 0:
+        va[:, 0] *= -1.0
+    if np.linalg.det(vb) < 0:
+        vb[:, 0] *= -1.0
+    zero = np.zeros(3)
+    signs = [np.diag(d) for d in ((1.0, 1.0, 1.0), (1.0, -1.0, -1.0), (-1.0, 1.0, -1.0),
+                                  (-1.0, -1.0, 1.0))]
+    rough = [pair.icp(vb @ g @ va.T, zero, RANKING_SAMPLE, RANKING_ITERATIONS) for g in signs]
+    order = np.argsort([p.residual for p in rough], kind="stable")[:REFINED_STARTS]
+    from_map = pair.icp(map_rotation, zero, SAMPLE, ITERATIONS)
+    # A start that has already come to the map pose is not polished again: it
+    # would only polish the same pose (on most shapes the best start does).
+    polished = [pair.icp(rough[i].rotation, rough[i].shift, SAMPLE, ITERATIONS) for i in order
+                if pose_angle(rough[i].rotation, from_map.rotation) > SAME_POSE]
+    best = min(polished + [from_map], key=lambda p: p.residual)
+    return best, from_map
