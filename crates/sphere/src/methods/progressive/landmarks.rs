@@ -142,8 +142,9 @@ pub struct PinParams {
     /// Most energy sweeps with the landmarks held, at the end.
     pub max_iter: usize,
     pub tolerance: f64,
-    /// Lay out at once, without trying the drag, when the landmarks' cyclic
-    /// order is scrambled ([`path_layout::scrambled`]).
+    /// Lay out at once, without trying the drag, when more than
+    /// [`DRAG_FIRST_OUT_OF_ORDER`] landmarks are out of order at the start
+    /// ([`path_layout::out_of_order_count`]).
     pub layout_when_scrambled: bool,
 }
 
@@ -487,8 +488,11 @@ pub fn pin_or_lay_out(
             return Err(conflict)
         }
         Err(conflict) => format!("no map of the mesh as given realises them: {conflict}"),
-        Ok(()) if params.layout_when_scrambled && path_layout::scrambled(points, landmarks) => {
-            "their cyclic order at the start differs from their targets'".into()
+        Ok(())
+            if params.layout_when_scrambled
+                && path_layout::out_of_order_count(points, landmarks) > DRAG_FIRST_OUT_OF_ORDER =>
+        {
+            "their cyclic order at the start differs from their targets' throughout".into()
         }
         Ok(()) => match pin_landmarks(mesh, points, landmarks, params, progress) {
             Ok((pinned, _)) => {
@@ -514,6 +518,15 @@ pub fn pin_or_lay_out(
     embedding.seconds = vec![("landmarks", started.elapsed().as_secs_f64())];
     Ok((embedding, Some(refined)))
 }
+
+/// Most landmarks out of order at the start for which the drag is still
+/// tried before the layout. The drag's map is on the mesh as given and
+/// better: registering corpus pairs with 8 landmark pairs (2-8 of them out
+/// of order), the warp's mean / p95 error was 1.0% / 3.4% on human_man and
+/// 1.1% / 2.9% on sword after a drag, 2.0% / 13.9% and 3.9% / 11.8% after
+/// the layout. With 32 landmarks moved 45 degrees each its own way the drag
+/// took 5-15 times the layout's time, or stalled after 40 times (horse).
+pub const DRAG_FIRST_OUT_OF_ORDER: usize = 8;
 
 /// The smallest face over the mean a pinned map must keep (issue 23).
 const MIN_AREA_RATIO: f64 = 1e-12;

@@ -515,12 +515,6 @@ fn with_auxiliary(start: &[[f64; 3]], landmarks: &Landmarks) -> Result<Triangula
     ))
 }
 
-/// Whether the landmarks' cyclic order at their start points differs from
-/// their targets': some triangle of T (the targets' hull) is not positive at
-/// the start points. Then the flip-free drag, which keeps the order, cannot
-/// finish without passing one landmark across another's paths, and mostly
-/// stalls (measured in docs/correspondence.md). False when T needs
-/// auxiliary landmarks (few landmarks: the drag is tried first).
 /// The caller's landmarks (vertex ids, sorted) on a triangle of `tris`
 /// that is not positive at the start points: the ones out of order. `ids`
 /// may end with auxiliary landmarks (from index `n_user` on), left out.
@@ -538,12 +532,16 @@ fn out_of_order(start: &[[f64; 3]], ids: &[u32], tris: &[[usize; 3]], n_user: us
     out
 }
 
-pub fn scrambled(start: &[[f64; 3]], landmarks: &Landmarks) -> bool {
-    let Some(tris) = covering(&landmarks.targets) else {
-        return false;
-    };
-    let at = |j: usize| start[landmarks.ids[j] as usize];
-    tris.iter().any(|&[a, b, c]| det3_sign(at(a), at(b), at(c)) != Sign::Positive)
+/// How many of the caller's landmarks are out of order at their start
+/// points: on a triangle of T (the targets' hull) that is not positive
+/// there. A drag keeps the landmarks' cyclic order only approximately, so
+/// it passes a few of them (measured in docs/correspondence.md: every
+/// registration with 8 pairs), but a set whose order is scrambled
+/// throughout mostly stalls, after long. 0 when T needs auxiliary
+/// landmarks (few landmarks: the drag is tried first).
+pub fn out_of_order_count(start: &[[f64; 3]], landmarks: &Landmarks) -> usize {
+    covering(&landmarks.targets)
+        .map_or(0, |tris| out_of_order(start, &landmarks.ids, &tris, landmarks.len()).len())
 }
 
 /// Builds the map of the module documentation. `rings` is the input mesh's
