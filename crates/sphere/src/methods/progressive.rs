@@ -394,7 +394,16 @@ fn insert_round(
     let mut moved = false;
     // The area scale for retries, measured once per round when needed.
     let mut retry_scale: Option<f64> = None;
-    for (c, q) in collapses.iter_mut().zip(placed).rev() {
+    for (j, q) in placed.into_iter().enumerate().rev() {
+        // Last first: the collapses a few places earlier come next.
+        for (stage, ahead) in
+            [ring_mesh::AHEAD, ring_mesh::AHEAD / 2, ring_mesh::AHEAD / 4].into_iter().enumerate()
+        {
+            if let Some(i) = j.checked_sub(ahead) {
+                rings.prefetch_undo(&collapses[i], stage as u8);
+            }
+        }
+        let c = &mut collapses[j];
         let q = match q {
             Some(q) if !moved || positive_star(q, &c.ring, points) => Some(q),
             _ if moved => placement::place(&c.ring, points),
