@@ -318,10 +318,18 @@ fn insert_levels(
     let mut local = filled(n, 0u32, "the progressive method's level numbers")?;
     for round in hierarchy.rounds.clone().into_iter().rev() {
         let collapses = &mut hierarchy.collapses[round.clone()];
-        insert_round(collapses, problem, rings, points)?;
+        let order = by_vertex(collapses);
+        insert_round(collapses, &order, problem, rings, points)?;
         fresh.extend(collapses.iter().map(|c| c.u));
         if let Some(level) = &level {
-            move_new_vertices(collapses, rings, &level.problem(problem), level.scale, points);
+            move_new_vertices(
+                collapses,
+                &order,
+                rings,
+                &level.problem(problem),
+                level.scale,
+                points,
+            );
         }
         inserted += collapses.len();
         let done = n + inserted;
@@ -381,13 +389,21 @@ impl Level {
 /// into `rings` (see [`RingMesh::undo_taking`]).
 fn insert_round(
     collapses: &mut [Collapse],
+    order: &[u32],
     problem: &Problem<'_>,
     rings: &mut RingMesh,
     points: &mut [[f64; 3]],
 ) -> Result<(), SphereError> {
     let shared: &[[f64; 3]] = points;
-    let placed: Vec<Option<[f64; 3]>> =
-        collapses.par_iter().with_min_len(64).map(|c| placement::place(&c.ring, shared)).collect();
+    let found: Vec<Option<[f64; 3]>> = order
+        .par_iter()
+        .with_min_len(64)
+        .map(|&j| placement::place(&collapses[j as usize].ring, shared))
+        .collect();
+    let mut placed = vec![None; collapses.len()];
+    for (&j, q) in order.iter().zip(found) {
+        placed[j as usize] = q;
+    }
     // Undo the round last collapse first. A retry moves vertices, which
     // may spoil the places found for the rest of the round: after one,
     // each place is tested again before it is used.
@@ -434,22 +450,37 @@ fn insert_round(
 /// with (no neighbour of it was re-inserted in the same round).
 fn move_new_vertices(
     collapses: &[Collapse],
+    order: &[u32],
     rings: &RingMesh,
     level: &Problem<'_>,
     k: f64,
     points: &mut [[f64; 3]],
 ) {
     let shared: &[[f64; 3]] = points;
-    let moves: Vec<Option<[f64; 3]>> = collapses
+    let moves: Vec<Option<[f64; 3]>> = order
         .par_iter()
         .with_min_len(64)
-        .map(|c| level.move_vertex(k, c.u, &rings.rings[c.u as usize], shared))
+        .map(|&j| {
+            let u = collapses[j as usize].u;
+            level.move_vertex(k, u, &rings.rings[u as usize], shared)
+        })
         .collect();
-    for (c, q) in collapses.iter().zip(moves) {
+    for (&j, q) in order.iter().zip(moves) {
         if let Some(q) = q {
-            points[c.u as usize] = q;
+            points[collapses[j as usize].u as usize] = q;
         }
     }
+}
+
+/// The positions in `collapses` in the order of their removed vertices.
+/// A round's collapses are listed by score, all over the mesh; its
+/// placements and moves, each independent of the others, run in this order
+/// instead, so that neighbouring vertices' points (close in the mesh's
+/// order) are read together from memory.
+fn by_vertex(collapses: &[Collapse]) -> Vec<u32> {
+    let mut order: Vec<u32> = (0..collapses.len() as u32).collect();
+    order.par_sort_unstable_by_key(|&j| collapses[j as usize].u);
+    order
 }
 
 /// Step 4 on a coarse level: flip-free sweeps of the coarse-level energy
