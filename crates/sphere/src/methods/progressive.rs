@@ -211,7 +211,7 @@ pub fn progressive(
     let mut rings = RingMesh::from_faces(n, mesh.faces())?;
     // progress(0, 0) only asks whether to go on; the other calls report.
     let go_on = || progress(0, 0);
-    let hierarchy = hierarchy::decimate(&mut rings, positions, &mut |removed| {
+    let mut hierarchy = hierarchy::decimate(&mut rings, positions, &mut |removed| {
         go_on() && progress(removed, total)
     })
     .ok_or_else(|| cancelled("hierarchy", n - rings.n_alive))?;
@@ -221,7 +221,15 @@ pub fn progressive(
     let mut points = filled(n, [0.0; 3], "the progressive method's points")?;
     place_tetrahedron(&rings, &mut points);
     let problem = whole_mesh_problem(params.energy, mesh);
-    insert_levels(&hierarchy, &problem, params, mesh.faces(), &mut rings, &mut points, progress)?;
+    insert_levels(
+        &mut hierarchy,
+        &problem,
+        params,
+        mesh.faces(),
+        &mut rings,
+        &mut points,
+        progress,
+    )?;
     seconds.push(("insertion", started.elapsed().as_secs_f64()));
     // The balanced energy's final area weight, from the stretch of the map
     // as inserted (see balanced_area_weight).
@@ -284,8 +292,10 @@ pub fn progressive(
 /// Steps 3 and 4 up to the finest level: undoes the rounds of `hierarchy`,
 /// last first ([`insert_round`]), moves each new vertex once, and lowers the
 /// energy whenever the mesh has grown by [`LEVEL_GROWTH`] ([`optimise_level`]).
+/// The collapses undone give their rings to `rings`: only the rounds not yet
+/// undone keep theirs (what [`Hierarchy::represented_area`] reads).
 fn insert_levels(
-    hierarchy: &Hierarchy,
+    hierarchy: &mut Hierarchy,
     problem: &Problem<'_>,
     params: &ProgressiveParams,
     faces: &[[u32; 3]],
@@ -306,12 +316,20 @@ fn insert_levels(
     let mut alive: Vec<u32> = (0..n as u32).filter(|&v| rings.is_alive(v)).collect();
     let mut fresh: Vec<u32> = Vec::new();
     let mut local = filled(n, 0u32, "the progressive method's level numbers")?;
-    for round in hierarchy.rounds.iter().rev() {
-        let collapses = &hierarchy.collapses[round.clone()];
-        insert_round(collapses, problem, rings, points)?;
+    for round in hierarchy.rounds.clone().into_iter().rev() {
+        let collapses = &mut hierarchy.collapses[round.clone()];
+        let order = by_vertex(collapses);
+        insert_round(collapses, &order, problem, rings, points)?;
         fresh.extend(collapses.iter().map(|c| c.u));
         if let Some(level) = &level {
-            move_new_vertices(collapses, &level.problem(problem), level.scale, points);
+            move_new_vertices(
+                collapses,
+                &order,
+                rings,
+                &level.problem(problem),
+                level.scale,
+                points,
+            );
         }
         inserted += collapses.len();
         let done = n + inserted;
@@ -367,23 +385,41 @@ impl Level {
 
 /// Undoes one round of collapses, last collapse first, each vertex at the
 /// centre of its ring's kernel, or, when that kernel is too thin, after its
-/// neighbourhood has moved ([`retry_placement`]).
+/// neighbourhood has moved ([`retry_placement`]). The collapses' rings move
+/// into `rings` (see [`RingMesh::undo_taking`]).
 fn insert_round(
-    collapses: &[Collapse],
+    collapses: &mut [Collapse],
+    order: &[u32],
     problem: &Problem<'_>,
     rings: &mut RingMesh,
     points: &mut [[f64; 3]],
 ) -> Result<(), SphereError> {
     let shared: &[[f64; 3]] = points;
-    let placed: Vec<Option<[f64; 3]>> =
-        collapses.par_iter().with_min_len(64).map(|c| placement::place(&c.ring, shared)).collect();
+    let found: Vec<Option<[f64; 3]>> = order
+        .par_iter()
+        .with_min_len(64)
+        .map(|&j| placement::place(&collapses[j as usize].ring, shared))
+        .collect();
+    let mut placed = vec![None; collapses.len()];
+    for (&j, q) in order.iter().zip(found) {
+        placed[j as usize] = q;
+    }
     // Undo the round last collapse first. A retry moves vertices, which
     // may spoil the places found for the rest of the round: after one,
     // each place is tested again before it is used.
     let mut moved = false;
     // The area scale for retries, measured once per round when needed.
     let mut retry_scale: Option<f64> = None;
-    for (c, q) in collapses.iter().zip(placed).rev() {
+    for (j, q) in placed.into_iter().enumerate().rev() {
+        // Last first: the collapses a few places earlier come next.
+        for (stage, ahead) in
+            [ring_mesh::AHEAD, ring_mesh::AHEAD / 2, ring_mesh::AHEAD / 4].into_iter().enumerate()
+        {
+            if let Some(i) = j.checked_sub(ahead) {
+                rings.prefetch_undo(&collapses[i], stage as u8);
+            }
+        }
+        let c = &mut collapses[j];
         let q = match q {
             Some(q) if !moved || positive_star(q, &c.ring, points) => Some(q),
             _ if moved => placement::place(&c.ring, points),
@@ -410,19 +446,41 @@ fn insert_round(
 /// Each new vertex moves once from its kernel's centre towards lower energy
 /// (measured on 200k-vertex `bumpy_blob`: 4 final sweeps instead of 9, 3.6
 /// degrees of angle distortion instead of 4.3). No two share a face, so they
-/// move in parallel.
-fn move_new_vertices(collapses: &[Collapse], level: &Problem<'_>, k: f64, points: &mut [[f64; 3]]) {
+/// move in parallel. Each one's ring in `rings` is the one it was collapsed
+/// with (no neighbour of it was re-inserted in the same round).
+fn move_new_vertices(
+    collapses: &[Collapse],
+    order: &[u32],
+    rings: &RingMesh,
+    level: &Problem<'_>,
+    k: f64,
+    points: &mut [[f64; 3]],
+) {
     let shared: &[[f64; 3]] = points;
-    let moves: Vec<Option<[f64; 3]>> = collapses
+    let moves: Vec<Option<[f64; 3]>> = order
         .par_iter()
         .with_min_len(64)
-        .map(|c| level.move_vertex(k, c.u, &c.ring, shared))
+        .map(|&j| {
+            let u = collapses[j as usize].u;
+            level.move_vertex(k, u, &rings.rings[u as usize], shared)
+        })
         .collect();
-    for (c, q) in collapses.iter().zip(moves) {
+    for (&j, q) in order.iter().zip(moves) {
         if let Some(q) = q {
-            points[c.u as usize] = q;
+            points[collapses[j as usize].u as usize] = q;
         }
     }
+}
+
+/// The positions in `collapses` in the order of their removed vertices.
+/// A round's collapses are listed by score, all over the mesh; its
+/// placements and moves, each independent of the others, run in this order
+/// instead, so that neighbouring vertices' points (close in the mesh's
+/// order) are read together from memory.
+fn by_vertex(collapses: &[Collapse]) -> Vec<u32> {
+    let mut order: Vec<u32> = (0..collapses.len() as u32).collect();
+    order.par_sort_unstable_by_key(|&j| collapses[j as usize].u);
+    order
 }
 
 /// Step 4 on a coarse level: flip-free sweeps of the coarse-level energy
@@ -618,8 +676,8 @@ pub(crate) fn rings_of(mesh: &GenusZeroMesh) -> Result<Vec<Vec<u32>>, SphereErro
     Ok(RingMesh::from_faces(mesh.n_vertices(), mesh.faces())?.rings)
 }
 
-fn insert(rings: &mut RingMesh, points: &mut [[f64; 3]], c: &Collapse, q: [f64; 3]) {
-    rings.undo(c);
+fn insert(rings: &mut RingMesh, points: &mut [[f64; 3]], c: &mut Collapse, q: [f64; 3]) {
+    rings.undo_taking(c);
     points[c.u as usize] = q;
 }
 

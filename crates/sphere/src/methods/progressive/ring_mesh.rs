@@ -138,11 +138,38 @@ impl RingMesh {
         Collapse { u, v, ring }
     }
 
+    /// Asks for the memory that undoing `collapse` will read, in the stage
+    /// `stage` of three, each a few steps after the one before so that it
+    /// reads what that one fetched: the collapse's ring (0), its vertices'
+    /// headers (1), their lists (2). Only a hint: it changes nothing.
+    pub fn prefetch_undo(&self, collapse: &Collapse, stage: u8) {
+        if stage == 0 {
+            prefetch(collapse.ring.as_ptr());
+            return;
+        }
+        for &r in &collapse.ring {
+            if stage == 1 {
+                prefetch(&self.rings[r as usize]);
+            } else {
+                prefetch(self.rings[r as usize].as_ptr());
+            }
+        }
+    }
+
     /// Undoes `collapse`, which must be the last collapse not yet undone among
     /// those touching its closed ring.
+    #[cfg(test)]
     pub fn undo(&mut self, collapse: &Collapse) {
-        let Collapse { u, v, ring } = collapse;
-        let (u, v) = (*u, *v);
+        self.undo_taking(&mut collapse.clone());
+    }
+
+    /// [`RingMesh::undo`] that moves the collapse's ring into the mesh
+    /// instead of copying it, leaving `collapse.ring` empty: the insertion
+    /// undoes each collapse once, and a copy was one allocation per vertex
+    /// of the mesh (and one more block to free when the hierarchy goes).
+    pub fn undo_taking(&mut self, collapse: &mut Collapse) {
+        let (u, v) = (collapse.u, collapse.v);
+        let ring = &collapse.ring;
         let k = ring.len() - 1;
         let (r1, rk) = (ring[1], ring[k]);
         for &r in &ring[2..k] {
@@ -165,9 +192,30 @@ impl RingMesh {
         rv.rotate_left(start);
         let end = rv.iter().position(|&x| x == rk).expect("rk is a neighbour of v");
         rv.splice(1..end, [u]);
-        self.rings[u as usize] = ring.clone();
+        self.rings[u as usize] = std::mem::take(&mut collapse.ring);
         self.n_alive += 1;
     }
+}
+
+/// How far ahead in a list of collapses the serial loops over them (the
+/// hierarchy's collapse loop, the insertion's undo loop) ask for memory:
+/// they visit vertices all over the mesh, in the order of their scores, and
+/// waited on main memory for nearly every one (their rings, their
+/// neighbours' rings). The loops themselves are serial, as each collapse is
+/// decided on (and each undo applied to) the mesh the earlier ones left.
+pub const AHEAD: usize = 16;
+
+/// A hint to load the cache line of `at` (no-op on other architectures).
+#[inline(always)]
+pub fn prefetch<T>(at: *const T) {
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: a prefetch reads nothing into the program and never faults,
+    // whatever the address; SSE, which it needs, is part of x86_64.
+    unsafe {
+        std::arch::x86_64::_mm_prefetch::<{ std::arch::x86_64::_MM_HINT_T0 }>(at.cast::<i8>());
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = at;
 }
 
 #[cfg(test)]
