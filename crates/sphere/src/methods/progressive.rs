@@ -58,7 +58,7 @@ use crate::error::SphereError;
 use crate::genus_zero::GenusZeroMesh;
 use crate::memory_budget::filled;
 use crate::methods::progressive::authalic_newton::{
-    authalic_newton, authalic_newton_rings, AuthalicSteps, Solver,
+    authalic_newton, authalic_newton_rings, AuthalicSteps,
 };
 use crate::methods::progressive::distortion_energy::{balanced_area_weight, Energy};
 use crate::methods::progressive::flip_free::{
@@ -269,11 +269,7 @@ pub fn progressive(
         let steps = (AUTHALIC_FINAL_WORK / mesh.n_faces().max(1))
             .clamp(AUTHALIC_FINAL_STEPS.0, AUTHALIC_FINAL_STEPS.1);
         let floor = problem.area_floor;
-        let solver = Solver::for_mesh(n);
-        let run =
-            authalic_newton(mesh.faces(), positions, floor, &mut points, steps, solver, &|| {
-                !go_on()
-            })
+        let run = authalic_newton(mesh.faces(), positions, floor, &mut points, steps, &|| !go_on())
             .map_err(|_| cancelled("optimisation", 2 * n))?;
         authalic = Some(run);
         seconds.push(("authalic steps", started.elapsed().as_secs_f64()));
@@ -494,16 +490,12 @@ fn optimise_level(
     drop(sub);
     let level = Level { area_floor, represented, scale: end.scale };
     if params.energy == Energy::Authalic && rings.n_alive >= AUTHALIC_LEVEL_MIN {
-        // The solver is the whole mesh's, so that a large mesh's levels
-        // keep to its memory too.
-        let solver = Solver::for_mesh(points.len());
         authalic_newton_rings(
             &rings.rings,
             problem.surface,
             area_floor,
             points,
             AUTHALIC_LEVEL_STEPS,
-            solver,
             &|| !go_on(),
         )
         .map_err(|_| cancelled())?;

@@ -45,7 +45,7 @@
 use rayon::prelude::*;
 use spherify_mesh::predicates::{det3_sign, Sign};
 use spherify_mesh::vec3::{add, cross, det3, dot, scale, sub, triangle_area};
-use spherify_sparse::{solve, CsrMatrix, Factorization, SolveParams, SolverKind, SparseError};
+use spherify_sparse::{CsrMatrix, Factorization};
 
 use crate::certificate::validity::{check_sphere, signed_area};
 use crate::embedding::normalize;
@@ -70,20 +70,6 @@ pub const TOLERANCE: f64 = 1e-3;
 /// on bumpy, 1250 vertices: 0.074 -> 0.001 took the mean angle distortion
 /// from 11.2 to 19.3 degrees).
 pub const GOAL: f64 = 0.02;
-/// Meshes of at least this many vertices solve every step's system by
-/// conjugate gradients ([`Solver::ConjugateGradients`]), on every level,
-/// instead of with a sparse Cholesky factor, whose values were most of the
-/// method's peak memory. Measured (issue 22, item 3; 1 thread, user and
-/// system CPU time): 50k-vertex `tentacles`, 2.5 KB per vertex with the
-/// factor and 1.07 KB with CG, 8.6 and 8.7 s, mean |log area ratio| 0.0483
-/// and 0.0493 on spherical triangles, 0.441 and 0.412 on chord triangles;
-/// 200k `tentacles`, 2.79 and 1.09 KB per vertex, 50 and 44 s, 0.0287 and
-/// 0.0264 spherical, 0.327 and 0.410 chord. Below it the factor stays: it is
-/// exact, and the corpus's and the smaller shapes' maps keep their bits.
-pub const ITERATIVE_FROM: usize = 500_000;
-/// Conjugate-gradient iterations and relative residual of one step's solve.
-const CG_ITERATIONS: usize = 100;
-const CG_TOLERANCE: f64 = 1e-3;
 /// Halvings of a step before the iteration stops.
 const MAX_HALVINGS: usize = 8;
 /// A vertex whose step has been halved this often goes back to its start.
@@ -91,27 +77,6 @@ const MAX_VERTEX_HALVINGS: usize = 6;
 /// Levenberg-Marquardt damping: start, and the bounds of its adaptation.
 const LAMBDA_START: f64 = 1e-2;
 const LAMBDA_RANGE: (f64, f64) = (1e-6, 1e3);
-
-/// How each step's linear system is solved.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Solver {
-    /// Sparse Cholesky, its ordering and symbolic analysis kept from step
-    /// to step ([`Factorization::refactor`]).
-    Factor,
-    /// Conjugate gradients with IC(0), not run to the end ([`iterative_solve`]).
-    ConjugateGradients,
-}
-
-impl Solver {
-    /// The solver for a mesh of `n_vertices` (see [`ITERATIVE_FROM`]).
-    pub fn for_mesh(n_vertices: usize) -> Solver {
-        if n_vertices >= ITERATIVE_FROM {
-            Solver::ConjugateGradients
-        } else {
-            Solver::Factor
-        }
-    }
-}
 
 /// How an iteration ended.
 #[derive(Debug, Clone, PartialEq)]
@@ -127,8 +92,7 @@ pub struct AuthalicSteps {
 }
 
 /// Runs at most `max_steps` steps on `points`, a valid map (one point per
-/// vertex, on the unit sphere) of the triangles `faces` of `surface`, each
-/// step's system solved by `solver`.
+/// vertex, on the unit sphere) of the triangles `faces` of `surface`.
 /// Surface triangles smaller than `area_floor` count as that large. `stop()`
 /// is asked before each step. An invalid start is left as it is (no step
 /// can pass the certificate's area test from one).
@@ -142,7 +106,6 @@ pub fn authalic_newton(
     area_floor: f64,
     points: &mut [[f64; 3]],
     max_steps: usize,
-    solver: Solver,
     stop: &(dyn Fn() -> bool + Sync),
 ) -> Result<AuthalicSteps, SphereError> {
     let target = surface_shares(faces, surface, area_floor);
@@ -165,7 +128,7 @@ pub fn authalic_newton(
                 total: max_steps,
             });
         }
-        let u = match direction(faces, points, &target, lambda, solver, &mut factor) {
+        let u = match direction(faces, points, &target, lambda, &mut factor) {
             Ok(u) => u,
             Err(e) => {
                 result.solve_failed = Some(e.to_string());
@@ -212,7 +175,6 @@ pub fn authalic_newton_rings(
     area_floor: f64,
     points: &mut [[f64; 3]],
     max_steps: usize,
-    solver: Solver,
     stop: &(dyn Fn() -> bool + Sync),
 ) -> Result<AuthalicSteps, SphereError> {
     let alive: Vec<u32> =
@@ -235,15 +197,8 @@ pub fn authalic_newton_rings(
     }
     let level_surface: Vec<[f64; 3]> = alive.iter().map(|&v| surface[v as usize]).collect();
     let mut level_points: Vec<[f64; 3]> = alive.iter().map(|&v| points[v as usize]).collect();
-    let result = authalic_newton(
-        &faces,
-        &level_surface,
-        area_floor,
-        &mut level_points,
-        max_steps,
-        solver,
-        stop,
-    );
+    let result =
+        authalic_newton(&faces, &level_surface, area_floor, &mut level_points, max_steps, stop);
     // Also after a cancellation: the level's points are a valid state.
     for (&v, p) in alive.iter().zip(level_points) {
         points[v as usize] = p;
@@ -366,7 +321,6 @@ fn direction(
     points: &[[f64; 3]],
     target: &[f64],
     lambda: f64,
-    solver: Solver,
     factor: &mut Option<Factorization>,
 ) -> Result<Vec<[f64; 3]>, SphereError> {
     let n = points.len();
@@ -404,42 +358,18 @@ fn direction(
     // Jacobian rows, the corners and the residuals (about 300 bytes per
     // vertex) go before the factor, the step's memory peak, is made.
     drop((res, rows, start, corners, diag));
-    let x = if solver == Solver::ConjugateGradients {
-        iterative_solve(&h, rhs)?
-    } else {
-        let f = match factor.take() {
-            Some(f) => f.refactor(&h)?,
-            None => Factorization::new(&h)?,
-        };
-        let x = f.solve(&h, &[rhs])?.remove(0);
-        *factor = Some(f);
-        x
+    let f = match factor.take() {
+        Some(f) => f.refactor(&h)?,
+        None => Factorization::new(&h)?,
     };
+    let x = f.solve(&h, &[rhs])?.remove(0);
+    *factor = Some(f);
     Ok((0..n)
         .map(|v| {
             let (e1, e2) = basis[v];
             add(scale(e1, x[2 * v]), scale(e2, x[2 * v + 1]))
         })
         .collect())
-}
-
-/// The step's system solved roughly by conjugate gradients with the IC(0)
-/// preconditioner ([`SolverKind::CgIc0`]): at most [`CG_ITERATIONS`]
-/// iterations towards a relative residual of [`CG_TOLERANCE`], the last
-/// iterate taken if they do not reach it. A Levenberg-Marquardt step need
-/// not be exact (the step is accepted only if it lowers the merit and passes
-/// the certificate); the factor it replaces was the iteration's memory peak.
-/// Falls back to the factor when IC(0) or CG finds the matrix indefinite.
-fn iterative_solve(h: &CsrMatrix, rhs: Vec<f64>) -> Result<Vec<f64>, SphereError> {
-    let params = SolveParams { tol: CG_TOLERANCE, max_iter: CG_ITERATIONS, x0: None };
-    match solve(h, std::slice::from_ref(&rhs), SolverKind::CgIc0, &params) {
-        Ok((mut x, _)) => Ok(x.remove(0)),
-        Err(SparseError::NoConvergence { mut last, .. }) => Ok(last.remove(0)),
-        Err(SparseError::NotPositiveDefinite { .. }) => {
-            Ok(Factorization::new(h)?.solve(h, &[rhs])?.remove(0))
-        }
-        Err(e) => Err(e.into()),
-    }
 }
 
 /// `points` moved by `t u`, each vertex of a face that fails the exact test

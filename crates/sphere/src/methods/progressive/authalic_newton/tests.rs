@@ -39,14 +39,6 @@ fn mean_abs_log_area(mesh: &GenusZeroMesh, points: &[[f64; 3]]) -> f64 {
 
 #[test]
 fn a_coiled_tube_gets_its_areas_and_stays_certified() {
-    for solver in [Solver::Factor, Solver::ConjugateGradients] {
-        a_coiled_tube_gets_its_areas(solver);
-    }
-}
-
-/// Both solvers: conjugate gradients, stopped early, still give steps that
-/// take the areas most of the way (measured: 1.05 -> 0.196 with the factor).
-fn a_coiled_tube_gets_its_areas(solver: Solver) {
     // The isometric map of a coiled tube shrinks the tube's middle: a mean
     // |log area ratio| above 1 (docs/progressive.md, helix_tube).
     let mesh = GenusZeroMesh::new(helix(8, 120, 0.15, 2.0, 0.8)).unwrap();
@@ -54,8 +46,7 @@ fn a_coiled_tube_gets_its_areas(solver: Solver) {
     let before = mean_abs_log_area(&mesh, &points);
     let floor = area_floor(&mesh);
     let run =
-        authalic_newton(mesh.faces(), mesh.positions(), floor, &mut points, 40, solver, &|| false)
-            .unwrap();
+        authalic_newton(mesh.faces(), mesh.positions(), floor, &mut points, 40, &|| false).unwrap();
     let after = mean_abs_log_area(&mesh, &points);
     let report = check_sphere(mesh.faces(), &points);
     assert!(report.valid, "{report:?}");
@@ -64,11 +55,7 @@ fn a_coiled_tube_gets_its_areas(solver: Solver) {
     assert!(before > 0.5, "the start is already area-preserving: {before}");
     // Measured: 1.05 -> 0.196 in 40 steps (local sweeps of the authalic
     // energy leave limbed shapes at 0.2 to 0.8).
-    assert!(
-        after < 0.25 && after < before / 4.0,
-        "{solver:?}: {before} -> {after} in {} steps",
-        run.steps
-    );
+    assert!(after < 0.25 && after < before / 4.0, "{before} -> {after} in {} steps", run.steps);
     assert!((run.start - before).abs() < 1e-9 && (run.end - after).abs() < 1e-9, "{run:?}");
 }
 
@@ -92,16 +79,8 @@ fn an_invalid_start_is_left_as_it_is() {
     points.swap(0, 1);
     let start = points.clone();
     let floor = area_floor(&mesh);
-    let run = authalic_newton(
-        mesh.faces(),
-        mesh.positions(),
-        floor,
-        &mut points,
-        10,
-        Solver::Factor,
-        &|| false,
-    )
-    .unwrap();
+    let run =
+        authalic_newton(mesh.faces(), mesh.positions(), floor, &mut points, 10, &|| false).unwrap();
     assert_eq!(run.steps, 0);
     assert_eq!(points, start);
 }
@@ -114,16 +93,8 @@ fn a_stop_request_ends_it_on_a_certified_map() {
     let asked = AtomicUsize::new(0);
     let stop = || asked.fetch_add(1, Ordering::Relaxed) >= 2;
     let floor = area_floor(&mesh);
-    let err = authalic_newton(
-        mesh.faces(),
-        mesh.positions(),
-        floor,
-        &mut points,
-        40,
-        Solver::Factor,
-        &stop,
-    )
-    .unwrap_err();
+    let err =
+        authalic_newton(mesh.faces(), mesh.positions(), floor, &mut points, 40, &stop).unwrap_err();
     assert!(matches!(err, SphereError::Cancelled { done: 2, .. }), "{err}");
     assert_ne!(points, start);
     assert!(check_sphere(mesh.faces(), &points).valid);
@@ -137,10 +108,7 @@ fn a_level_of_rings_is_the_same_problem_numbered_densely() {
     let points = map(&mesh, Energy::Isometric);
     let floor = area_floor(&mesh);
     let mut direct = points.clone();
-    authalic_newton(mesh.faces(), mesh.positions(), floor, &mut direct, 5, Solver::Factor, &|| {
-        false
-    })
-    .unwrap();
+    authalic_newton(mesh.faces(), mesh.positions(), floor, &mut direct, 5, &|| false).unwrap();
     let rings = crate::methods::progressive::rings_of(&mesh).unwrap();
     let mut padded_rings = vec![Vec::new()];
     padded_rings.extend(rings.iter().map(|r| r.iter().map(|&v| v + 1).collect::<Vec<u32>>()));
@@ -148,16 +116,8 @@ fn a_level_of_rings_is_the_same_problem_numbered_densely() {
     padded_surface.extend_from_slice(mesh.positions());
     let mut padded = vec![[0.0, 0.0, 1.0]];
     padded.extend_from_slice(&points);
-    authalic_newton_rings(
-        &padded_rings,
-        &padded_surface,
-        floor,
-        &mut padded,
-        5,
-        Solver::Factor,
-        &|| false,
-    )
-    .unwrap();
+    authalic_newton_rings(&padded_rings, &padded_surface, floor, &mut padded, 5, &|| false)
+        .unwrap();
     assert_eq!(padded[0], [0.0, 0.0, 1.0]);
     let padded_valid = check_sphere(mesh.faces(), &padded[1..]);
     assert!(padded_valid.valid);
@@ -174,16 +134,8 @@ fn the_steps_give_the_same_bits_on_every_thread_count() {
     let run = |threads: usize| {
         let mut points = start.clone();
         rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap().install(|| {
-            authalic_newton(
-                mesh.faces(),
-                mesh.positions(),
-                floor,
-                &mut points,
-                10,
-                Solver::Factor,
-                &|| false,
-            )
-            .unwrap()
+            authalic_newton(mesh.faces(), mesh.positions(), floor, &mut points, 10, &|| false)
+                .unwrap()
         });
         points
     };
