@@ -606,20 +606,11 @@ impl Factor {
 pub struct Factorization {
     factor: Factor,
     n: usize,
-    /// [`pattern_fingerprint`] of the matrix factorised, for [`Factorization::refactor`].
-    pattern: u64,
-}
-
-/// A 64-bit fingerprint of `a`'s size and pattern (FNV-1a over the row
-/// offsets and column indices): two patterns with the same fingerprint are
-/// taken as equal by [`Factorization::refactor`]. One pass over the indices,
-/// far less than the factorisation it may save.
-fn pattern_fingerprint(a: &CsrMatrix) -> u64 {
-    const PRIME: u64 = 0x0000_0100_0000_01b3;
-    let mix = |h: u64, x: u64| (h ^ x).wrapping_mul(PRIME);
-    let mut h = mix(0xcbf2_9ce4_8422_2325, a.n_rows() as u64);
-    h = a.row_offsets().iter().fold(h, |h, &o| mix(h, o as u64));
-    a.col_indices().iter().fold(h, |h, &j| mix(h, j as u64))
+    /// The pattern of the matrix factorised (row offsets, column indices),
+    /// kept by [`Factorization::reusable`] for [`Factorization::refactor`].
+    pattern: Option<(Vec<usize>, Vec<u32>)>,
+    /// How many times [`Factorization::refactor`] reused the analysis.
+    reuses: usize,
 }
 
 impl Factorization {
@@ -627,12 +618,30 @@ impl Factorization {
     pub fn new(a: &CsrMatrix) -> Result<Factorization, SparseError> {
         validate(a, &[], &SolveParams::default())?;
         let factor = Factor::cholesky_or_lu(a, find_asymmetry(a).is_none())?;
-        Ok(Factorization { factor, n: a.n_rows(), pattern: pattern_fingerprint(a) })
+        Ok(Factorization { factor, n: a.n_rows(), pattern: None, reuses: 0 })
+    }
+
+    /// [`Factorization::new`], keeping a copy of `a`'s pattern (12 bytes per
+    /// nonzero at most) so that [`Factorization::refactor`] can reuse the
+    /// ordering and analysis for a matrix of exactly that pattern.
+    ///
+    /// Errors: those of [`Factorization::new`].
+    pub fn reusable(a: &CsrMatrix) -> Result<Factorization, SparseError> {
+        let mut f = Factorization::new(a)?;
+        f.pattern = Some((a.row_offsets().to_vec(), a.col_indices().to_vec()));
+        Ok(f)
+    }
+
+    /// How many times [`Factorization::refactor`] has reused this factor's
+    /// ordering and symbolic analysis.
+    pub fn reuses(&self) -> usize {
+        self.reuses
     }
 
     /// Factorises `a`, a matrix with new values, reusing this factor's
-    /// fill-reducing ordering and symbolic analysis when `a` has the pattern
-    /// of the matrix this was made from and is symmetric. Gives what
+    /// fill-reducing ordering and symbolic analysis when this factor was made
+    /// by [`Factorization::reusable`] (or `refactor`) from a matrix of exactly
+    /// `a`'s pattern and `a` is symmetric. Gives what
     /// [`Factorization::new`] of `a` gives, bit for bit: the ordering and
     /// analysis depend on the pattern alone. Otherwise (another pattern, an
     /// LU factor, a pivot that is not positive) it is `new(a)`.
@@ -644,18 +653,25 @@ impl Factorization {
     /// Errors: those of [`Factorization::new`].
     pub fn refactor(mut self, a: &CsrMatrix) -> Result<Factorization, SparseError> {
         validate(a, &[], &SolveParams::default())?;
+        // The whole pattern is compared, not a hash of it: a factor reused
+        // for another pattern would be a wrong answer, not a slow one.
         let same = a.n_rows() == self.n
-            && pattern_fingerprint(a) == self.pattern
+            && self.pattern.as_ref().is_some_and(|(offsets, columns)| {
+                offsets.as_slice() == a.row_offsets() && columns.as_slice() == a.col_indices()
+            })
             && find_asymmetry(a).is_none();
         if same {
             match self.factor.refactor(a) {
-                Ok(true) => return Ok(self),
+                Ok(true) => {
+                    self.reuses += 1;
+                    return Ok(self);
+                }
                 Ok(false) | Err(SparseError::NotPositiveDefinite { .. }) => {}
                 Err(e) => return Err(e),
             }
         }
         drop(self);
-        Factorization::new(a)
+        Factorization::reusable(a)
     }
 
     /// Solves `A x = b` for every `b`, with no refinement and no residual;

@@ -77,8 +77,8 @@ fn solving_in_place_is_solving() {
             (0..2).map(|j| (0..n).map(|i| ((i * (j + 2)) as f64 * 0.31).sin()).collect()).collect();
         let mut factors = vec![Factorization::new(&a).unwrap()];
         if let Some(halves) = bordered::factor(&a).unwrap() {
-            let pattern = pattern_fingerprint(&a);
-            factors.push(Factorization { factor: Factor::Bordered(Box::new(halves)), n, pattern });
+            let factor = Factor::Bordered(Box::new(halves));
+            factors.push(Factorization { factor, n, pattern: None, reuses: 0 });
         }
         for f in &factors {
             let x = f.solve(&a, &rhs).unwrap();
@@ -128,7 +128,7 @@ fn refactoring_gives_the_bits_of_a_new_factor() {
     for a in [grid_laplacian(20, 30), grid_laplacian(460, 460)] {
         let n = a.n_rows();
         let rhs: Vec<Vec<f64>> = vec![(0..n).map(|i| (i as f64 * 0.31).sin()).collect()];
-        let mut f = Factorization::new(&a).unwrap();
+        let mut f = Factorization::reusable(&a).unwrap();
         for k in [0.5, 1.5] {
             let b = rescaled(&a, k);
             f = f.refactor(&b).unwrap();
@@ -138,13 +138,18 @@ fn refactoring_gives_the_bits_of_a_new_factor() {
             b.mul_vec(&f.solve(&b, &rhs).unwrap()[0], &mut bx).unwrap();
             assert!(rel_err(&bx, &rhs[0]) < 1e-10);
         }
+        assert_eq!(f.reuses(), 2, "both refactorisations reused the analysis");
         if n > 200_000 {
             assert!(matches!(f.factor, Factor::Bordered(_)), "the large grid cuts in two");
         }
     }
-    // Another pattern: factored anew.
+    // Another pattern of the same size: factored anew, never reused.
     let (a, b) = (grid_laplacian(7, 9), grid_laplacian(9, 7));
-    let f = Factorization::new(&a).unwrap().refactor(&b).unwrap();
+    assert_eq!((a.n_rows(), a.nnz()), (b.n_rows(), b.nnz()));
+    let f = Factorization::reusable(&a).unwrap().refactor(&b).unwrap();
+    assert_eq!(f.reuses(), 0);
+    // A factor made without its pattern is never reused either.
+    assert_eq!(Factorization::new(&a).unwrap().refactor(&rescaled(&a, 2.0)).unwrap().reuses(), 0);
     let rhs = vec![(0..63).map(|i| i as f64).collect::<Vec<f64>>()];
     assert!(rel_err(&f.solve(&b, &rhs).unwrap()[0], &dense_solve(&b, &rhs[0])) < 1e-10);
 }

@@ -360,7 +360,7 @@ fn direction(
     drop((res, rows, start, corners, diag));
     let f = match factor.take() {
         Some(f) => f.refactor(&h)?,
-        None => Factorization::new(&h)?,
+        None => Factorization::reusable(&h)?,
     };
     let x = f.solve(&h, &[rhs])?.remove(0);
     *factor = Some(f);
