@@ -99,9 +99,19 @@ pub(crate) fn factor(a: &CsrMatrix) -> Result<Option<Bordered>, SparseError> {
     let (Some(h1), Some(h2)) = (h1?, h2?) else {
         return Ok(None);
     };
+    let corner = corner(a, [&h1, &h2], &separator)?;
+    Ok(Some(Bordered { halves: [h1, h2], separator, corner }))
+}
+
+/// The dense Cholesky factor of the separator's Schur complement
+/// `S = C1 C1^T + C2 C2^T - ASS` (module comment), from the halves' factors.
+///
+/// Errors: [`SparseError::NotPositiveDefinite`] on a non-positive pivot.
+fn corner(a: &CsrMatrix, halves: [&Half; 2], separator: &[u32]) -> Result<Llt<f64>, SparseError> {
+    let (n, ns) = (a.n_rows(), separator.len());
     // S = C1 C1^T + C2 C2^T - ASS, lower triangle only.
     let mut s = Mat::<f64>::zeros(ns, ns);
-    for (h, beta) in [(&h1, Accum::Replace), (&h2, Accum::Add)] {
+    for (h, beta) in [(halves[0], Accum::Replace), (halves[1], Accum::Add)] {
         let c = h.corner_dense();
         matmul(
             s.as_mut(),
@@ -129,10 +139,8 @@ pub(crate) fn factor(a: &CsrMatrix) -> Result<Option<Bordered>, SparseError> {
             }
         }
     }
-    let corner = s
-        .llt(Side::Lower)
-        .map_err(|_| SparseError::NotPositiveDefinite { method: "sparse Cholesky pivot" })?;
-    Ok(Some(Bordered { halves: [h1, h2], separator, corner }))
+    s.llt(Side::Lower)
+        .map_err(|_| SparseError::NotPositiveDefinite { method: "sparse Cholesky pivot" })
 }
 
 /// Which triangle of a half's matrix [`Triangle::of`] keeps.
@@ -299,6 +307,28 @@ impl Half {
         Ok(Some(Half { rows, n_own, symbolic, values }))
     }
 
+    /// The numeric factorisation of this half's `M` again, from the values
+    /// of `a`, whose pattern is the one this half was analysed on (the
+    /// caller's promise, see [`Bordered::refactor`]): the ordering and the
+    /// symbolic analysis are kept.
+    fn refactor(&mut self, a: &CsrMatrix) -> Result<(), SparseError> {
+        let size = self.rows.len();
+        let mut local = vec![u32::MAX; a.n_rows()];
+        for (r, &v) in self.rows.iter().enumerate() {
+            local[v as usize] = r as u32;
+        }
+        // The same pattern fitted 32 bits when the half was first factored.
+        let lower = Triangle::of(a, &local, size, Part::Lower).ok_or_else(|| {
+            SparseError::Factorization { detail: "a half's matrix no longer fits 32 bits".into() }
+        })?;
+        drop(local);
+        // The old values go first: two factors side by side would be the peak.
+        self.values = Vec::new();
+        self.values =
+            numeric_llt(&self.symbolic, SparseColMatRef::new(lower.pattern(size), &lower.values))?;
+        Ok(())
+    }
+
     fn supernodal(&self) -> &SymbolicSupernodalCholesky<u32> {
         match self.symbolic.raw() {
             SymbolicCholeskyRaw::Supernodal(s) => s,
@@ -414,6 +444,21 @@ impl Bordered {
         self.halves.each_ref().map(|h| (&h.rows[..], h.n_own, &h.symbolic))
     }
 
+    /// Factors `a` again with the halves' orderings and symbolic analyses:
+    /// `a` must have the pattern of the matrix this was made from (checked
+    /// by [`super::Factorization::refactor`]).
+    ///
+    /// Errors: [`SparseError::NotPositiveDefinite`] on a non-positive pivot;
+    /// the factor is then unusable and is dropped by the caller.
+    pub(crate) fn refactor(&mut self, a: &CsrMatrix) -> Result<(), SparseError> {
+        let [h1, h2] = &mut self.halves;
+        let (r1, r2) = rayon::join(|| h1.refactor(a), || h2.refactor(a));
+        r1.and(r2)?;
+        let [h1, h2] = &self.halves;
+        self.corner = corner(a, [h1, h2], &self.separator)?;
+        Ok(())
+    }
+
     /// The number of unknowns in the separator (the dense corner's size).
     pub(super) fn separator_len(&self) -> usize {
         self.separator.len()
@@ -522,10 +567,17 @@ mod tests {
             let n = a.n_rows();
             let rhs: Vec<Vec<f64>> =
                 (0..2).map(|j| columns(n).col(j).iter().copied().collect()).collect();
-            let whole = Factorization { factor: Factor::cholesky(&a).unwrap(), n };
+            let whole = Factorization {
+                factor: Factor::cholesky(&a).unwrap(),
+                n,
+                pattern: None,
+                reuses: 0,
+            };
             let halves = Factorization {
                 factor: Factor::Bordered(Box::new(factor(&a).unwrap().unwrap())),
                 n,
+                pattern: None,
+                reuses: 0,
             };
             let refined = |f: &Factorization| {
                 let mut x = f.solve(&a, &rhs).unwrap();

@@ -77,7 +77,8 @@ fn solving_in_place_is_solving() {
             (0..2).map(|j| (0..n).map(|i| ((i * (j + 2)) as f64 * 0.31).sin()).collect()).collect();
         let mut factors = vec![Factorization::new(&a).unwrap()];
         if let Some(halves) = bordered::factor(&a).unwrap() {
-            factors.push(Factorization { factor: Factor::Bordered(Box::new(halves)), n });
+            let factor = Factor::Bordered(Box::new(halves));
+            factors.push(Factorization { factor, n, pattern: None, reuses: 0 });
         }
         for f in &factors {
             let x = f.solve(&a, &rhs).unwrap();
@@ -99,4 +100,56 @@ fn solving_in_place_is_solving() {
             assert_eq!(factors.len(), 2, "the long grid cuts in two");
         }
     }
+}
+
+/// `a` with every value scaled by `1 + k (i + j) / 100`: the same pattern,
+/// still symmetric and positive definite (`a` is diagonally dominant and the
+/// off-diagonal entries stay at most as large relative to the diagonal).
+fn rescaled(a: &CsrMatrix, k: f64) -> CsrMatrix {
+    let n = a.n_rows();
+    let (mut rows, mut cols, mut vals) = (Vec::new(), Vec::new(), Vec::new());
+    for i in 0..n {
+        let (c, v) = a.row(i);
+        for (&j, &x) in c.iter().zip(v) {
+            rows.push(i as u32);
+            cols.push(j);
+            let j = j as usize;
+            let scale = if i == j { 2.0 + k } else { 1.0 + k * ((i + j) % 7) as f64 / 100.0 };
+            vals.push(x * scale);
+        }
+    }
+    CsrMatrix::from_triplets(n, n, &rows, &cols, &vals).unwrap()
+}
+
+#[test]
+fn refactoring_gives_the_bits_of_a_new_factor() {
+    // The whole factor (small grid), the two halves (above the size where
+    // Factor::cholesky cuts in two) and a new pattern.
+    for a in [grid_laplacian(20, 30), grid_laplacian(460, 460)] {
+        let n = a.n_rows();
+        let rhs: Vec<Vec<f64>> = vec![(0..n).map(|i| (i as f64 * 0.31).sin()).collect()];
+        let mut f = Factorization::reusable(&a).unwrap();
+        for k in [0.5, 1.5] {
+            let b = rescaled(&a, k);
+            f = f.refactor(&b).unwrap();
+            let fresh = Factorization::new(&b).unwrap();
+            assert_eq!(f.solve(&b, &rhs).unwrap(), fresh.solve(&b, &rhs).unwrap());
+            let mut bx = vec![0.0; n];
+            b.mul_vec(&f.solve(&b, &rhs).unwrap()[0], &mut bx).unwrap();
+            assert!(rel_err(&bx, &rhs[0]) < 1e-10);
+        }
+        assert_eq!(f.reuses(), 2, "both refactorisations reused the analysis");
+        if n > 200_000 {
+            assert!(matches!(f.factor, Factor::Bordered(_)), "the large grid cuts in two");
+        }
+    }
+    // Another pattern of the same size: factored anew, never reused.
+    let (a, b) = (grid_laplacian(7, 9), grid_laplacian(9, 7));
+    assert_eq!((a.n_rows(), a.nnz()), (b.n_rows(), b.nnz()));
+    let f = Factorization::reusable(&a).unwrap().refactor(&b).unwrap();
+    assert_eq!(f.reuses(), 0);
+    // A factor made without its pattern is never reused either.
+    assert_eq!(Factorization::new(&a).unwrap().refactor(&rescaled(&a, 2.0)).unwrap().reuses(), 0);
+    let rhs = vec![(0..63).map(|i| i as f64).collect::<Vec<f64>>()];
+    assert!(rel_err(&f.solve(&b, &rhs).unwrap()[0], &dense_solve(&b, &rhs[0])) < 1e-10);
 }

@@ -117,6 +117,9 @@ pub fn authalic_newton(
     }
     let (mut t, mut lambda) = (1.0, LAMBDA_START);
     let mut mean = start;
+    // The last step's factor: the system's pattern is the mesh's, the same
+    // at every step, so its ordering and symbolic analysis are kept.
+    let mut factor: Option<Factorization> = None;
     while result.steps < max_steps && mean > GOAL {
         if stop() {
             return Err(SphereError::Cancelled {
@@ -125,7 +128,7 @@ pub fn authalic_newton(
                 total: max_steps,
             });
         }
-        let u = match direction(faces, points, &target, lambda) {
+        let u = match direction(faces, points, &target, lambda, &mut factor) {
             Ok(u) => u,
             Err(e) => {
                 result.solve_failed = Some(e.to_string());
@@ -309,12 +312,16 @@ fn vertex_corners(faces: &[[u32; 3]], n: usize) -> (Vec<usize>, Vec<(u32, usize)
     (start, corners)
 }
 
-/// The Levenberg-Marquardt step: a tangent vector per vertex.
+/// The Levenberg-Marquardt step: a tangent vector per vertex. `factor` is
+/// the previous step's factor, refactored with its ordering and symbolic
+/// analysis ([`Factorization::refactor`]; the same bits as a new one), and
+/// left with this step's.
 fn direction(
     faces: &[[u32; 3]],
     points: &[[f64; 3]],
     target: &[f64],
     lambda: f64,
+    factor: &mut Option<Factorization>,
 ) -> Result<Vec<[f64; 3]>, SphereError> {
     let n = points.len();
     let res = residuals(faces, points, target);
@@ -347,7 +354,16 @@ fn direction(
         entries.push((r as u32, lambda * diag[r] + 1e-9 * mean_diag));
         b
     })?;
-    let x = Factorization::new(&h)?.solve(&h, &[rhs])?.remove(0);
+    // Only the matrix and right-hand side are needed from here: the
+    // Jacobian rows, the corners and the residuals (about 300 bytes per
+    // vertex) go before the factor, the step's memory peak, is made.
+    drop((res, rows, start, corners, diag));
+    let f = match factor.take() {
+        Some(f) => f.refactor(&h)?,
+        None => Factorization::reusable(&h)?,
+    };
+    let x = f.solve(&h, &[rhs])?.remove(0);
+    *factor = Some(f);
     Ok((0..n)
         .map(|v| {
             let (e1, e2) = basis[v];

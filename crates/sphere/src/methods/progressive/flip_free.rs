@@ -592,6 +592,11 @@ impl Problem<'_> {
         let mut energy = self.total_energy(k, stars, points);
         let mut result =
             Optimised { sweeps: 0, energy, last_change: f64::INFINITY, converged: false, scale: k };
+        // The chord-area sum C of the current points, once known: the sum
+        // after a sweep is the next sweep's before it and its weight's (each
+        // was computed apart, three passes over the mesh per sweep where one
+        // gives the same bits).
+        let mut chord: Option<f64> = None;
         while result.sweeps < max_sweeps {
             let sweeps = result.sweeps;
             // The sweep lowers E + mu C (see chord_area); its change is
@@ -599,9 +604,16 @@ impl Problem<'_> {
             // for the full chord weight: with 0.3 of it every sweep seemed
             // to lower the sum by a third, and the sweeps never stopped
             // before their most.)
-            let mu = self.chord_weight(energy, stars, points);
-            let before =
-                if mu == 0.0 { energy } else { energy + mu * self.chord_total(stars, points) };
+            let mu = if chord_area::applies(self.energy) {
+                let c = *chord.get_or_insert_with(|| self.chord_total(stars, points));
+                chord_area::weight(true, energy, c)
+            } else {
+                0.0
+            };
+            let before = match chord {
+                Some(c) if mu != 0.0 => energy + mu * c,
+                _ => energy,
+            };
             let moved =
                 self.sweep(k, mu, &classes, stars, points, Some(&active), &|| stop(sweeps))?;
             result.sweeps += 1;
@@ -613,10 +625,11 @@ impl Problem<'_> {
                     active[r as usize] = free(r);
                 }
             }
-            let after = if mu == 0.0 {
-                0.0
-            } else {
-                self.total_energy(k, stars, points) + mu * self.chord_total(stars, points)
+            // The points have moved: C is known again only if measured here.
+            chord = (mu != 0.0).then(|| self.chord_total(stars, points));
+            let after = match chord {
+                Some(c) => self.total_energy(k, stars, points) + mu * c,
+                None => 0.0,
             };
             k = self.area_scale(stars, points);
             let next = self.total_energy(k, stars, points);
