@@ -48,6 +48,7 @@ HERE = Path(__file__).resolve().parent
 
 
 def vm(field: str) -> int:
+    """One field of /proc/self/status, in bytes."""
     with open("/proc/self/status") as status:
         for line in status:
             if line.startswith(field + ":"):

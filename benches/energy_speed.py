@@ -39,17 +39,10 @@ import numpy as np
 import spherify as sp
 
 HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE))
+from default_at_scale import vm  # noqa: E402  (one reader of /proc/self/status)
 SHAPES = ["helix_tube", "tentacles", "urchin", "bumpy_blob", "ellipsoid", "icosphere"]
 ENERGIES = ["isometric", "stretch", "conformal", "authalic", "balanced"]
-
-
-def vm(field: str) -> int:
-    """One field of /proc/self/status, in bytes."""
-    with open("/proc/self/status") as status:
-        for line in status:
-            if line.startswith(field + ":"):
-                return int(line.split()[1]) * 1024
-    return 0
 
 
 def cpu_seconds() -> float:
