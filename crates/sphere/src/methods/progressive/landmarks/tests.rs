@@ -21,6 +21,25 @@ fn turned(p: [f64; 3], degrees: f64, seed: usize) -> [f64; 3] {
     normalize(add(scale(p, t.cos()), scale(dir, t.sin()))).unwrap()
 }
 
+/// Each landmark's point turned by `degrees`, each its own way (seed = its
+/// index in `ids`).
+fn turned_targets(points: &[[f64; 3]], ids: &[i64], degrees: f64) -> Vec<[f64; 3]> {
+    ids.iter().enumerate().map(|(j, &i)| turned(points[i as usize], degrees, j)).collect()
+}
+
+/// A vertex of the icosphere and its whole ring pinned where they are, the
+/// vertex itself sent to the far side of its ring: no map of the mesh as
+/// given has it there.
+fn across_its_pinned_ring(mesh: &GenusZeroMesh, points: &[[f64; 3]]) -> (Vec<i64>, Vec<[f64; 3]>) {
+    let rings = rings_of(mesh).unwrap();
+    let v = 0usize;
+    let mut ids: Vec<i64> = rings[v].iter().map(|&r| r as i64).collect();
+    let mut targets: Vec<[f64; 3]> = rings[v].iter().map(|&r| points[r as usize]).collect();
+    ids.push(v as i64);
+    targets.push(scale(points[v], -1.0));
+    (ids, targets)
+}
+
 /// Vertices spread over the map: farthest-point sampling from vertex 0.
 fn spread(points: &[[f64; 3]], k: usize) -> Vec<i64> {
     let mut chosen = vec![0usize];
@@ -61,8 +80,7 @@ fn landmarks_45_degrees_away_land_exactly_on_a_valid_map() {
         let (mesh, points) = mapped(shape);
         for k in [1, 3, 8] {
             let ids = spread(&points, k);
-            let targets: Vec<[f64; 3]> =
-                ids.iter().enumerate().map(|(j, &i)| turned(points[i as usize], 45.0, j)).collect();
+            let targets: Vec<[f64; 3]> = turned_targets(&points, &ids, 45.0);
             let pinned = pin(&mesh, &points, &ids, &targets)
                 .unwrap_or_else(|e| panic!("{name}, {k} landmarks: {e}"));
             assert_pinned(&mesh, &pinned, &ids, &targets);
@@ -74,8 +92,7 @@ fn landmarks_45_degrees_away_land_exactly_on_a_valid_map() {
 fn a_long_capsule_takes_its_ends_to_new_places() {
     let (mesh, points) = mapped(capsule(8, 60, 8.0));
     let ids = spread(&points, 4);
-    let targets: Vec<[f64; 3]> =
-        ids.iter().enumerate().map(|(j, &i)| turned(points[i as usize], 30.0, j)).collect();
+    let targets: Vec<[f64; 3]> = turned_targets(&points, &ids, 30.0);
     let pinned = pin(&mesh, &points, &ids, &targets).unwrap();
     assert_pinned(&mesh, &pinned, &ids, &targets);
 }
@@ -84,8 +101,7 @@ fn a_long_capsule_takes_its_ends_to_new_places() {
 fn pinning_gives_the_same_bits_on_one_and_two_threads() {
     let (mesh, points) = mapped(bumpy(3));
     let ids = spread(&points, 8);
-    let targets: Vec<[f64; 3]> =
-        ids.iter().enumerate().map(|(j, &i)| turned(points[i as usize], 45.0, j)).collect();
+    let targets: Vec<[f64; 3]> = turned_targets(&points, &ids, 45.0);
     let on = |threads: usize| {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
         pool.install(|| pin(&mesh, &points, &ids, &targets).unwrap())
@@ -123,17 +139,12 @@ fn a_crossing_that_no_map_realises_stops_with_the_landmarks_named() {
     // and the vertex itself asked to leave its ring for the far side: no
     // valid map has it there, and the drag must say so in bounded work.
     let (mesh, points) = mapped(icosphere(2));
-    let rings = rings_of(&mesh).unwrap();
-    let v = 0u32;
-    let mut ids: Vec<i64> = rings[v as usize].iter().map(|&r| r as i64).collect();
-    let mut targets: Vec<[f64; 3]> =
-        rings[v as usize].iter().map(|&r| points[r as usize]).collect();
-    ids.push(v as i64);
-    targets.push(scale(points[v as usize], -1.0));
+    let (ids, targets) = across_its_pinned_ring(&mesh, &points);
+    let sent = *ids.last().unwrap() as usize; // the vertex, after its ring
     let err = pin(&mesh, &points, &ids, &targets).unwrap_err();
     match err {
         SphereError::LandmarkConflict { ids, reason } => {
-            assert!(ids.contains(&(v as usize)), "{ids:?}: {reason}");
+            assert!(ids.contains(&sent), "{ids:?}: {reason}");
         }
         other => panic!("{other}"),
     }
@@ -162,8 +173,7 @@ fn bad_sets_are_refused_before_any_move() {
 fn pinning_stops_when_the_callback_says_so() {
     let (mesh, points) = mapped(icosphere(2));
     let ids = spread(&points, 3);
-    let targets: Vec<[f64; 3]> =
-        ids.iter().enumerate().map(|(j, &i)| turned(points[i as usize], 45.0, j)).collect();
+    let targets: Vec<[f64; 3]> = turned_targets(&points, &ids, 45.0);
     let landmarks = Landmarks::new(mesh.n_vertices(), &ids, &targets).unwrap();
     let err = pin_landmarks(&mesh, &points, &landmarks, &PinParams::default(), &|_, _| false)
         .unwrap_err();
@@ -283,8 +293,7 @@ fn a_scrambled_set_the_drag_cannot_pin_is_laid_out_exactly() {
     // each other is scrambled, so no flip-free drag passes them.
     let (mesh, points) = mapped(bumpy(2));
     let ids = spread(&points, 32);
-    let targets: Vec<[f64; 3]> =
-        ids.iter().enumerate().map(|(j, &i)| turned(points[i as usize], 45.0, j)).collect();
+    let targets: Vec<[f64; 3]> = turned_targets(&points, &ids, 45.0);
     assert!(matches!(
         pin(&mesh, &points, &ids, &targets),
         Err(SphereError::LandmarkConflict { .. })
@@ -304,8 +313,7 @@ fn a_scrambled_set_the_drag_cannot_pin_is_laid_out_exactly() {
 fn three_landmarks_get_auxiliary_ones_that_are_not_held() {
     let (mesh, points) = mapped(icosphere(3));
     let ids = spread(&points, 3);
-    let targets: Vec<[f64; 3]> =
-        ids.iter().enumerate().map(|(j, &i)| turned(points[i as usize], 40.0, j)).collect();
+    let targets: Vec<[f64; 3]> = turned_targets(&points, &ids, 40.0);
     let refined = assert_laid_out(&mesh, &points, &ids, &targets);
     assert!(!refined.layout.auxiliary.is_empty());
     assert!(refined.layout.auxiliary.iter().all(|a| !ids.contains(&(*a as i64))));
@@ -316,13 +324,7 @@ fn a_vertex_sent_across_its_pinned_ring_is_laid_out_by_splitting() {
     // The set the drag refuses above (a_crossing_that_no_map_realises...):
     // on the mesh as given no map has it, after edge splits one does.
     let (mesh, points) = mapped(icosphere(2));
-    let rings = rings_of(&mesh).unwrap();
-    let v = 0u32;
-    let mut ids: Vec<i64> = rings[v as usize].iter().map(|&r| r as i64).collect();
-    let mut targets: Vec<[f64; 3]> =
-        rings[v as usize].iter().map(|&r| points[r as usize]).collect();
-    ids.push(v as i64);
-    targets.push(scale(points[v as usize], -1.0));
+    let (ids, targets) = across_its_pinned_ring(&mesh, &points);
     assert_laid_out(&mesh, &points, &ids, &targets);
 }
 
@@ -348,8 +350,7 @@ fn the_hull_of_cocircular_targets_is_one_triangulation() {
 fn the_layout_gives_the_same_bits_on_one_and_two_threads() {
     let (mesh, points) = mapped(bumpy(2));
     let ids = spread(&points, 16);
-    let targets: Vec<[f64; 3]> =
-        ids.iter().enumerate().map(|(j, &i)| turned(points[i as usize], 45.0, j)).collect();
+    let targets: Vec<[f64; 3]> = turned_targets(&points, &ids, 45.0);
     let landmarks = Landmarks::new(mesh.n_vertices(), &ids, &targets).unwrap();
     let run = |threads| {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
