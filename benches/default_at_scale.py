@@ -38,7 +38,7 @@ import sys
 import time
 import warnings
 from pathlib import Path
-from typing import Any, Dict, List, Optional
+from typing import Any, Dict, List, Optional, Tuple
 
 import numpy as np
 
@@ -56,19 +56,25 @@ def vm(field: str) -> int:
     return 0
 
 
-def worker(shape: str, n: int, threads: Optional[int], cholmod: bool) -> Dict[str, Any]:
-    if threads is not None:
-        sp.set_num_threads(threads)
-    mesh = sp.datasets.make(shape, n)
+def measured_embed(mesh: sp.Mesh, **options: Any) -> Tuple[sp.SphereMap, float, int]:
+    """``sp.embed(mesh, **options)`` with its wall time and the growth of this
+    process's high-water mark over its resident size just before the call
+    (the mark is reset first, so whatever made ``mesh`` does not count)."""
     with open("/proc/self/clear_refs", "w") as refs:
         refs.write("5")  # the high-water mark starts again from here
     before = vm("VmRSS")
     started = time.perf_counter()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", sp.SpherifyWarning)
-        m = sp.embed(mesh)
-    seconds = time.perf_counter() - started
-    grown = vm("VmHWM") - before
+        m = sp.embed(mesh, **options)
+    return m, time.perf_counter() - started, vm("VmHWM") - before
+
+
+def worker(shape: str, n: int, threads: Optional[int], cholmod: bool) -> Dict[str, Any]:
+    if threads is not None:
+        sp.set_num_threads(threads)
+    mesh = sp.datasets.make(shape, n)
+    m, seconds, grown = measured_embed(mesh)
     out: Dict[str, Any] = {
         "shape": shape, "n": mesh.n_vertices, "threads": threads, "seconds": seconds,
         "stages": dict(m.seconds), "valid": bool(m.valid), "margin": float(m.margin),

@@ -40,7 +40,7 @@ import spherify as sp
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
-from default_at_scale import vm  # noqa: E402  (one reader of /proc/self/status)
+from default_at_scale import measured_embed  # noqa: E402  (one measure of embed's peak)
 SHAPES = ["helix_tube", "tentacles", "urchin", "bumpy_blob", "ellipsoid", "icosphere"]
 ENERGIES = ["isometric", "stretch", "conformal", "authalic", "balanced"]
 
@@ -83,15 +83,7 @@ def time_worker(shape: str, n: int, energies: List[str]) -> None:
 
 def memory_worker(shape: str, n: int, energy: str) -> None:
     mesh = sp.datasets.make(shape, n)
-    with open("/proc/self/clear_refs", "w") as refs:
-        refs.write("5")  # the high-water mark starts again from here
-    before = vm("VmRSS")
-    wall = time.perf_counter()
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", sp.SpherifyWarning)
-        m = sp.embed(mesh, method="progressive", energy=energy)
-    wall = time.perf_counter() - wall
-    grown = vm("VmHWM") - before
+    m, wall, grown = measured_embed(mesh, method="progressive", energy=energy)
     print(json.dumps({"shape": shape, "n": mesh.n_vertices, "energy": energy, "wall": wall,
                       "bytes_per_vertex": grown / mesh.n_vertices, "certified": bool(m.valid),
                       "stages": {k: round(float(v), 2) for k, v in dict(m.seconds).items()}}),
