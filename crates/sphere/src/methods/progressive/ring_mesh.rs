@@ -78,17 +78,7 @@ impl RingMesh {
     #[cfg(test)]
     /// The faces of the current mesh, each once (listed at its smallest vertex).
     pub fn faces(&self) -> Vec<[u32; 3]> {
-        let mut faces = Vec::new();
-        for (i, ring) in self.rings.iter().enumerate() {
-            let i = i as u32;
-            for j in 0..ring.len() {
-                let (b, c) = (ring[j], ring[(j + 1) % ring.len()]);
-                if i < b && i < c {
-                    faces.push([i, b, c]);
-                }
-            }
-        }
-        faces
+        faces_of_rings(&self.rings)
     }
 
     /// Whether `u -> v` keeps the mesh a closed manifold: the link condition
@@ -195,6 +185,22 @@ impl RingMesh {
         self.rings[u as usize] = std::mem::take(&mut collapse.ring);
         self.n_alive += 1;
     }
+}
+
+/// The faces of a rotation system (face (v, r[j], r[j + 1]) for each ring
+/// `r` of a vertex `v`), each once: listed at its smallest vertex.
+pub(crate) fn faces_of_rings(rings: &[Vec<u32>]) -> Vec<[u32; 3]> {
+    let mut faces = Vec::new();
+    for (i, ring) in rings.iter().enumerate() {
+        let i = i as u32;
+        for j in 0..ring.len() {
+            let (b, c) = (ring[j], ring[(j + 1) % ring.len()]);
+            if i < b && i < c {
+                faces.push([i, b, c]);
+            }
+        }
+    }
+    faces
 }
 
 /// How far ahead in a list of collapses the serial loops over them (the

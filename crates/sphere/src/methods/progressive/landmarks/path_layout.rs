@@ -42,6 +42,7 @@ use spherify_mesh::vec3::{add, cross, dot, norm, scale, sub};
 use spherify_sparse::tutte::FixedSystem;
 use spherify_sparse::{solve, SolveParams, SolverKind};
 
+use super::super::ring_mesh::faces_of_rings;
 use super::{angle, Landmarks};
 use crate::embedding::normalize;
 use crate::error::SphereError;
@@ -294,17 +295,7 @@ impl Rotation {
     }
 
     fn faces(&self) -> Vec<[u32; 3]> {
-        let mut faces = Vec::new();
-        for (u, r) in self.rings.iter().enumerate() {
-            let u = u as u32;
-            for j in 0..r.len() {
-                let (a, b) = (r[j], r[(j + 1) % r.len()]);
-                if u < a && u < b {
-                    faces.push([u, a, b]);
-                }
-            }
-        }
-        faces
+        faces_of_rings(&self.rings)
     }
 }
 
