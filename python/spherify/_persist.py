@@ -132,9 +132,10 @@ def record(m: "SphereMap") -> Record:
     if m.landmarks is not None:
         arrays.update(landmark_ids=m.landmarks[0], landmark_points=m.landmarks[1])
     if m.refinement is not None:
-        arrays.update(input_faces=m.input_mesh.faces, refinement_faces=m.refinement[0],
+        source = m.input_mesh
+        arrays.update(input_faces=source.faces, refinement_faces=m.refinement[0],
                       refinement_barycentric=m.refinement[1])
-        meta["input_vertices"] = len(m.input_mesh.vertices)
+        meta["input_vertices"] = len(source.vertices)
     if isinstance(m, ThetaPhiMap):
         arrays.update(poles=np.array(m.poles, dtype=np.int64), cut_path=m.cut_path,
                       theta_phi=m.theta_phi)
