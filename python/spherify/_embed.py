@@ -188,8 +188,9 @@ def embed(mesh: MeshLike, method: str = "progressive", *, progress: Any = None,
         Hoppe's on 25 of the 26 meshes of issue 22; like ``"stretch"``, it also pays for
         the chord triangles' total area, by which L2 stretch is normalised,
         and is followed by global L-BFGS steps
-        on the coarse levels and at the end, which ``max_iter`` and ``tol``
-        do not bound; 2.6-6 times the isometric energy's time at 200k
+        on the coarse levels and at the end (not at the end on limbed meshes
+        above 50k vertices), which ``max_iter`` and ``tol``
+        do not bound; 2.4-3.4 times the isometric energy's CPU time at 200k
         vertices), ``"conformal"``
         (MIPS with a barrier below an area ratio of 1e-5: an exactly
         conformal map of a limbed shape cannot be stored in doubles),

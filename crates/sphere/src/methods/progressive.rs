@@ -17,7 +17,8 @@
 //!    For the stretch and balanced energies, global L-BFGS steps over every
 //!    vertex follow the sweeps of the coarse levels up to 30k vertices and the
 //!    final sweeps ([`mod@crate::methods::progressive::lbfgs`]): the sweeps stall on
-//!    tubes and nearly round meshes.
+//!    tubes and nearly round meshes (the final ones are left out on large
+//!    limbed balanced maps, where they bought nothing measurable).
 //!    For the authalic energy, global steps towards equal areas follow
 //!    ([`mod@crate::methods::progressive::authalic_newton`]): the local moves alone stall on limbs.
 //!
@@ -109,6 +110,16 @@ const GLOBAL_TOLERANCE: f64 = 1e-7;
 /// times SphereParam's 27.41; with 100, 29.25.
 const GLOBAL_FULL_SIZE: usize = 50_000;
 const GLOBAL_MIN_STEPS: usize = 10;
+/// Above [`GLOBAL_FULL_SIZE`] vertices, a balanced map whose stretch density
+/// S (see [`balanced_area_weight`]) is above this, a limbed shape, takes no
+/// final global steps: there the ten steps bought nothing its twenty sweeps
+/// had not (issue 22, measured at 200k vertices with and without them, L2
+/// stretch / area: `helix_tube` 3.6399 / 0.7580 and 3.6421 / 0.7581,
+/// `tentacles` 2.7848 / 0.7430 and 2.7893 / 0.7431) for a quarter to a
+/// third of the map's time. Nearly round meshes (S about 1.0-1.1) keep them:
+/// without them 200k `bumpy_blob`'s angle distortion was 3.26 degrees
+/// instead of 2.82 (SphereParam 2.8).
+const GLOBAL_SKIP_STRETCH: f64 = 4.0;
 /// Global steps on each coarse level of the stretch and balanced energies
 /// with this many vertices, after its sweeps: there limbs win or lose their
 /// share of the sphere (measured with the weight 0.1, L2 stretch without and
@@ -154,18 +165,22 @@ impl ProgressiveParams {
     /// and a hundred sweeps to 1e-5 (measured on the corpus: octopus 2.646 ->
     /// 2.599, spot 1.185 -> 1.177 in L2 stretch; spot 5.7 -> 3.8 and hand
     /// 14.3 -> 11.8 degrees of mean angle distortion). Balanced (the best
-    /// quality; not the default, as it takes 3.8-5.9 times the isometric
-    /// energy's time at 200k vertices, issue 22 allows 1.5): twenty to 1e-4, as final sweeps are what bring its stretch
+    /// quality; not the default, as it takes 2.4-3.4 times the isometric
+    /// energy's time at 200k vertices, issue 22 allows 1.5): sixteen to 1e-4, as final sweeps are what bring its stretch
     /// to SphereParam's (measured on ten corpus meshes, five sweeps to 1e-3
-    /// against these twenty: stretch worse than SphereParam's on 10 and 6,
+    /// against twenty: stretch worse than SphereParam's on 10 and 6,
     /// area on 8 and 5; sword 2.732 and 2.696, octopus 2.816 and 2.613).
+    /// Sixteen rather than twenty since its moves are over-relaxed
+    /// ([`flip_free`]'s `OVER_RELAXATION`): 200k `helix_tube` L2 stretch /
+    /// area 3.662 / 0.7746 with fourteen, 3.640 / 0.7580 with twenty
+    /// unrelaxed (SphereParam 3.701 / 0.7755).
     pub fn for_energy(energy: Energy) -> ProgressiveParams {
         match energy {
             Energy::Stretch | Energy::CoarseStretch => {
                 ProgressiveParams { energy, max_iter: 50, tolerance: 1e-5 }
             }
             Energy::Balanced | Energy::BalancedWeighted(_) | Energy::CoarseBalanced => {
-                ProgressiveParams { energy, max_iter: 20, tolerance: 1e-4 }
+                ProgressiveParams { energy, max_iter: 16, tolerance: 1e-4 }
             }
             Energy::Conformal => ProgressiveParams { energy, max_iter: 100, tolerance: 1e-5 },
             Energy::Authalic => ProgressiveParams { energy, max_iter: 10, tolerance: 1e-3 },
@@ -233,12 +248,12 @@ pub fn progressive(
     seconds.push(("insertion", started.elapsed().as_secs_f64()));
     // The balanced energy's final area weight, from the stretch of the map
     // as inserted (see balanced_area_weight).
-    let problem = if params.energy == Energy::Balanced {
+    let (problem, stretch_density) = if params.energy == Energy::Balanced {
         let stretch = Problem { energy: Energy::Stretch, ..problem };
         let s = stretch.per_area(&stretch.stars(&rings.rings), &points);
-        Problem { energy: Energy::BalancedWeighted(balanced_area_weight(s)), ..problem }
+        (Problem { energy: Energy::BalancedWeighted(balanced_area_weight(s)), ..problem }, s)
     } else {
-        problem
+        (problem, 1.0)
     };
 
     let started = Instant::now();
@@ -247,7 +262,7 @@ pub fn progressive(
     drop(hierarchy);
     let max_iter = params.max_iter.max(1);
     let stop = |sweep: usize| !(go_on() && progress(2 * n + n * sweep / max_iter, total));
-    let global_params = global_steps(params.energy, n);
+    let global_params = global_steps(params.energy, n, stretch_density);
     let (start, flat) = flat_rings(&rings.rings);
     // Only the global steps read the rings again; without them they are
     // let go before the references, the method's largest buffer, are made.
@@ -563,8 +578,12 @@ fn optimise_level(
 
 /// The global L-BFGS steps ([`lbfgs`]) after the final sweeps: for the
 /// stretch and balanced energies, whose sweeps stall far from the minimum on
-/// tubes and on nearly round meshes (issue 22).
-fn global_steps(energy: Energy, n: usize) -> Option<LbfgsParams> {
+/// tubes and on nearly round meshes (issue 22); not for a large limbed
+/// balanced map (`stretch_density` above [`GLOBAL_SKIP_STRETCH`]).
+fn global_steps(energy: Energy, n: usize, stretch_density: f64) -> Option<LbfgsParams> {
+    if energy == Energy::Balanced && n > GLOBAL_FULL_SIZE && stretch_density > GLOBAL_SKIP_STRETCH {
+        return None;
+    }
     let shrink = (GLOBAL_FULL_SIZE as f64 / n.max(1) as f64).min(1.0);
     let max_iter =
         ((GLOBAL_STEPS as f64 * shrink * shrink) as usize).clamp(GLOBAL_MIN_STEPS, GLOBAL_STEPS);

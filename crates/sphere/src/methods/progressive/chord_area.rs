@@ -77,20 +77,21 @@ pub fn chord_area_hessian(
     }
     let u = scale(n, 1.0 / len);
     let e = sub(p1, p2);
-    let grad = scale(cross(e, u), 0.5);
-    // Column j of [e]x is e x unit_j; H = [e]x^T P [e]x / (2 |n|), P = I - u u^T.
-    let cols = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]].map(|unit| {
-        let c = cross(e, unit);
-        sub(c, scale(u, dot(u, c)))
-    });
+    // Column j of [e]x is e x unit_j, so ([e]x^T [e]x)_ij = |e|^2 d_ij - e_i e_j
+    // and (u^T [e]x)_j = (u x e)_j: H = (|e|^2 I - e e^T - w w^T) / (2 |n|)
+    // with w = u x e, and the gradient (e x u) / 2 is -w / 2. (Written out
+    // instead of through the three columns P [e]x and their nine products:
+    // 7% of a balanced map's time went to this function.)
+    let w = cross(u, e);
+    let (ee, half) = (dot(e, e), 0.5 / len);
     let mut hess = [[0.0; 3]; 3];
     for i in 0..3 {
         for j in 0..3 {
-            // (P [e]x)^T (P [e]x) = [e]x^T P [e]x, as P is a projection.
-            hess[i][j] = dot(cols[i], cols[j]) / (2.0 * len);
+            let diagonal = if i == j { ee } else { 0.0 };
+            hess[i][j] = (diagonal - e[i] * e[j] - w[i] * w[j]) * half;
         }
     }
-    (0.5 * len, grad, hess)
+    (0.5 * len, scale(w, -0.5), hess)
 }
 
 /// [`chord_area`] and its gradients with respect to `p0`, `p1` and `p2`.

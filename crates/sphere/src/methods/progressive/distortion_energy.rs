@@ -162,6 +162,7 @@ impl Energy {
     }
 
     /// f(a, d) and its partial derivatives; infinite for d <= 0.
+    #[inline]
     pub fn density(self, a: f64, d: f64) -> (f64, f64, f64) {
         if d <= 0.0 || !d.is_finite() || !a.is_finite() {
             return (f64::INFINITY, 0.0, 0.0);
