@@ -2,8 +2,8 @@
 later), installed into a fresh virtual environment whose PATH has no Rust
 toolchain, runs README's main job.
 
-The wheel is built by ``.ci/run`` (``maturin build --release``, which reuses
-the release build of the install before it) and named by the environment
+The wheel is built by ``.ci/run`` (``maturin build --profile wheel --zig``, in
+a target folder of its own) and named by the environment
 variable ``SPHERIFY_WHEEL``; without it this test is skipped, so the default
 run stays fast.
 """
