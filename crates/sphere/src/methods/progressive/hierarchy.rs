@@ -26,7 +26,7 @@
 use rayon::prelude::*;
 use spherify_mesh::vec3::{cross, dot, norm, sub, triangle_area};
 
-use super::ring_mesh::{collapse_keeps_manifold, prefetch, Collapse, RingMesh, AHEAD};
+use super::ring_mesh::{prefetch, Collapse, RingMesh, AHEAD};
 
 /// Degree above which a collapse is only taken when nothing else is left.
 const MAX_DEGREE: usize = 12;
@@ -193,8 +193,7 @@ pub fn decimate(
     let mut quadrics: Vec<Quadric> = per_vertex.into_iter().map(|x| x.0).collect();
     let length_weight = LENGTH_WEIGHT * total_area / n_corners.max(1) as f64;
     let mut alive: Vec<u32> = (0..n as u32).collect();
-    // Below REMOVED and above every round number: not locked yet.
-    let mut locked = vec![REMOVED - 1; n];
+    let mut locked = vec![u32::MAX; n];
     let mut hierarchy = Hierarchy::default();
     let mut round = 0u32;
     while mesh.n_alive > 4 {
@@ -205,15 +204,8 @@ pub fn decimate(
             taken = take_round(mesh, positions, &quadrics, length_weight, &alive, careful);
         }
         let start = hierarchy.collapses.len();
-        // The round's decisions, in score order, on the rings as they were
-        // at its start: each is taken on the mesh the earlier ones left,
-        // which [`Round`] reads off the original rings (see its notes). The
-        // edits follow, vertex by vertex in parallel.
-        let mut chosen: Vec<(u32, u32)> = Vec::new();
-        let mut n_alive = mesh.n_alive;
-        let mut rv = Vec::new();
         for (index, &(_, u, v)) in taken.iter().enumerate() {
-            if n_alive <= 4 {
+            if mesh.n_alive <= 4 {
                 break;
             }
             prefetch_ahead(mesh, &quadrics, &locked, round, &taken, index);
@@ -223,29 +215,21 @@ pub fn decimate(
             // scored with; `v`'s may have grown, so the degree and link
             // condition are asked again.
             let ring = &mesh.rings[u as usize];
-            if locked[u as usize] == round {
-                continue;
-            }
-            let now = Round { rings: &mesh.rings, locked: &locked, chosen: &chosen };
-            now.ring(v, &mut rv);
-            if careful && rv.len() + ring.len() - 4 > MAX_DEGREE {
-                continue;
-            }
-            if !collapse_keeps_manifold(n_alive, ring, v, &rv, |x| now.degree(x)) {
+            if locked[u as usize] == round
+                || (careful && mesh.rings[v as usize].len() + ring.len() - 4 > MAX_DEGREE)
+                || !mesh.can_collapse(u, v)
+            {
                 continue;
             }
             for &r in ring {
                 locked[r as usize] = round;
             }
-            locked[u as usize] = REMOVED | chosen.len() as u32;
             let qu = quadrics[u as usize];
             for (x, y) in quadrics[v as usize].iter_mut().zip(qu) {
                 *x += y;
             }
-            chosen.push((u, v));
-            n_alive -= 1;
+            hierarchy.collapses.push(mesh.collapse(u, v));
         }
-        apply_round(mesh, &mut hierarchy, &chosen, &locked, round);
         if hierarchy.collapses.len() == start {
             // Cannot happen on a closed genus-0 mesh (see the module notes).
             return None;
@@ -258,119 +242,6 @@ pub fn decimate(
         }
     }
     Some(hierarchy)
-}
-
-/// The tag of a vertex removed in the current round in `locked` (whose other
-/// entries are round numbers, far below it), over its place in the round's
-/// list of collapses.
-const REMOVED: u32 = 1 << 31;
-
-/// The mesh in the middle of a round, read off the rings as they were at its
-/// start: the collapses chosen so far are not applied yet. Each edit of a
-/// collapse `e -> t` (with `e`'s ring `[t, r1, .., rk]`) replaces the entry
-/// `e` in one neighbour's list: by `r2 .. r(k-1)` in `t`'s, by nothing in
-/// `r1`'s and `rk`'s, by `t` in the others' ([`RingMesh::collapse`]). No
-/// two vertices removed in a round are neighbours, so every entry a round
-/// edits is a vertex it removes, each list loses, gains or renames distinct
-/// entries, and the current list of `x` is its list at the start of the
-/// round with each removed entry replaced so: the edits of a round commute,
-/// and are made afterwards, vertex by vertex in parallel ([`apply_round`]).
-struct Round<'a> {
-    rings: &'a [Vec<u32>],
-    /// Per vertex: the round that locked it, or [`REMOVED`] and its collapse.
-    locked: &'a [u32],
-    chosen: &'a [(u32, u32)],
-}
-
-impl Round<'_> {
-    /// What the removed entry `e` of `x`'s list stands for now.
-    fn replaced(&self, x: u32, e: u32, out: &mut impl FnMut(u32)) {
-        let (_, t) = self.chosen[(self.locked[e as usize] & !REMOVED) as usize];
-        let re = &self.rings[e as usize];
-        let m = re.len();
-        let at = re.iter().position(|&y| y == t).expect("a collapse's target is in its ring");
-        let turned = |i: usize| re[(at + i) % m];
-        if x == t {
-            (2..m - 1).for_each(|i| out(turned(i)));
-        } else if x != turned(1) && x != turned(m - 1) {
-            out(t);
-        }
-    }
-
-    /// `x`'s current ring, into `out`.
-    fn ring(&self, x: u32, out: &mut Vec<u32>) {
-        out.clear();
-        for &e in &self.rings[x as usize] {
-            if self.locked[e as usize] & REMOVED == 0 {
-                out.push(e);
-            } else {
-                self.replaced(x, e, &mut |y| out.push(y));
-            }
-        }
-    }
-
-    /// The length of `x`'s current ring.
-    fn degree(&self, x: u32) -> usize {
-        let mut n = 0;
-        for &e in &self.rings[x as usize] {
-            if self.locked[e as usize] & REMOVED == 0 {
-                n += 1;
-            } else {
-                self.replaced(x, e, &mut |_| n += 1);
-            }
-        }
-        n
-    }
-}
-
-/// Makes the collapses `chosen` (in this order) of round `round`, whose
-/// removed vertices carry [`REMOVED`] and their place in `chosen` in
-/// `locked` and whose rings' vertices carry `round`: each removed ring,
-/// turned to start at its target, goes to `hierarchy` as [`RingMesh::collapse`]
-/// leaves it, then every locked vertex's list is edited on its own, in
-/// parallel (see [`Round`]): the same lists, entry for entry, as the
-/// collapses made one after the other.
-fn apply_round(
-    mesh: &mut RingMesh,
-    hierarchy: &mut Hierarchy,
-    chosen: &[(u32, u32)],
-    locked: &[u32],
-    round: u32,
-) {
-    let first = hierarchy.collapses.len();
-    for &(u, v) in chosen {
-        let mut ring = std::mem::take(&mut mesh.rings[u as usize]);
-        let at = ring.iter().position(|&x| x == v).expect("v is a neighbour of u");
-        ring.rotate_left(at);
-        hierarchy.collapses.push(Collapse { u, v, ring });
-    }
-    mesh.n_alive -= chosen.len();
-    let made = &hierarchy.collapses[first..];
-    mesh.rings.par_iter_mut().enumerate().with_min_len(1024).for_each_init(
-        Vec::new,
-        |edited: &mut Vec<u32>, (x, list)| {
-            if locked[x] != round {
-                return;
-            }
-            edited.clear();
-            for &e in list.iter() {
-                let tag = locked[e as usize];
-                if tag & REMOVED == 0 {
-                    edited.push(e);
-                    continue;
-                }
-                let c = &made[(tag & !REMOVED) as usize];
-                let k = c.ring.len() - 1; // c.ring = [v, r1, .., rk]
-                if x as u32 == c.v {
-                    edited.extend_from_slice(&c.ring[2..k]);
-                } else if x as u32 != c.ring[1] && x as u32 != c.ring[k] {
-                    edited.push(c.v);
-                }
-            }
-            list.clear();
-            list.extend_from_slice(edited);
-        },
-    );
 }
 
 /// Asks the processor to fetch what the collapse loop will read for the
@@ -448,29 +319,4 @@ fn take_round(
         .collect();
     scored.par_sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
     scored
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use spherify_mesh::solids::{bumpy, helix};
-
-    #[test]
-    fn a_round_applied_at_once_gives_the_lists_of_its_collapses_made_one_by_one() {
-        for mesh in [bumpy(3), helix(8, 160, 0.1, 3.0, 0.8)] {
-            let (positions, faces) = (mesh.positions(), mesh.faces());
-            let mut at_once = RingMesh::from_faces(positions.len(), faces).unwrap();
-            let hierarchy = decimate(&mut at_once, positions, &mut |_| true).unwrap();
-            assert_eq!(at_once.n_alive, 4);
-            assert!(hierarchy.rounds.len() > 3, "{} rounds", hierarchy.rounds.len());
-            let mut one_by_one = RingMesh::from_faces(positions.len(), faces).unwrap();
-            for round in &hierarchy.rounds {
-                for c in &hierarchy.collapses[round.clone()] {
-                    assert!(one_by_one.can_collapse(c.u, c.v), "{} -> {}", c.u, c.v);
-                    assert_eq!(&one_by_one.collapse(c.u, c.v), c);
-                }
-            }
-            assert_eq!(one_by_one.rings, at_once.rings);
-        }
-    }
 }

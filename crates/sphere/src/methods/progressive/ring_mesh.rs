@@ -86,20 +86,20 @@ impl RingMesh {
     /// opposite the edge; Dey et al. 1999) on a mesh larger than a
     /// tetrahedron, and no neighbour left with fewer than three neighbours.
     pub fn can_collapse(&self, u: u32, v: u32) -> bool {
-        collapse_keeps_manifold(
-            self.n_alive,
-            &self.rings[u as usize],
-            v,
-            &self.rings[v as usize],
-            |x| self.rings[x as usize].len(),
-        )
+        let (ru, rv) = (&self.rings[u as usize], &self.rings[v as usize]);
+        if self.n_alive <= 4 || ru.len() < 3 {
+            return false;
+        }
+        let Some(at) = ru.iter().position(|&x| x == v) else { return false };
+        let k = ru.len();
+        let (left, right) = (ru[(at + 1) % k], ru[(at + k - 1) % k]);
+        if self.rings[left as usize].len() < 4 || self.rings[right as usize].len() < 4 {
+            return false;
+        }
+        ru.iter().all(|&w| w == v || w == left || w == right || !rv.contains(&w))
     }
 
     /// Collapses `u` into `v` (which must pass [`RingMesh::can_collapse`]).
-    /// The hierarchy makes a round's collapses all at once instead
-    /// (`hierarchy::apply_round`); this one at a time is what the tests hold
-    /// that against.
-    #[cfg(test)]
     pub fn collapse(&mut self, u: u32, v: u32) -> Collapse {
         let mut ring = std::mem::take(&mut self.rings[u as usize]);
         let at = ring.iter().position(|&x| x == v).expect("v is a neighbour of u");
@@ -185,29 +185,6 @@ impl RingMesh {
         self.rings[u as usize] = std::mem::take(&mut collapse.ring);
         self.n_alive += 1;
     }
-}
-
-/// [`RingMesh::can_collapse`] of `u -> v` on a mesh of `n_alive` vertices
-/// where `u`'s ring is `ru`, `v`'s is `rv` and `degree(x)` is the length of
-/// `x`'s ring: also asked of a mesh whose edits are not applied yet (see
-/// [`crate::methods::progressive::hierarchy`]).
-pub fn collapse_keeps_manifold(
-    n_alive: usize,
-    ru: &[u32],
-    v: u32,
-    rv: &[u32],
-    degree: impl Fn(u32) -> usize,
-) -> bool {
-    if n_alive <= 4 || ru.len() < 3 {
-        return false;
-    }
-    let Some(at) = ru.iter().position(|&x| x == v) else { return false };
-    let k = ru.len();
-    let (left, right) = (ru[(at + 1) % k], ru[(at + k - 1) % k]);
-    if degree(left) < 4 || degree(right) < 4 {
-        return false;
-    }
-    ru.iter().all(|&w| w == v || w == left || w == right || !rv.contains(&w))
 }
 
 /// The faces of a rotation system (face (v, r[j], r[j + 1]) for each ring
