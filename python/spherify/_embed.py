@@ -190,7 +190,7 @@ def embed(mesh: MeshLike, method: str = "progressive", *, progress: Any = None,
         and is followed by global L-BFGS steps
         on the coarse levels and at the end (not at the end on limbed meshes
         above 50k vertices), which ``max_iter`` and ``tol``
-        do not bound; 2.4-3.4 times the isometric energy's CPU time at 200k
+        do not bound; 2.5-3.5 times the isometric energy's CPU time at 200k
         vertices), ``"conformal"``
         (MIPS with a barrier below an area ratio of 1e-5: an exactly
         conformal map of a limbed shape cannot be stored in doubles),

@@ -176,8 +176,10 @@ impl ProgressiveParams {
     /// and a hundred sweeps to 1e-5 (measured on the corpus: octopus 2.646 ->
     /// 2.599, spot 1.185 -> 1.177 in L2 stretch; spot 5.7 -> 3.8 and hand
     /// 14.3 -> 11.8 degrees of mean angle distortion). Balanced (the best
-    /// quality; not the default, as it takes 2.4-3.4 times the isometric
-    /// energy's time at 200k vertices, issue 22 allows 1.5): sixteen to 1e-4, as final sweeps are what bring its stretch
+    /// quality; not the default, as it takes 2.5-3.5 times the isometric
+    /// energy's time at 200k vertices, issue 22 allows 1.5): sixteen to
+    /// 1e-4 (two more on large limbed meshes, see `LIMBED_WAKE`), as final
+    /// sweeps are what bring its stretch
     /// to SphereParam's (measured on ten corpus meshes, five sweeps to 1e-3
     /// against twenty: stretch worse than SphereParam's on 10 and 6,
     /// area on 8 and 5; sword 2.732 and 2.696, octopus 2.816 and 2.613).
