@@ -190,7 +190,7 @@ def embed(mesh: MeshLike, method: str = "progressive", *, progress: Any = None,
         and is followed by global L-BFGS steps
         on the coarse levels and at the end (not at the end on limbed meshes
         above 50k vertices), which ``max_iter`` and ``tol``
-        do not bound; 2.4-3.4 times the isometric energy's CPU time at 200k
+        do not bound; 2.5-3.5 times the isometric energy's CPU time at 200k
         vertices), ``"conformal"``
         (MIPS with a barrier below an area ratio of 1e-5: an exactly
         conformal map of a limbed shape cannot be stored in doubles),
@@ -200,9 +200,11 @@ def embed(mesh: MeshLike, method: str = "progressive", *, progress: Any = None,
         ``"stretch"`` (Sander's L2 stretch, as Praun and Hoppe, with the
         chord-area term of ``"balanced"``).
     max_iter : int
-        *Progressive.* Sweeps of the final optimisation (default 5 for ``"isometric"``, 20 for
+        *Progressive.* Sweeps of the final optimisation (default 5 for ``"isometric"``, 16 for
         ``"balanced"``, 10 for ``"authalic"``, 50 for ``"stretch"``, 100 for
-        ``"conformal"``).
+        ``"conformal"``). A ``"balanced"`` map of a limbed mesh above 50k
+        vertices takes two sweeps more, in which only the vertices that
+        still move (or a neighbour did) are moved.
         Most of the work is done level by level on the way up, and each new
         vertex is moved once as it is inserted; measured on a 200k-vertex
         ``tentacles``, 10 final sweeps instead of 5 change the mean angle

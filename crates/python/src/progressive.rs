@@ -18,7 +18,7 @@ pub fn energy(options: &Options<'_>, default: Energy) -> PyResult<Energy> {
     })
 }
 
-/// `energy` ("isometric"), `max_iter` (final sweeps; 5 for "isometric", 20 for "balanced", 10
+/// `energy` ("isometric"), `max_iter` (final sweeps; 5 for "isometric", 16 for "balanced", 10
 /// for "authalic", 50 for "stretch", 100 for "conformal"), `tol` (stop when a sweep lowers the
 /// energy by less than this fraction; 1e-3, 1e-4 for "balanced", or 1e-5 for "stretch" and
 /// "conformal").

@@ -120,6 +120,17 @@ const GLOBAL_MIN_STEPS: usize = 10;
 /// without them 200k `bumpy_blob`'s angle distortion was 3.26 degrees
 /// instead of 2.82 (SphereParam 2.8).
 const GLOBAL_SKIP_STRETCH: f64 = 4.0;
+/// On the same large limbed balanced maps, a vertex wakes itself and its
+/// neighbours for the next final sweep only by moving more than this
+/// fraction of its shortest edge (elsewhere [`flip_free::NOTICEABLE`],
+/// 1e-3, which kept nearly every vertex moving in every sweep), and the
+/// final sweeps are [`LIMBED_EXTRA_SWEEPS`] more: the later sweeps then move
+/// only where the map still changes (issue 22, 200k `helix_tube`, L2 stretch
+/// / area / CPU s in one process: 16 sweeps as before 3.647 / 0.7698 /
+/// 8.31; wake 0.05 and 16 sweeps 3.648 / 0.7700 / 7.55; 0.1 and 18 sweeps
+/// 3.638 / 0.7669 / 7.53).
+const LIMBED_WAKE: f64 = 0.1;
+const LIMBED_EXTRA_SWEEPS: usize = 2;
 /// Global steps on each coarse level of the stretch and balanced energies
 /// with this many vertices, after its sweeps: there limbs win or lose their
 /// share of the sphere (measured with the weight 0.1, L2 stretch without and
@@ -165,8 +176,10 @@ impl ProgressiveParams {
     /// and a hundred sweeps to 1e-5 (measured on the corpus: octopus 2.646 ->
     /// 2.599, spot 1.185 -> 1.177 in L2 stretch; spot 5.7 -> 3.8 and hand
     /// 14.3 -> 11.8 degrees of mean angle distortion). Balanced (the best
-    /// quality; not the default, as it takes 2.4-3.4 times the isometric
-    /// energy's time at 200k vertices, issue 22 allows 1.5): sixteen to 1e-4, as final sweeps are what bring its stretch
+    /// quality; not the default, as it takes 2.5-3.5 times the isometric
+    /// energy's time at 200k vertices, issue 22 allows 1.5): sixteen to
+    /// 1e-4 (two more on large limbed meshes, see `LIMBED_WAKE`), as final
+    /// sweeps are what bring its stretch
     /// to SphereParam's (measured on ten corpus meshes, five sweeps to 1e-3
     /// against twenty: stretch worse than SphereParam's on 10 and 6,
     /// area on 8 and 5; sword 2.732 and 2.696, octopus 2.816 and 2.613).
@@ -273,8 +286,9 @@ pub fn progressive(
     // references below set.
     spherify_sparse::release_free_memory();
     let stars = problem.stars_of(start, flat);
+    let (wake, sweeps) = final_sweeps(params, n, stretch_density);
     let end = problem
-        .optimise_stars(&stars, &mut points, params.max_iter, params.tolerance, None, &stop)
+        .optimise_waking(&stars, &mut points, (sweeps, params.tolerance), None, wake, &stop)
         .map_err(|_| cancelled("optimisation", 2 * n))?;
     drop(stars);
     seconds.push(("optimisation", started.elapsed().as_secs_f64()));
@@ -581,7 +595,7 @@ fn optimise_level(
 /// tubes and on nearly round meshes (issue 22); not for a large limbed
 /// balanced map (`stretch_density` above [`GLOBAL_SKIP_STRETCH`]).
 fn global_steps(energy: Energy, n: usize, stretch_density: f64) -> Option<LbfgsParams> {
-    if energy == Energy::Balanced && n > GLOBAL_FULL_SIZE && stretch_density > GLOBAL_SKIP_STRETCH {
+    if limbed_balanced(energy, n, stretch_density) {
         return None;
     }
     let shrink = (GLOBAL_FULL_SIZE as f64 / n.max(1) as f64).min(1.0);
@@ -593,6 +607,25 @@ fn global_steps(energy: Energy, n: usize, stretch_density: f64) -> Option<LbfgsP
         }
         _ => None,
     }
+}
+
+/// The final sweeps' waking threshold (see [`Problem::optimise_waking`])
+/// and most sweeps: [`LIMBED_WAKE`] and [`LIMBED_EXTRA_SWEEPS`] more than
+/// `params.max_iter` where the final global steps are left out (a large
+/// limbed balanced map), [`flip_free::NOTICEABLE`] and `params.max_iter`
+/// elsewhere.
+fn final_sweeps(params: &ProgressiveParams, n: usize, stretch_density: f64) -> (f64, usize) {
+    if limbed_balanced(params.energy, n, stretch_density) {
+        (LIMBED_WAKE, params.max_iter + LIMBED_EXTRA_SWEEPS)
+    } else {
+        (flip_free::NOTICEABLE, params.max_iter)
+    }
+}
+
+/// A balanced map above [`GLOBAL_FULL_SIZE`] vertices whose stretch density
+/// is above [`GLOBAL_SKIP_STRETCH`]: a large limbed shape.
+fn limbed_balanced(energy: Energy, n: usize, stretch_density: f64) -> bool {
+    energy == Energy::Balanced && n > GLOBAL_FULL_SIZE && stretch_density > GLOBAL_SKIP_STRETCH
 }
 
 /// The run's account in words: the hierarchy, the final sweeps, the global

@@ -340,8 +340,8 @@ impl Problem<'_> {
     /// lowering the energy plus `chord` times the chord areas,
     /// class after class, the vertices of a class in parallel, skipping those
     /// not `active` (all, when `None`). Returns the vertices that moved by
-    /// more than [`NOTICEABLE`] of their shortest edge; `stop()` is asked
-    /// between classes.
+    /// more than `wake` (usually [`NOTICEABLE`]) of their shortest edge;
+    /// `stop()` is asked between classes.
     #[allow(clippy::too_many_arguments)]
     pub fn sweep(
         &self,
@@ -351,6 +351,7 @@ impl Problem<'_> {
         stars: &Stars,
         points: &mut [[f64; 3]],
         active: Option<&[bool]>,
+        wake: f64,
         stop: &(dyn Fn() -> bool + Sync),
     ) -> Result<Vec<u32>, Stopped> {
         let mut moved = Vec::new();
@@ -368,7 +369,7 @@ impl Problem<'_> {
                     }
                     let (ring, refs) = (stars.ring(i), stars.refs(i));
                     let (q, shortest) = self.step(k, chord, i, ring, refs, shared, corners)?;
-                    Some((q, norm(sub(q, shared[i as usize])) > NOTICEABLE * shortest))
+                    Some((q, norm(sub(q, shared[i as usize])) > wake * shortest))
                 })
                 .collect();
             for (&i, q) in class.iter().zip(moves) {
@@ -559,6 +560,8 @@ pub struct Optimised {
     pub converged: bool,
     /// The area scale `k` of the last sweep (see [`Problem::area_scale`]).
     pub scale: f64,
+    /// Vertices active over all sweeps (each tried once in its sweep).
+    pub moves: usize,
 }
 
 impl Problem<'_> {
@@ -603,13 +606,37 @@ impl Problem<'_> {
         held: Option<&[bool]>,
         stop: &(dyn Fn(usize) -> bool + Sync),
     ) -> Result<Optimised, Stopped> {
+        self.optimise_waking(stars, points, (max_sweeps, tolerance), held, NOTICEABLE, stop)
+    }
+
+    /// [`Problem::optimise_stars`] (with `(max_sweeps, tolerance)`) where a
+    /// vertex wakes itself and its neighbours for the next sweep only by
+    /// moving more than `wake` of its shortest edge, instead of
+    /// [`NOTICEABLE`]: with a larger `wake`, later sweeps move only where the
+    /// map still changes (issue 22: the final sweeps of large limbed
+    /// balanced maps, see the progressive method's `LIMBED_WAKE`).
+    pub fn optimise_waking(
+        &self,
+        stars: &Stars,
+        points: &mut [[f64; 3]],
+        (max_sweeps, tolerance): (usize, f64),
+        held: Option<&[bool]>,
+        wake: f64,
+        stop: &(dyn Fn(usize) -> bool + Sync),
+    ) -> Result<Optimised, Stopped> {
         let classes = colour_stars(stars);
         let free = |v: u32| held.is_none_or(|h| !h[v as usize]);
         let mut active: Vec<bool> = (0..stars.len() as u32).map(free).collect();
         let mut k = self.area_scale(stars, points);
         let mut energy = self.total_energy(k, stars, points);
-        let mut result =
-            Optimised { sweeps: 0, energy, last_change: f64::INFINITY, converged: false, scale: k };
+        let mut result = Optimised {
+            sweeps: 0,
+            energy,
+            last_change: f64::INFINITY,
+            converged: false,
+            scale: k,
+            moves: 0,
+        };
         // The chord-area sum C of the current points, once known: the sum
         // after a sweep is the next sweep's before it and its weight's (each
         // was computed apart, three passes over the mesh per sweep where one
@@ -632,8 +659,9 @@ impl Problem<'_> {
                 Some(c) if mu != 0.0 => energy + mu * c,
                 _ => energy,
             };
+            result.moves += active.iter().filter(|&&a| a).count();
             let moved =
-                self.sweep(k, mu, &classes, stars, points, Some(&active), &|| stop(sweeps))?;
+                self.sweep(k, mu, &classes, stars, points, Some(&active), wake, &|| stop(sweeps))?;
             result.sweeps += 1;
             // Only what moved, and its neighbours, can still go down much.
             active.iter_mut().for_each(|a| *a = false);

@@ -128,3 +128,53 @@ fn coarse_levels_of_a_stretch_map_pay_for_growth() {
     let q = crate::applications::metrics::quality(mesh.mesh(), &e.points).unwrap();
     assert!(q.stretch_l2 < 9.5, "L2 stretch {}", q.stretch_l2);
 }
+
+#[test]
+fn final_sweeps_that_wake_only_on_larger_moves_move_fewer_vertices_and_stay_valid() {
+    // A limbed shape's isometric map, then ten sweeps of the balanced final
+    // energy from it, waking on every noticeable move and on LIMBED_WAKE.
+    let mesh = GenusZeroMesh::new(helix(8, 120, 0.15, 2.0, 0.8)).unwrap();
+    let start = progressive(&mesh, &ProgressiveParams::default(), &|_, _| true).unwrap().points;
+    let problem = Problem {
+        energy: Energy::BalancedWeighted(1300),
+        ..whole_mesh_problem(Energy::Balanced, &mesh)
+    };
+    let stars = problem.stars(&rings_of(&mesh).unwrap());
+    let before = problem.per_area(&stars, &start);
+    let run = |wake: f64| {
+        let mut points = start.clone();
+        let end = problem
+            .optimise_waking(&stars, &mut points, (10, 0.0), None, wake, &|_| false)
+            .unwrap();
+        (points, end)
+    };
+    let (every, every_end) = run(flip_free::NOTICEABLE);
+    let (larger, larger_end) = run(LIMBED_WAKE);
+    // With the usual threshold it is optimise_stars, move for move.
+    let mut same = start.clone();
+    problem.optimise_stars(&stars, &mut same, 10, 0.0, None, &|_| false).unwrap();
+    assert_eq!(every, same);
+    assert!(check_sphere(mesh.faces(), &larger).valid);
+    assert!(
+        larger_end.moves < every_end.moves * 9 / 10,
+        "{} against {} moves",
+        larger_end.moves,
+        every_end.moves
+    );
+    // It lowers the energy, and by at least as much per vertex move (here
+    // 1.5e-4 against 1.46e-4 per move, with 64% of the moves).
+    assert!(larger_end.energy < before, "{} from {before}", larger_end.energy);
+    let per_move = |end: &Optimised| (before - end.energy) / end.moves as f64;
+    assert!(
+        per_move(&larger_end) > 0.95 * per_move(&every_end),
+        "{larger_end:?} against {every_end:?} from {before}"
+    );
+    // Only large limbed balanced maps take this path.
+    let balanced = ProgressiveParams::for_energy(Energy::Balanced);
+    let limbed = GLOBAL_SKIP_STRETCH + 1.0;
+    assert_eq!(final_sweeps(&balanced, 60_000, limbed), (LIMBED_WAKE, 16 + LIMBED_EXTRA_SWEEPS));
+    assert_eq!(final_sweeps(&balanced, 40_000, limbed), (flip_free::NOTICEABLE, 16));
+    assert_eq!(final_sweeps(&balanced, 60_000, 1.1), (flip_free::NOTICEABLE, 16));
+    let stretch = ProgressiveParams::for_energy(Energy::Stretch);
+    assert_eq!(final_sweeps(&stretch, 60_000, limbed), (flip_free::NOTICEABLE, 50));
+}
