@@ -71,12 +71,22 @@ PULL_STAGES = (1e3, 1e4, 1e5)
 PULL_SWEEPS = 50
 # A vertex farther than this fraction of the mean chord edge from its target
 # stopped short; the region pulled on is such vertices and PULL_RINGS rings
-# around them (horse: 17% stopped short, 35% of the vertices pulled on, the
-# same error as pulling on all at half the time).
-PULL_SHORT = 0.3
-PULL_RINGS = 5
-# Most vertex moves per stage.
-PULL_WORK = 400_000
+# around them. Pulling on horse's whole map or on 0.3 of an edge and 5 rings
+# (35% of the vertices) gave the same error, the latter in half the time;
+# 0.5 and 3 rings (23% of horse, 33% of armadillo) the same again with 20
+# sweeps a stage (armadillo 1.01% / 4.13%), a little worse on small meshes
+# (octopus 1.57% / 4.09% against 1.50% / 3.68%).
+PULL_SHORT = 0.5
+PULL_RINGS = 3
+# Most vertex moves per stage: the pull's cost is capped at 3 x 300,000
+# moves (about 1 s on this machine's 2 cores), so that a register of two
+# 50k meshes stays within 3x mapping both. Measured with 0.5 and 3 rings,
+# mean / p95: armadillo 1.01% / 4.13% with 300,000 (20 sweeps), 0.96% /
+# 3.71% with 400,000 (and with 0.3, 5 rings and no cap, 50 sweeps a stage:
+# 0.82% / 2.68% at 4.7x mapping both); horse 1.53% / 4.39% and 1.47% /
+# 3.76%; without the pull 1.17% / 5.34% and 1.69% / 5.93% (the bench's
+# pairs with B of 41k vertices).
+PULL_WORK = 300_000
 # The steps reported to a progress callback: one per ICP iteration, one per
 # round and one per stage of the pull.
 STEPS = sum(s for _, _, s in _nricp.SCHEDULE) + ROUNDS + len(PULL_STAGES)
