@@ -325,7 +325,7 @@ def register(m_a: SphereMap, m_b: SphereMap, *, landmarks: Any = None,
         304 unknowns on at most 3000 of A's vertices, each with a
         closest-point search on B, one closest-point search for every vertex
         of A, 10 rounds of flip-free moves of all, then up to 3 stages of
-        energy sweeps (at most 400,000 vertex moves each) where the moves
+        energy sweeps (at most 200,000 vertex moves each) where the moves
         stopped short of their targets.
 
     Raises

@@ -78,15 +78,16 @@ PULL_SWEEPS = 50
 # (octopus 1.57% / 4.09% against 1.50% / 3.68%).
 PULL_SHORT = 0.5
 PULL_RINGS = 3
-# Most vertex moves per stage: the pull's cost is capped at 3 x 300,000
-# moves (about 1 s on this machine's 2 cores), so that a register of two
-# 50k meshes stays within 3x mapping both. Measured with 0.5 and 3 rings,
-# mean / p95: armadillo 1.01% / 4.13% with 300,000 (20 sweeps), 0.96% /
-# 3.71% with 400,000 (and with 0.3, 5 rings and no cap, 50 sweeps a stage:
-# 0.82% / 2.68% at 4.7x mapping both); horse 1.53% / 4.39% and 1.47% /
-# 3.76%; without the pull 1.17% / 5.34% and 1.69% / 5.93% (the bench's
-# pairs with B of 41k vertices).
-PULL_WORK = 300_000
+# Most vertex moves per stage: the pull's cost is capped at 3 x 200,000
+# moves (about 0.6 s on 2 quiet cores, 1-1.5 s on busy ones), so that a
+# register of two 50k meshes stays within 3x mapping both. Measured with 0.5
+# and 3 rings against B of 41k vertices (the speed pairs), mean / p95:
+# armadillo 1.10% / 4.85% with 150,000, 1.01% / 4.13% with 300,000,
+# 0.96% / 3.71% with 400,000 (and with 0.3, 5 rings and no cap, 50 sweeps a
+# stage: 0.82% / 2.68%, at 4.7x mapping both); horse 1.62% / 5.38%, 1.53% /
+# 4.39% and 1.47% / 3.76%; without the pull 1.17% / 5.34% and 1.69% / 5.93%.
+# On the busy machine (load 6-7) 300,000 added 1.5-2 s to the warp.
+PULL_WORK = 200_000
 # The steps reported to a progress callback: one per ICP iteration, one per
 # round and one per stage of the pull.
 STEPS = sum(s for _, _, s in _nricp.SCHEDULE) + ROUNDS + len(PULL_STAGES)
