@@ -34,7 +34,7 @@ def truth_error(m_b: sp.SphereMap, points: np.ndarray, copy: sp.datasets.Deforme
     return out
 
 
-def test_the_pull_lowers_the_error_where_the_moves_stop_short(stopped_short: Tuple) -> None:
+def test_the_warp_pull_lowers_the_error_where_the_moves_stop_short(stopped_short: Tuple) -> None:
     map_a, m_b, targets, copy = stopped_short
     fixed = np.array([5, 400, 2000])
     rounds, _, stopped = _warp.move_rounds(map_a, targets, fixed=fixed)
@@ -49,7 +49,7 @@ def test_the_pull_lowers_the_error_where_the_moves_stop_short(stopped_short: Tup
     assert np.mean(_warp._angles(pulled.points, targets)) < after[0] * 1.0001
 
 
-def test_the_pull_gives_the_same_bits_on_one_and_two_threads(stopped_short: Tuple) -> None:
+def test_the_warp_pull_gives_the_same_bits_on_one_and_two_threads(stopped_short: Tuple) -> None:
     map_a, _, targets, _ = stopped_short
     weights = np.full(len(targets), 1e3 * 4 * np.pi / len(targets))
     threads = sp.get_num_threads()
@@ -64,7 +64,7 @@ def test_the_pull_gives_the_same_bits_on_one_and_two_threads(stopped_short: Tupl
     assert not np.array_equal(runs[0], map_a.points)
 
 
-def test_the_pull_refuses_bad_input(stopped_short: Tuple) -> None:
+def test_the_warp_pull_refuses_bad_input(stopped_short: Tuple) -> None:
     map_a, _, targets, _ = stopped_short
     n = len(targets)
     ones = np.ones(n)
