@@ -15,7 +15,7 @@ use spherify_sphere::{
 
 use crate::convert::rows;
 use crate::errors::{mesh_error, sphere_error};
-use crate::sphere_map::CoreSphereMap;
+use crate::sphere_map::{genus_zero, CoreSphereMap};
 
 /// Landmark ids `(k,)` and points `(k, 3)` as given; checked by the core
 /// (`Landmarks::new`) once the mesh is known.
@@ -89,9 +89,10 @@ pub fn move_towards(
     let fixed: Vec<i64> = fixed.iter().copied().collect();
     let params = TowardsParams { energy_sweeps, ..TowardsParams::default() };
     let shared = sphere_map.shared_mesh();
+    let topology = sphere_map.topology();
     let start = sphere_map.embedding().clone();
     let result = crate::progress::run_detachable(py, progress, move |report| {
-        let mesh = GenusZeroMesh::new(shared).map_err(SphereError::from)?;
+        let mesh = genus_zero(&topology, shared)?;
         let embedding =
             move_towards_embedding(&mesh, &start, &targets, &weights, &fixed, &params, report)?;
         Ok::<_, SphereError>(embedding)
@@ -137,9 +138,10 @@ pub fn pull_towards(
     let fixed: Vec<i64> = fixed.iter().copied().collect();
     let params = PullParams { energy, sweeps, tolerance };
     let shared = sphere_map.shared_mesh();
+    let topology = sphere_map.topology();
     let start = sphere_map.embedding().clone();
     let result = crate::progress::run_detachable(py, progress, move |report| {
-        let mesh = GenusZeroMesh::new(shared).map_err(SphereError::from)?;
+        let mesh = genus_zero(&topology, shared)?;
         let embedding = pull_towards_embedding(
             &mesh,
             &start,
