@@ -287,8 +287,9 @@ def best_rotation(m_a: SphereMap, m_b: SphereMap,
     Given the landmarks' rotation, only it is refined.
 
     Every start takes :data:`RANKING_STEPS` Gauss-Newton steps on
-    :data:`RANKING_SAMPLE` vertices (all starts at once), and the best
-    :data:`REFINED_STARTS` are refined to the end. Besides the identity, the harmonic frames
+    :data:`RANKING_SAMPLE` vertices (all starts at once; before the second
+    and the third step only the :data:`RANKING_KEPT` best where they stand
+    go on), and the best :data:`REFINED_STARTS` are refined to the end. Besides the identity, the harmonic frames
     and the landmarks' rotation, each harmonic frame turned by the 24
     rotations of the octahedral group is a start: the frame of a shape with
     a near-symmetric ellipsoid (an octopus, whose eight arms make it round)
