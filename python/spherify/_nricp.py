@@ -89,7 +89,8 @@ class Deformation:
         np.maximum(d2, 0.0, out=d2)
         np.negative(d2, out=d2)
         np.divide(d2, 2.0 * self.sigma ** 2, out=d2)
-        return np.exp(d2, out=d2)
+        np.exp(d2, out=d2)
+        return d2
 
     def __call__(self, x: np.ndarray) -> np.ndarray:
         out = np.empty_like(x)
