@@ -30,6 +30,28 @@ def test_fit_reproduces_a_smooth_bend_from_its_pairs() -> None:
     assert np.linalg.norm(model(a) - bent, axis=1).mean() < 0.02 * motion
 
 
+def test_fit_with_its_normal_matrix_given_is_the_same_fit() -> None:
+    # nonrigid_icp forms D^T diag(v) D once a width and takes out the pairs
+    # left out; the fit must not depend on which way the matrix came.
+    mesh, bent = bent_pair()
+    a = mesh.vertices
+    controls = a[sp.datasets.farthest_points(a, 150)]
+    v = np.where(np.arange(len(a)) % 7 == 0, 0.0, 1.0 + 0.5 * np.sin(np.arange(len(a))))
+    phi = _nricp.Deformation(np.eye(3), np.zeros(3), controls, np.zeros((0, 3)), 0.6).kernel(a)
+    design = np.hstack([a, np.ones((len(a), 1)), phi])
+    every = np.where(v > 0, v, 1.0 + 0.5 * np.sin(np.arange(len(a))))
+    out = np.flatnonzero(v == 0)
+    normal = design.T @ (design * every[:, None]) - design[out].T @ (design[out] * every[out, None])
+    given = _nricp.fit(a, bent, v, controls, 0.6, 1e-4, phi, normal)
+    formed = _nricp.fit(a, bent, v, controls, 0.6, 1e-4)
+    # (the kernel between close controls is nearly singular: the weights
+    # themselves agree to about 1e-6 of their size, the deformation closer)
+    assert np.abs(given(a) - formed(a)).max() < 1e-9
+    # A wrong normal matrix (the left-out pairs kept) gives another fit.
+    kept = _nricp.fit(a, bent, v, controls, 0.6, 1e-4, phi, design.T @ (design * every[:, None]))
+    assert np.abs(kept(a) - formed(a)).max() > 1e-6
+
+
 def test_icp_finds_the_bend_from_slid_pairs() -> None:
     mesh, bent = bent_pair()
     a, faces = mesh.vertices, mesh.faces

@@ -278,6 +278,22 @@ def test_farthest_points_spreads_and_checks_its_arguments() -> None:
         sp.datasets.farthest_points(np.zeros((3, 2)), 1)
 
 
+def test_the_screened_ranking_picks_the_start_and_bits_of_the_full_one(
+        pair: "tuple[sp.datasets.DeformedCopy, sp.SphereMap]", blob: sp.SphereMap,
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    # The rotation's starts drop out before the later ranking steps
+    # (RANKING_KEPT); where the best ones stay in, the winner is the same to
+    # the bit as with every start ranked to the end.
+    from spherify import _align
+    _, m_b = pair
+    screened = _align.best_rotation(blob, m_b)
+    assert _align.RANKING_KEPT and _align.RANKING_KEPT[0] < 97
+    monkeypatch.setattr(_align, "RANKING_KEPT", ())
+    full = _align.best_rotation(blob, m_b)
+    assert screened[1] == full[1] and screened[2] == full[2]
+    assert np.array_equal(screened[0], full[0])
+
+
 def test_rigid_icp_finds_the_pose_a_wrong_start_misses() -> None:
     # A shape without a symmetry and a turned copy of it: from the pose turned
     # 180 degrees about the copy's principal axis (a front-to-back start), the

@@ -8,7 +8,7 @@ import numpy.typing as npt
 
 from ._report import MeshReport, SphereReport
 
-__all__ = ["AtomicWrite", "CoreClosestPoints", "CoreMesh", "CoreSphereMap", "__version__", "boundary_loop", "check", "check_application", "check_memory", "check_raw", "check_sphere", "choices", "dijkstra", "embed", "embed_need", "encode", "face_quality", "from_points", "get_num_threads", "harmonics_evaluate", "harmonics_fit", "improve", "is_stale_temporary", "is_temporary", "load", "method_options", "methods", "move_towards", "orient", "quality", "remove_stale_temporaries", "require_regular_file", "restore_map", "save", "save_textured_obj", "set_num_threads", "shortest_path", "special_kind", "temporary_path", "tutte", "weld", "write_atomic"]
+__all__ = ["AtomicWrite", "CoreClosestPoints", "CoreMesh", "CoreSphereMap", "__version__", "boundary_loop", "check", "check_application", "check_memory", "check_raw", "check_sphere", "choices", "dijkstra", "embed", "embed_need", "encode", "face_quality", "from_points", "get_num_threads", "harmonics_evaluate", "harmonics_fit", "improve", "is_stale_temporary", "is_temporary", "load", "method_options", "methods", "move_towards", "orient", "pull_towards", "quality", "remove_stale_temporaries", "require_regular_file", "restore_map", "save", "save_textured_obj", "set_num_threads", "shortest_path", "special_kind", "temporary_path", "tutte", "weld", "write_atomic"]
 
 __version__: str
 
@@ -161,6 +161,17 @@ def move_towards(
     weights: npt.NDArray[np.float64],
     fixed: npt.NDArray[np.int64],
     energy_sweeps: int = 3,
+    progress: Optional[Callable[[int, int], object]] = None,
+) -> CoreSphereMap: ...
+def pull_towards(
+    sphere_map: CoreSphereMap,
+    targets: npt.NDArray[np.float64],
+    weights: npt.NDArray[np.float64],
+    fixed: npt.NDArray[np.int64],
+    rest: Optional[npt.NDArray[np.float64]] = None,
+    energy: str = "isometric",
+    sweeps: int = 10,
+    tolerance: float = 1e-4,
     progress: Optional[Callable[[int, int], object]] = None,
 ) -> CoreSphereMap: ...
 def harmonics_fit(

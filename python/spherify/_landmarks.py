@@ -1,9 +1,10 @@
 """Landmarks of a map: the ``landmarks=`` argument of :func:`spherify.embed`
-and :func:`spherify.improve` read into arrays, and :func:`move_towards`, the
-soft moves towards per-vertex targets that registration builds on.
+and :func:`spherify.improve` read into arrays, :func:`move_towards`, the
+soft moves towards per-vertex targets that registration builds on, and
+:func:`pull_towards`, energy sweeps with a pull towards such targets.
 
 The work is the core's (``crates/sphere/src/methods/progressive/landmarks.rs``
-and ``move_towards.rs``): every check of the ids and targets (range,
+``move_towards.rs`` and ``target_pull.rs``): every check of the ids and targets (range,
 repeats, direction, two at one point) and every move, decided by exact
 predicates; here the arguments only become arrays.
 """
@@ -203,6 +204,71 @@ def move_towards(sphere_map: SphereMap, targets: npt.ArrayLike, *,
         raise MeshError(f"energy_sweeps must be an int >= 0, got {energy_sweeps!r}")
     core = _core.move_towards(sphere_map._core, target_rows, weight_values, fixed_ids,
                               int(energy_sweeps), as_callback(progress, "move_towards"))
+    result = SphereMap(core, sphere_map.mesh)
+    warn_if_thin(result)
+    return result
+
+
+def pull_towards(sphere_map: SphereMap, targets: npt.ArrayLike, weights: npt.ArrayLike, *,
+                 fixed: Optional[npt.ArrayLike] = None, rest: Optional[npt.ArrayLike] = None,
+                 energy: str = "isometric", sweeps: int = 10, tolerance: float = 1e-4,
+                 progress: Any = None) -> SphereMap:
+    """Lower a distortion plus a pull towards targets, flip-free.
+
+    Sweeps of the flip-free Newton moves of thesis 9.3.2 over colour classes
+    (the same bits on every thread count) lower ``E(x) = D(x) + sum_i
+    weights[i] |x_i - targets[i]|^2`` over the sphere points ``x``, where ``D``
+    is the ``energy`` of the map's chord triangles against ``rest``'s
+    triangles (the mesh's own surface when None). The ``fixed`` vertices
+    never move. Every move keeps every face positive under the exact test,
+    so every state is a valid GC-embedding. Cost: O(n) per sweep
+    (``crates/sphere/src/methods/progressive/target_pull.rs``).
+
+    Parameters
+    ----------
+    sphere_map : SphereMap
+        A valid map (``sphere_map.valid``).
+    targets : (n, 3) float
+        One direction per vertex (normalised in the core; rows with weight 0
+        are not read).
+    weights : (n,) float >= 0
+        The pull's weight per vertex, in the units of ``D`` (whose density
+        is about 4 per unit of the sphere's area at an isometry).
+    fixed : (f,) int, optional
+        Vertex ids that do not move (landmarks).
+    rest : (n, 3) float, optional
+        The triangles ``D`` measures against (default: the mesh's vertices).
+    energy : str
+        One of the core's energy names (default "isometric").
+    sweeps : int
+        Most sweeps; fewer when one lowers ``E`` by less than ``tolerance``.
+    tolerance : float
+        Relative fall of ``E`` in a sweep below which the sweeps stop.
+
+    Returns
+    -------
+    SphereMap
+        Certified in the core (``method == "improve"``); ``landmarks`` is
+        None.
+
+    Raises
+    ------
+    MapError
+        ``sphere_map`` is not a valid GC-embedding.
+    MeshError
+        Arrays of the wrong shape, a weight negative or not finite, a
+        weighted target with no direction, a fixed id out of range, an
+        unknown energy.
+    """
+    target_rows = np.ascontiguousarray(targets, dtype=np.float64)
+    weight_values = np.ascontiguousarray(weights, dtype=np.float64)
+    fixed_ids = _integer_ids([] if fixed is None else fixed, "fixed")
+    rest_rows = None if rest is None else np.ascontiguousarray(rest, dtype=np.float64)
+    if isinstance(sweeps, bool) or not isinstance(sweeps, (int, np.integer)) or sweeps < 0:
+        raise MeshError(f"sweeps must be an int >= 0, got {sweeps!r}")
+    core = _core.pull_towards(sphere_map._core, target_rows, weight_values, fixed_ids, rest_rows,
+                              str(energy), int(sweeps), float(tolerance),
+                              as_callback(progress, "pull_towards"))
     result = SphereMap(core, sphere_map.mesh)
     warn_if_thin(result)
     return result

@@ -10,7 +10,8 @@ sphere. Three transforms, each building on the one before:
   freedom), kept only where it lowers the alignment cost;
 - ``"warp"`` (default): then landmark pairs pinned exactly and the flip-free
   non-rigid warp of :mod:`spherify._warp` (non-rigid ICP in space, then
-  flip-free moves to the closest points' places in B's map).
+  flip-free moves to the closest points' places in B's map, and energy
+  sweeps with a pull towards them where the moves stop short).
 
 A's map stays a certified bijection at every step (the exact orientation
 test and the area test), so the correspondence is one-to-one by construction:
@@ -323,7 +324,9 @@ def register(m_a: SphereMap, m_b: SphereMap, *, landmarks: Any = None,
         in space (without landmarks); for the warp, 15 least-squares fits of
         304 unknowns on at most 3000 of A's vertices, each with a
         closest-point search on B, one closest-point search for every vertex
-        of A and 10 rounds of flip-free moves of all.
+        of A, 10 rounds of flip-free moves of all, then up to 3 stages of
+        energy sweeps (at most 200,000 vertex moves each) where the moves
+        stopped short of their targets.
 
     Raises
     ------
@@ -407,6 +410,7 @@ def _registered(m_a: SphereMap, m_b: SphereMap, pairs: np.ndarray, transform: st
                                 should_stop=heard)
         details["warp_icp_distance"] = run["icp"]
         details["warp_moved"] = run["moved"]
+        details["warp_pulled"] = run["pulled"]
         seconds["warp"] = time.perf_counter() - started
     if report:
         report(total, total)

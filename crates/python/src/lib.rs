@@ -71,6 +71,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(embed::improve, m)?)?;
     m.add_function(wrap_pyfunction!(embed::from_points, m)?)?;
     m.add_function(wrap_pyfunction!(landmarks::move_towards, m)?)?;
+    m.add_function(wrap_pyfunction!(landmarks::pull_towards, m)?)?;
     m.add_function(wrap_pyfunction!(harmonics::harmonics_fit, m)?)?;
     m.add_function(wrap_pyfunction!(harmonics::harmonics_evaluate, m)?)?;
     m.add_function(wrap_pyfunction!(metrics::quality, m)?)?;

@@ -12,7 +12,7 @@ use pyo3::types::PyDict;
 use spherify_mesh::Mesh;
 use spherify_sphere::memory_budget::{self, Application};
 use spherify_sphere::point_map::PointMap;
-use spherify_sphere::{Details, Embedding};
+use spherify_sphere::{Details, Embedding, GenusZeroMesh, SphereError};
 
 use crate::convert::{rows, to_numpy};
 use crate::errors::{mesh_error, point_map_error, resource_error};
@@ -30,6 +30,11 @@ pub struct CoreSphereMap {
     reoriented_faces: usize,
     /// Built on first use (O(F log F)).
     point_map: OnceLock<PointMap>,
+    /// The mesh's checked topology and half-edges, built on first use and
+    /// shared by every map made from this one ([`CoreSphereMap::with_embedding`]):
+    /// registration moves one map through 10 rounds and 3 pull stages, and
+    /// each call checked and linked the same mesh again.
+    topology: Arc<OnceLock<Arc<GenusZeroMesh>>>,
     /// For a map whose landmarks were laid out on a refined mesh: per vertex
     /// of `mesh`, a face of the input mesh (caller's faces) and barycentric
     /// weights in its corner order.
@@ -61,6 +66,7 @@ impl CoreSphereMap {
             embedding,
             reoriented_faces,
             point_map: OnceLock::new(),
+            topology: Arc::new(OnceLock::new()),
             refinement: None,
         }
     }
@@ -82,7 +88,14 @@ impl CoreSphereMap {
             self.reoriented_faces,
         );
         map.refinement = self.refinement.clone();
+        map.topology = Arc::clone(&self.topology);
         map
+    }
+
+    /// A handle on the mesh's topology ([`genus_zero`]), to be called
+    /// without the GIL.
+    pub fn topology(&self) -> Arc<OnceLock<Arc<GenusZeroMesh>>> {
+        Arc::clone(&self.topology)
     }
 
     /// The map back to the input, for a map on a refined mesh.
@@ -325,4 +338,21 @@ impl CoreSphereMap {
             out.error.into_pyarray(py),
         ))
     }
+}
+
+/// The [`GenusZeroMesh`] of `mesh` from the map's `topology` handle
+/// ([`CoreSphereMap::topology`]), built there on first use.
+///
+/// # Errors
+/// The mesh is not a sphere's topology (not for a map's own mesh, which was
+/// checked when the map was made).
+pub fn genus_zero(
+    topology: &OnceLock<Arc<GenusZeroMesh>>,
+    mesh: Arc<Mesh>,
+) -> Result<Arc<GenusZeroMesh>, SphereError> {
+    if let Some(built) = topology.get() {
+        return Ok(Arc::clone(built));
+    }
+    let built = Arc::new(GenusZeroMesh::new(mesh).map_err(SphereError::from)?);
+    Ok(Arc::clone(topology.get_or_init(|| built)))
 }

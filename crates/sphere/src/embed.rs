@@ -19,6 +19,7 @@ use crate::methods::progressive::landmarks::{
     pin_landmarks, pin_or_lay_out, Landmarks, PinParams, Refined,
 };
 use crate::methods::progressive::move_towards::{move_towards, TowardsParams};
+use crate::methods::progressive::target_pull::{pull_towards, PullParams};
 use crate::methods::progressive::{progressive, require_valid_start, ProgressiveParams};
 use crate::methods::radial::kernel::KernelPoint;
 use crate::methods::radial::{radial_map, Center};
@@ -340,6 +341,27 @@ pub fn move_towards_embedding(
 ) -> Result<Embedding, SphereError> {
     let result =
         move_towards(mesh, &start.result.points, targets, weights, fixed, params, progress)?;
+    Ok(Embedding::certified(mesh, MethodName::Improve, result, Details::None))
+}
+
+/// [`pull_towards`] from `start`'s points, certified as a plain GC-embedding
+/// ([`MethodName::Improve`]).
+///
+/// # Errors
+/// As [`pull_towards`].
+#[allow(clippy::too_many_arguments)]
+pub fn pull_towards_embedding(
+    mesh: &GenusZeroMesh,
+    start: &Embedding,
+    rest: Option<&[[f64; 3]]>,
+    targets: &[[f64; 3]],
+    weights: &[f64],
+    fixed: &[i64],
+    params: &PullParams,
+    progress: &(dyn Fn(usize, usize) -> bool + Sync),
+) -> Result<Embedding, SphereError> {
+    let result =
+        pull_towards(mesh, &start.result.points, rest, targets, weights, fixed, params, progress)?;
     Ok(Embedding::certified(mesh, MethodName::Improve, result, Details::None))
 }
 

@@ -88,7 +88,7 @@ pub struct ReadmeSnippets;
 pub use certificate::validity::{check_sphere, SphereReport};
 pub use embed::{
     embed, improve_embedding, move_towards_embedding, pin_embedding, pin_or_refine_embedding,
-    Details, Embedding, Method, MethodName, UnknownMethod,
+    pull_towards_embedding, Details, Embedding, Method, MethodName, UnknownMethod,
 };
 pub use embedding::{SphereEmbedding, Status};
 pub use error::SphereError;

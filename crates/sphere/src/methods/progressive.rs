@@ -46,6 +46,7 @@ pub mod mobius_centring;
 pub mod move_towards;
 mod placement;
 mod ring_mesh;
+pub mod target_pull;
 
 use std::time::Instant;
 
@@ -408,6 +409,7 @@ impl Level {
             surface: problem.surface,
             area_floor: self.area_floor,
             represented: self.represented.as_deref(),
+            pull: None,
         }
     }
 }
@@ -552,6 +554,7 @@ fn optimise_level(
         surface: &sub.surface,
         area_floor,
         represented: sub.represented.as_deref(),
+        pull: None,
     };
     // The level's global steps run on the level copied out too: on the whole
     // mesh's rings each step walked every slot of the finest mesh (measured
@@ -684,7 +687,13 @@ fn message(
 /// the method's insertion, `improve`, the landmarks and `move_towards` all
 /// optimise.
 pub(crate) fn whole_mesh_problem(energy: Energy, mesh: &GenusZeroMesh) -> Problem<'_> {
-    Problem { energy, surface: mesh.positions(), area_floor: area_floor(mesh), represented: None }
+    Problem {
+        energy,
+        surface: mesh.positions(),
+        area_floor: area_floor(mesh),
+        represented: None,
+        pull: None,
+    }
 }
 
 /// `Ok` when `report` certifies a GC-embedding: improving, pinning or moving

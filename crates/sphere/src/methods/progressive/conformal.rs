@@ -70,6 +70,7 @@ pub fn from_conformal_start(
         surface: mesh.positions(),
         area_floor: floor,
         represented: None,
+        pull: None,
     };
     let stars = problem.stars(&rings);
     let smallest = smallest_area_ratio(&problem, &stars, &start.points);

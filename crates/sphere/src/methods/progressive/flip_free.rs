@@ -23,6 +23,7 @@ use crate::methods::progressive::chord_area::{self, chord_area, chord_area_hessi
 use crate::methods::progressive::distortion_energy::{
     face_energy, face_energy_hessian, Energy, Reference,
 };
+use crate::methods::progressive::target_pull::TargetPull;
 
 /// The energy to lower and the surface it measures against.
 #[derive(Debug, Clone, Copy)]
@@ -39,6 +40,10 @@ pub struct Problem<'a> {
     /// the mean over its corners, so that a face aims at the share of the
     /// sphere its part of the finest surface needs. `None`: the mesh itself.
     pub represented: Option<&'a [f64]>,
+    /// A data term added to the energy: each vertex pulled towards a target
+    /// ([`crate::methods::progressive::target_pull`]). `None`: the
+    /// distortion alone.
+    pub pull: Option<&'a TargetPull>,
 }
 
 /// Every vertex's ring and the surface reference of each face around it,
@@ -193,6 +198,7 @@ impl Problem<'_> {
                         face_energy(self.energy, &refs[j], k, p, a, b)
                     })
                     .sum::<f64>()
+                    + self.pull.map_or(0.0, |pull| pull.energy(i, p))
             })
             .collect();
         // A fixed order of summation: the same total on every thread count.
@@ -277,7 +283,15 @@ impl Problem<'_> {
     ) -> Option<([f64; 3], f64)> {
         let p = points[i as usize];
         let star = Star::gather(refs, ring, points, corners);
-        let (e0, g, hess) = star.hessian(self.energy, k, chord, p);
+        let (mut e0, mut g, mut hess) = star.hessian(self.energy, k, chord, p);
+        if let Some(pull) = self.pull {
+            let (pe, pg, ph) = pull.vertex_term(i, p);
+            e0 += pe;
+            g = add(g, pg);
+            for (j, row) in hess.iter_mut().enumerate() {
+                row[j] += ph;
+            }
+        }
         if !e0.is_finite() {
             return None;
         }
@@ -326,7 +340,10 @@ impl Problem<'_> {
         let mut t = (SAFE_FRACTION * t_safe).min(1.0);
         for _ in 0..MAX_HALVINGS {
             if let Some(q) = normalize(add(p, scale(step, t))) {
-                let e = star.energy(self.energy, k, chord, q);
+                let mut e = star.energy(self.energy, k, chord, q);
+                if let Some(pull) = self.pull {
+                    e += pull.energy(i, q);
+                }
                 if e <= e0 + 1e-4 * t * slope && positive_fan(q, star.corners) {
                     return Some((q, reach));
                 }

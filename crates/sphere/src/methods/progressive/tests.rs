@@ -106,6 +106,7 @@ fn improve_lowers_the_energy_of_a_theta_phi_map_and_keeps_it_valid() {
         surface: mesh.positions(),
         area_floor: area_floor(&mesh),
         represented: None,
+        pull: None,
     };
     let stars = problem.stars(&rings_of(&mesh).unwrap());
     let energy = |p: &[[f64; 3]]| problem.total_energy(problem.area_scale(&stars, p), &stars, p);

@@ -25,6 +25,7 @@ fn global_steps_lower_the_energy_and_keep_a_certified_map() {
                 surface: mesh.positions(),
                 area_floor: area_floor(&mesh),
                 represented: None,
+                pull: None,
             };
             let rings = rings_of(&mesh).unwrap();
             let params = LbfgsParams { max_iter: 50, tolerance: 1e-9 };
@@ -46,6 +47,7 @@ fn the_same_bits_on_one_and_on_two_threads() {
         surface: mesh.positions(),
         area_floor: area_floor(&mesh),
         represented: None,
+        pull: None,
     };
     let rings = rings_of(&mesh).unwrap();
     let run = |threads: usize| {
@@ -68,6 +70,7 @@ fn a_stop_request_is_heard() {
         surface: mesh.positions(),
         area_floor: area_floor(&mesh),
         represented: None,
+        pull: None,
     };
     let params = LbfgsParams { max_iter: 50, tolerance: 0.0 };
     let stopped = lbfgs(&problem, &rings_of(&mesh).unwrap(), &mut points, &params, &|| true);
