@@ -158,6 +158,14 @@ impl RingMesh {
     /// undoes each collapse once, and a copy was one allocation per vertex
     /// of the mesh (and one more block to free when the hierarchy goes).
     pub fn undo_taking(&mut self, collapse: &mut Collapse) {
+        self.undo_around(collapse);
+        self.rings[collapse.u as usize] = std::mem::take(&mut collapse.ring);
+    }
+
+    /// [`RingMesh::undo`] but for `u`'s own list, which stays empty until the
+    /// caller moves the collapse's ring there: the edits of the lists of
+    /// `u`'s ring, which read the collapse's ring and leave it as it is.
+    pub fn undo_around(&mut self, collapse: &Collapse) {
         let (u, v) = (collapse.u, collapse.v);
         let ring = &collapse.ring;
         let k = ring.len() - 1;
@@ -182,7 +190,6 @@ impl RingMesh {
         rv.rotate_left(start);
         let end = rv.iter().position(|&x| x == rk).expect("rk is a neighbour of v");
         rv.splice(1..end, [u]);
-        self.rings[u as usize] = std::mem::take(&mut collapse.ring);
         self.n_alive += 1;
     }
 }
