@@ -6,6 +6,8 @@
 //! so the faces around `i` are `(i, r[j], r[j + 1])` with the mesh's own
 //! orientation. A removed vertex keeps an empty list.
 
+use rayon::prelude::*;
+
 use crate::memory_budget::{filled, reserved, ResourceError};
 
 /// A half-edge collapse `u -> v`: `u` is removed and its faces become a fan
@@ -53,7 +55,8 @@ impl RingMesh {
             }
         }
         let mut rings = reserved(n_vertices, "the progressive method's rings")?;
-        rings.extend((0..n_vertices).map(|i| {
+        // Each vertex's list is ordered on its own: in parallel.
+        rings.par_extend((0..n_vertices).into_par_iter().map(|i| {
             let own = &pairs[counts[i] as usize..counts[i + 1] as usize];
             let mut ring = Vec::with_capacity(own.len());
             if let Some(&[first, _]) = own.first() {
