@@ -615,12 +615,19 @@ impl Problem<'_> {
         held: Option<&[bool]>,
         stop: &(dyn Fn(usize) -> bool + Sync),
     ) -> Result<Optimised, Stopped> {
-        let classes = colour_stars(stars);
+        // The greedy colouring is serial: it runs beside the first area
+        // scale and energy, which are parallel and need no colours.
+        let shared: &[[f64; 3]] = points;
+        let (classes, (mut k, mut energy)) = rayon::join(
+            || colour_stars(stars),
+            || {
+                let k = self.area_scale(stars, shared);
+                (k, self.total_energy(k, stars, shared))
+            },
+        );
         let free = |v: u32| held.is_none_or(|h| !h[v as usize]);
         let mut active: Vec<bool> = (0..stars.len() as u32).map(free).collect();
         let mut was_moved = vec![false; stars.len()];
-        let mut k = self.area_scale(stars, points);
-        let mut energy = self.total_energy(k, stars, points);
         let mut result =
             Optimised { sweeps: 0, energy, last_change: f64::INFINITY, converged: false, scale: k };
         // The chord-area sum C of the current points, once known: the sum
