@@ -421,7 +421,9 @@ fn insert_round(
     let found: Vec<Option<[f64; 3]>> = order
         .par_iter()
         .with_min_len(64)
-        .map(|&j| placement::place(&collapses[j as usize].ring, shared))
+        .map_init(placement::Scratch::default, |scratch, &j| {
+            placement::place_with(&collapses[j as usize].ring, shared, scratch)
+        })
         .collect();
     if found.iter().all(Option::is_some) {
         for (&j, q) in order.iter().zip(found) {
@@ -534,10 +536,13 @@ fn new_vertex_moves<'r>(
     order
         .par_iter()
         .with_min_len(64)
-        .map(|&j| {
-            let (u, ring) = ring_of(j);
-            level.move_vertex(k, u, ring, points)
-        })
+        .map_init(
+            || (Vec::new(), Vec::new()),
+            |(refs, corners), &j| {
+                let (u, ring) = ring_of(j);
+                level.move_vertex_with(k, u, ring, points, refs, corners)
+            },
+        )
         .collect()
 }
 

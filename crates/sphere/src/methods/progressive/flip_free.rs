@@ -113,12 +113,6 @@ impl Problem<'_> {
         }
     }
 
-    /// The references of the faces around `i`, in ring order.
-    fn references(&self, i: u32, ring: &[u32]) -> Vec<Reference> {
-        let m = ring.len();
-        (0..m).map(|j| self.reference(i, ring[j], ring[(j + 1) % m])).collect()
-    }
-
     /// The rings and references of every vertex of `rings`.
     pub fn stars(&self, rings: &[Vec<u32>]) -> Stars {
         let (start, ring) = flat_rings(rings);
@@ -268,8 +262,25 @@ impl Problem<'_> {
         ring: &[u32],
         points: &[[f64; 3]],
     ) -> Option<[f64; 3]> {
-        let refs = self.references(i, ring);
-        self.step(k, 0.0, i, ring, &refs, points, &mut Vec::new()).map(|(q, _)| q)
+        self.move_vertex_with(k, i, ring, points, &mut Vec::new(), &mut Vec::new())
+    }
+
+    /// [`Problem::move_vertex`] with buffers for the references of `i`'s
+    /// faces and its ring's points, kept between calls (the same move).
+    pub fn move_vertex_with(
+        &self,
+        k: f64,
+        i: u32,
+        ring: &[u32],
+        points: &[[f64; 3]],
+        refs: &mut Vec<Reference>,
+        corners: &mut Vec<[f64; 3]>,
+    ) -> Option<[f64; 3]> {
+        // The references of the faces around `i`, in ring order.
+        let m = ring.len();
+        refs.clear();
+        refs.extend((0..m).map(|j| self.reference(i, ring[j], ring[(j + 1) % m])));
+        self.step(k, 0.0, i, ring, refs, points, corners).map(|(q, _)| q)
     }
 
     /// [`Problem::move_vertex`] with the references of `i`'s faces given,
