@@ -349,18 +349,16 @@ fn insert_levels(
     for round in hierarchy.rounds.clone().into_iter().rev() {
         let collapses = &mut hierarchy.collapses[round.clone()];
         let order = by_vertex(collapses);
-        insert_round(collapses, &order, problem, rings, points)?;
+        let level_problem = level.as_ref().map(|level| (level.problem(problem), level.scale));
+        insert_round(
+            collapses,
+            &order,
+            problem,
+            level_problem.as_ref().map(|(p, k)| (p, *k)),
+            rings,
+            points,
+        )?;
         fresh.extend(collapses.iter().map(|c| c.u));
-        if let Some(level) = &level {
-            move_new_vertices(
-                collapses,
-                &order,
-                rings,
-                &level.problem(problem),
-                level.scale,
-                points,
-            );
-        }
         inserted += collapses.len();
         let done = n + inserted;
         if !(go_on() && progress(done, total)) {
@@ -416,12 +414,22 @@ impl Level {
 
 /// Undoes one round of collapses, last collapse first, each vertex at the
 /// centre of its ring's kernel, or, when that kernel is too thin, after its
-/// neighbourhood has moved ([`retry_placement`]). The collapses' rings move
-/// into `rings` (see [`RingMesh::undo_taking`]).
+/// neighbourhood has moved ([`retry_placement`]); then, when `moves` gives a
+/// coarse level's problem and area scale, moves each new vertex once
+/// ([`new_vertex_moves`]). The collapses' rings move into `rings` (see
+/// [`RingMesh::undo_taking`]).
+///
+/// When every vertex of the round found its place (nearly always), the
+/// round's edits of its neighbours' lists, a serial loop over vertices all
+/// over the mesh, run beside the parallel moves of the new vertices instead
+/// of before them: a move reads only its vertex's ring (the collapse's, which
+/// the edits do not change) and the points, which the edits do not touch.
+/// Same results as one after the other.
 fn insert_round(
     collapses: &mut [Collapse],
     order: &[u32],
     problem: &Problem<'_>,
+    moves: Option<(&Problem<'_>, f64)>,
     rings: &mut RingMesh,
     points: &mut [[f64; 3]],
 ) -> Result<(), SphereError> {
@@ -429,8 +437,46 @@ fn insert_round(
     let found: Vec<Option<[f64; 3]>> = order
         .par_iter()
         .with_min_len(64)
-        .map(|&j| placement::place(&collapses[j as usize].ring, shared))
+        .map_init(placement::Scratch::default, |scratch, &j| {
+            placement::place_with(&collapses[j as usize].ring, shared, scratch)
+        })
         .collect();
+    if found.iter().all(Option::is_some) {
+        for (&j, q) in order.iter().zip(found) {
+            if let Some(q) = q {
+                points[collapses[j as usize].u as usize] = q;
+            }
+        }
+        let shared: &[[f64; 3]] = points;
+        let in_place: &[Collapse] = collapses;
+        let (moved, ()) = rayon::join(
+            || {
+                moves.map(|(level, k)| {
+                    new_vertex_moves(
+                        order,
+                        |j| (in_place[j as usize].u, in_place[j as usize].ring.as_slice()),
+                        level,
+                        k,
+                        shared,
+                    )
+                })
+            },
+            || {
+                for j in (0..in_place.len()).rev() {
+                    prefetch_undo_ahead(rings, in_place, j);
+                    rings.undo_around(&in_place[j]);
+                }
+            },
+        );
+        for &j in order {
+            let c = &mut collapses[j as usize];
+            rings.rings[c.u as usize] = std::mem::take(&mut c.ring);
+        }
+        if let Some(moved) = moved {
+            apply_moves(collapses, order, moved, points);
+        }
+        return Ok(());
+    }
     let mut placed = vec![None; collapses.len()];
     for (&j, q) in order.iter().zip(found) {
         placed[j as usize] = q;
@@ -442,14 +488,7 @@ fn insert_round(
     // The area scale for retries, measured once per round when needed.
     let mut retry_scale: Option<f64> = None;
     for (j, q) in placed.into_iter().enumerate().rev() {
-        // Last first: the collapses a few places earlier come next.
-        for (stage, ahead) in
-            [ring_mesh::AHEAD, ring_mesh::AHEAD / 2, ring_mesh::AHEAD / 4].into_iter().enumerate()
-        {
-            if let Some(i) = j.checked_sub(ahead) {
-                rings.prefetch_undo(&collapses[i], stage as u8);
-            }
-        }
+        prefetch_undo_ahead(rings, collapses, j);
         let c = &mut collapses[j];
         let q = match q {
             Some(q) if !moved || positive_star(q, &c.ring, points) => Some(q),
@@ -471,32 +510,66 @@ fn insert_round(
         };
         insert(rings, points, c, q);
     }
+    if let Some((level, k)) = moves {
+        let taken: &RingMesh = rings;
+        let moved = new_vertex_moves(
+            order,
+            |j| (collapses[j as usize].u, taken.rings[collapses[j as usize].u as usize].as_slice()),
+            level,
+            k,
+            points,
+        );
+        apply_moves(collapses, order, moved, points);
+    }
     Ok(())
+}
+
+/// Asks for the memory of the collapses a few places before `j` in the undo
+/// loop, which goes last first ([`RingMesh::prefetch_undo`]).
+fn prefetch_undo_ahead(rings: &RingMesh, collapses: &[Collapse], j: usize) {
+    for (stage, ahead) in
+        [ring_mesh::AHEAD, ring_mesh::AHEAD / 2, ring_mesh::AHEAD / 4].into_iter().enumerate()
+    {
+        if let Some(i) = j.checked_sub(ahead) {
+            rings.prefetch_undo(&collapses[i], stage as u8);
+        }
+    }
 }
 
 /// Each new vertex moves once from its kernel's centre towards lower energy
 /// (measured on 200k-vertex `bumpy_blob`: 4 final sweeps instead of 9, 3.6
-/// degrees of angle distortion instead of 4.3). No two share a face, so they
-/// move in parallel. Each one's ring in `rings` is the one it was collapsed
+/// degrees of angle distortion instead of 4.3): the new points, in `order`.
+/// No two share a face, so they move in parallel. `ring_of(j)` is the
+/// removed vertex of collapse `j` and its ring, the one it was collapsed
 /// with (no neighbour of it was re-inserted in the same round).
-fn move_new_vertices(
-    collapses: &[Collapse],
+fn new_vertex_moves<'r>(
     order: &[u32],
-    rings: &RingMesh,
+    ring_of: impl Fn(u32) -> (u32, &'r [u32]) + Sync,
     level: &Problem<'_>,
     k: f64,
-    points: &mut [[f64; 3]],
-) {
-    let shared: &[[f64; 3]] = points;
-    let moves: Vec<Option<[f64; 3]>> = order
+    points: &[[f64; 3]],
+) -> Vec<Option<[f64; 3]>> {
+    order
         .par_iter()
         .with_min_len(64)
-        .map(|&j| {
-            let u = collapses[j as usize].u;
-            level.move_vertex(k, u, &rings.rings[u as usize], shared)
-        })
-        .collect();
-    for (&j, q) in order.iter().zip(moves) {
+        .map_init(
+            || (Vec::new(), Vec::new()),
+            |(refs, corners), &j| {
+                let (u, ring) = ring_of(j);
+                level.move_vertex_with(k, u, ring, points, refs, corners)
+            },
+        )
+        .collect()
+}
+
+/// Writes the moves of [`new_vertex_moves`] (in `order`) into `points`.
+fn apply_moves(
+    collapses: &[Collapse],
+    order: &[u32],
+    moved: Vec<Option<[f64; 3]>>,
+    points: &mut [[f64; 3]],
+) {
+    for (&j, q) in order.iter().zip(moved) {
         if let Some(q) = q {
             points[collapses[j as usize].u as usize] = q;
         }

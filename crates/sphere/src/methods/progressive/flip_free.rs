@@ -56,6 +56,12 @@ pub struct Stars {
     start: Vec<usize>,
     ring: Vec<u32>,
     refs: Vec<Reference>,
+    /// The references' areas summed as [`Problem::area_scale`] sums them
+    /// (per vertex in ring order, then over the vertices in order): fixed
+    /// for the stars' life, so that each area scale between sweeps reads
+    /// only the rings and points, not the references (the method's largest
+    /// buffer, 192 bytes per vertex).
+    surface_total: f64,
 }
 
 impl Stars {
@@ -112,12 +118,6 @@ impl Problem<'_> {
         }
     }
 
-    /// The references of the faces around `i`, in ring order.
-    fn references(&self, i: u32, ring: &[u32]) -> Vec<Reference> {
-        let m = ring.len();
-        (0..m).map(|j| self.reference(i, ring[j], ring[(j + 1) % m])).collect()
-    }
-
     /// The rings and references of every vertex of `rings`.
     pub fn stars(&self, rings: &[Vec<u32>]) -> Stars {
         let (start, ring) = flat_rings(rings);
@@ -153,29 +153,35 @@ impl Problem<'_> {
                 }
             }
         });
-        Stars { start, ring, refs }
+        let per_vertex: Vec<f64> = (0..n)
+            .into_par_iter()
+            .map(|i| refs[start[i]..start[i + 1]].iter().fold(0.0, |sum, r| sum + r.area))
+            .collect();
+        // The fold of area_scale, in the same order: the same bits.
+        let surface_total = per_vertex.iter().fold(0.0, |sum, x| sum + x);
+        Stars { start, ring, refs, surface_total }
     }
 
     /// Sum of image areas (det / 2, see [`crate::methods::progressive::distortion_energy`]) over
     /// surface areas of the current faces:
     /// the `k` that gives mesh and image equal total area.
     pub fn area_scale(&self, stars: &Stars, points: &[[f64; 3]]) -> f64 {
-        let per_vertex: Vec<(f64, f64)> = (0..stars.len() as u32)
+        let per_vertex: Vec<f64> = (0..stars.len() as u32)
             .into_par_iter()
             .map(|i| {
-                let mut sums = (0.0, 0.0);
-                let (ring, refs) = (stars.ring(i), stars.refs(i));
+                let mut sum = 0.0;
+                let ring = stars.ring(i);
                 let m = ring.len();
                 for j in 0..m {
                     let [p, pa, pb] = [i, ring[j], ring[(j + 1) % m]].map(|v| points[v as usize]);
-                    sums.0 += 0.5 * det3(p, pa, pb);
-                    sums.1 += refs[j].area;
+                    sum += 0.5 * det3(p, pa, pb);
                 }
-                sums
+                sum
             })
             .collect();
         // A fixed order of summation: the same scale on every thread count.
-        let (chord, surface) = per_vertex.iter().fold((0.0, 0.0), |s, x| (s.0 + x.0, s.1 + x.1));
+        let chord = per_vertex.iter().fold(0.0, |s, x| s + x);
+        let surface = stars.surface_total;
         if surface > 0.0 && chord > 0.0 {
             chord / surface
         } else {
@@ -262,8 +268,25 @@ impl Problem<'_> {
         ring: &[u32],
         points: &[[f64; 3]],
     ) -> Option<[f64; 3]> {
-        let refs = self.references(i, ring);
-        self.step(k, 0.0, i, ring, &refs, points, &mut Vec::new()).map(|(q, _)| q)
+        self.move_vertex_with(k, i, ring, points, &mut Vec::new(), &mut Vec::new())
+    }
+
+    /// [`Problem::move_vertex`] with buffers for the references of `i`'s
+    /// faces and its ring's points, kept between calls (the same move).
+    pub fn move_vertex_with(
+        &self,
+        k: f64,
+        i: u32,
+        ring: &[u32],
+        points: &[[f64; 3]],
+        refs: &mut Vec<Reference>,
+        corners: &mut Vec<[f64; 3]>,
+    ) -> Option<[f64; 3]> {
+        // The references of the faces around `i`, in ring order.
+        let m = ring.len();
+        refs.clear();
+        refs.extend((0..m).map(|j| self.reference(i, ring[j], ring[(j + 1) % m])));
+        self.step(k, 0.0, i, ring, refs, points, corners).map(|(q, _)| q)
     }
 
     /// [`Problem::move_vertex`] with the references of `i`'s faces given,
@@ -641,11 +664,19 @@ impl Problem<'_> {
         wake: f64,
         stop: &(dyn Fn(usize) -> bool + Sync),
     ) -> Result<Optimised, Stopped> {
-        let classes = colour_stars(stars);
+        // The greedy colouring is serial: it runs beside the first area
+        // scale and energy, which are parallel and need no colours.
+        let shared: &[[f64; 3]] = points;
+        let (classes, (mut k, mut energy)) = rayon::join(
+            || colour_stars(stars),
+            || {
+                let k = self.area_scale(stars, shared);
+                (k, self.total_energy(k, stars, shared))
+            },
+        );
         let free = |v: u32| held.is_none_or(|h| !h[v as usize]);
         let mut active: Vec<bool> = (0..stars.len() as u32).map(free).collect();
-        let mut k = self.area_scale(stars, points);
-        let mut energy = self.total_energy(k, stars, points);
+        let mut was_moved = vec![false; stars.len()];
         let mut result = Optimised {
             sweeps: 0,
             energy,
@@ -680,14 +711,21 @@ impl Problem<'_> {
             let moved =
                 self.sweep(k, mu, &classes, stars, points, Some(&active), wake, &|| stop(sweeps))?;
             result.sweeps += 1;
-            // Only what moved, and its neighbours, can still go down much.
-            active.iter_mut().for_each(|a| *a = false);
+            // Only what moved, and its neighbours, can still go down much: a
+            // vertex is active when it moved or, free, is next to one that
+            // did (every ring lists its neighbours, and they list it). Per
+            // vertex, in parallel, instead of a serial pass that wrote the
+            // rings of the moved vertices: the same flags.
+            was_moved.iter_mut().for_each(|m| *m = false);
             for &v in &moved {
-                active[v as usize] = true;
-                for &r in stars.ring(v) {
-                    active[r as usize] = free(r);
-                }
+                was_moved[v as usize] = true;
             }
+            let moved_flags = &was_moved;
+            active.par_iter_mut().enumerate().with_min_len(1024).for_each(|(x, a)| {
+                *a = moved_flags[x]
+                    || (free(x as u32)
+                        && stars.ring(x as u32).iter().any(|&r| moved_flags[r as usize]));
+            });
             // The points have moved: C is known again only if measured here.
             chord = (mu != 0.0).then(|| self.chord_total(stars, points));
             let after = match chord {

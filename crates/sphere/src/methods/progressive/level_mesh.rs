@@ -17,7 +17,9 @@
 //! from its smallest corner" test are those of the whole mesh with the
 //! removed vertices (empty rings, which add nothing) left out.
 
-use crate::memory_budget::{reserved, ResourceError};
+use rayon::prelude::*;
+
+use crate::memory_budget::{filled, reserved, ResourceError};
 
 /// One level, numbered `0..vertices.len()` in the order of `vertices`.
 #[derive(Debug)]
@@ -56,10 +58,28 @@ impl LevelMesh {
         for &v in vertices {
             start.push(start[start.len() - 1] + rings[v as usize].len());
         }
-        let mut ring = reserved(start[m], "a progressive level's rings")?;
-        for &v in vertices {
-            ring.extend(rings[v as usize].iter().map(|&r| local[r as usize]));
+        let mut ring = filled(start[m], 0u32, "a progressive level's rings")?;
+        // Block by block in parallel (each vertex's list is renumbered on
+        // its own): the level's largest copy.
+        const BLOCK: usize = 1024;
+        let local: &[u32] = local;
+        let mut blocks = Vec::with_capacity(m.div_ceil(BLOCK));
+        let mut rest = ring.as_mut_slice();
+        for first in (0..m).step_by(BLOCK) {
+            let end = (first + BLOCK).min(m);
+            let (block, tail) = rest.split_at_mut(start[end] - start[first]);
+            blocks.push((&vertices[first..end], block));
+            rest = tail;
         }
+        blocks.into_par_iter().for_each(|(block_vertices, out)| {
+            let mut at = 0;
+            for &v in block_vertices {
+                for &r in &rings[v as usize] {
+                    out[at] = local[r as usize];
+                    at += 1;
+                }
+            }
+        });
         let level_represented = match represented {
             Some(rho) => Some(picked(rho, vertices, "a progressive level's represented areas")?),
             None => None,
@@ -92,12 +112,12 @@ impl LevelMesh {
 }
 
 /// `values[v]` for each of `vertices`, in order.
-fn picked<T: Copy>(
+fn picked<T: Copy + Send + Sync>(
     values: &[T],
     vertices: &[u32],
     what: &'static str,
 ) -> Result<Vec<T>, ResourceError> {
     let mut out = reserved(vertices.len(), what)?;
-    out.extend(vertices.iter().map(|&v| values[v as usize]));
+    out.par_extend(vertices.par_iter().map(|&v| values[v as usize]));
     Ok(out)
 }

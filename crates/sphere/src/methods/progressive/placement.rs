@@ -36,13 +36,33 @@ impl HalfPlane {
     }
 }
 
+/// The buffers of [`place_with`], kept between calls: a placement made a
+/// dozen small allocations (one per clipping half-plane among them), about
+/// as long as its arithmetic at a million placements per map.
+#[derive(Debug, Default)]
+pub struct Scratch {
+    normals: Vec<[f64; 3]>,
+    planes: Vec<HalfPlane>,
+    polygon: Vec<([f64; 2], usize)>,
+    clipped: Vec<([f64; 2], usize)>,
+    lines: Vec<HalfPlane>,
+}
+
 /// A point for a vertex with ring `ring` (positions `points`) at which every
 /// new face is positive under the exact test, or `None` when none of the
 /// candidates passes (a kernel too thin for doubles).
 pub fn place(ring: &[u32], points: &[[f64; 3]]) -> Option<[f64; 3]> {
-    let normals: Vec<[f64; 3]> = (0..ring.len())
-        .map(|j| cross(points[ring[j] as usize], points[ring[(j + 1) % ring.len()] as usize]))
-        .collect();
+    place_with(ring, points, &mut Scratch::default())
+}
+
+/// [`place`] with its buffers in `scratch` (the same point).
+pub fn place_with(ring: &[u32], points: &[[f64; 3]], scratch: &mut Scratch) -> Option<[f64; 3]> {
+    let Scratch { normals, planes, polygon, clipped, lines } = scratch;
+    normals.clear();
+    normals.extend(
+        (0..ring.len())
+            .map(|j| cross(points[ring[j] as usize], points[ring[(j + 1) % ring.len()] as usize])),
+    );
     let mean = ring.iter().fold([0.0; 3], |s, &r| add(s, points[r as usize]));
     let centre = match normalize(mean) {
         Some(c) if normals.iter().all(|n| dot(*n, c) > 0.0) => c,
@@ -51,8 +71,8 @@ pub fn place(ring: &[u32], points: &[[f64; 3]]) -> Option<[f64; 3]> {
         _ => points[ring[0] as usize],
     };
     let (e1, e2) = tangent_basis(centre);
-    let mut planes = Vec::with_capacity(normals.len() + 4);
-    for n in &normals {
+    planes.clear();
+    for n in normals.iter() {
         let beta = [dot(*n, e1), dot(*n, e2)];
         let len = beta[0].hypot(beta[1]);
         let alpha = dot(*n, centre);
@@ -65,36 +85,45 @@ pub fn place(ring: &[u32], points: &[[f64; 3]]) -> Option<[f64; 3]> {
     for beta in [[1.0, 0.0], [-1.0, 0.0], [0.0, 1.0], [0.0, -1.0]] {
         planes.push(HalfPlane { alpha: WINDOW, beta });
     }
-    let polygon = kernel_polygon(&planes);
+    kernel_polygon(planes, polygon, clipped);
     if polygon.len() < 3 {
         return None;
     }
     let to_sphere = |y: [f64; 2]| normalize(add(centre, add(scale(e1, y[0]), scale(e2, y[1]))));
-    let mut candidates = Vec::with_capacity(2);
-    if polygon.len() <= MAX_CHEBYSHEV_EDGES {
-        if let Some(y) = chebyshev_centre(&polygon, &planes) {
-            candidates.push(y);
-        }
-    }
+    let chebyshev = if polygon.len() <= MAX_CHEBYSHEV_EDGES {
+        chebyshev_centre(polygon, planes, lines)
+    } else {
+        None
+    };
     let m = polygon.len() as f64;
-    candidates.push(polygon.iter().fold([0.0; 2], |s, v| [s[0] + v.0[0] / m, s[1] + v.0[1] / m]));
-    candidates.into_iter().filter_map(to_sphere).find(|&q| positive_star(q, ring, points))
+    let mean = polygon.iter().fold([0.0; 2], |s, v| [s[0] + v.0[0] / m, s[1] + v.0[1] / m]);
+    [chebyshev, Some(mean)]
+        .into_iter()
+        .flatten()
+        .filter_map(to_sphere)
+        .find(|&q| positive_star(q, ring, points))
 }
 
-/// The window clipped by every half-plane: vertices in order, each with the
-/// index of the half-plane whose line carries the edge leaving it.
-fn kernel_polygon(planes: &[HalfPlane]) -> Vec<([f64; 2], usize)> {
+/// The window clipped by every half-plane, into `poly`: vertices in order,
+/// each with the index of the half-plane whose line carries the edge leaving
+/// it (`out` is the buffer of each clip).
+fn kernel_polygon(
+    planes: &[HalfPlane],
+    poly: &mut Vec<([f64; 2], usize)>,
+    out: &mut Vec<([f64; 2], usize)>,
+) {
     let n = planes.len();
     // The window itself, counter-clockwise; its four planes are the last
     // four: y0 >= -W, y0 <= W, y1 >= -W, y1 <= W.
-    let mut poly: Vec<([f64; 2], usize)> = vec![
+    poly.clear();
+    poly.extend([
         ([WINDOW, -WINDOW], n - 3),
         ([WINDOW, WINDOW], n - 1),
         ([-WINDOW, WINDOW], n - 4),
         ([-WINDOW, -WINDOW], n - 2),
-    ];
+    ]);
     for (index, plane) in planes.iter().enumerate().take(n - 4) {
-        let mut out = Vec::with_capacity(poly.len() + 1);
+        out.clear();
         for j in 0..poly.len() {
             let (a, label) = poly[j];
             let b = poly[(j + 1) % poly.len()].0;
@@ -110,18 +139,22 @@ fn kernel_polygon(planes: &[HalfPlane]) -> Vec<([f64; 2], usize)> {
                 out.push((x, if fa >= 0.0 { index } else { label }));
             }
         }
-        poly = out;
+        std::mem::swap(poly, out);
         if poly.len() < 3 {
-            return poly;
+            return;
         }
     }
-    poly
 }
 
 /// The point of the polygon farthest from its edges, among the points equally
 /// far from three edge lines.
-fn chebyshev_centre(polygon: &[([f64; 2], usize)], planes: &[HalfPlane]) -> Option<[f64; 2]> {
-    let lines: Vec<HalfPlane> = polygon.iter().map(|&(_, i)| planes[i]).collect();
+fn chebyshev_centre(
+    polygon: &[([f64; 2], usize)],
+    planes: &[HalfPlane],
+    lines: &mut Vec<HalfPlane>,
+) -> Option<[f64; 2]> {
+    lines.clear();
+    lines.extend(polygon.iter().map(|&(_, i)| planes[i]));
     let m = lines.len();
     let mut best: Option<([f64; 2], f64)> = None;
     for i in 0..m {

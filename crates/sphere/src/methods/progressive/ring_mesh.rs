@@ -6,6 +6,8 @@
 //! so the faces around `i` are `(i, r[j], r[j + 1])` with the mesh's own
 //! orientation. A removed vertex keeps an empty list.
 
+use rayon::prelude::*;
+
 use crate::memory_budget::{filled, reserved, ResourceError};
 
 /// A half-edge collapse `u -> v`: `u` is removed and its faces become a fan
@@ -53,7 +55,8 @@ impl RingMesh {
             }
         }
         let mut rings = reserved(n_vertices, "the progressive method's rings")?;
-        rings.extend((0..n_vertices).map(|i| {
+        // Each vertex's list is ordered on its own: in parallel.
+        rings.par_extend((0..n_vertices).into_par_iter().map(|i| {
             let own = &pairs[counts[i] as usize..counts[i + 1] as usize];
             let mut ring = Vec::with_capacity(own.len());
             if let Some(&[first, _]) = own.first() {
@@ -158,6 +161,14 @@ impl RingMesh {
     /// undoes each collapse once, and a copy was one allocation per vertex
     /// of the mesh (and one more block to free when the hierarchy goes).
     pub fn undo_taking(&mut self, collapse: &mut Collapse) {
+        self.undo_around(collapse);
+        self.rings[collapse.u as usize] = std::mem::take(&mut collapse.ring);
+    }
+
+    /// [`RingMesh::undo`] but for `u`'s own list, which stays empty until the
+    /// caller moves the collapse's ring there: the edits of the lists of
+    /// `u`'s ring, which read the collapse's ring and leave it as it is.
+    pub fn undo_around(&mut self, collapse: &Collapse) {
         let (u, v) = (collapse.u, collapse.v);
         let ring = &collapse.ring;
         let k = ring.len() - 1;
@@ -182,7 +193,6 @@ impl RingMesh {
         rv.rotate_left(start);
         let end = rv.iter().position(|&x| x == rk).expect("rk is a neighbour of v");
         rv.splice(1..end, [u]);
-        self.rings[u as usize] = std::mem::take(&mut collapse.ring);
         self.n_alive += 1;
     }
 }
