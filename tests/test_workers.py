@@ -1,0 +1,54 @@
+"""spherify._workers: registration's independent pieces on two threads."""
+
+import threading
+
+import numpy as np
+import pytest
+
+import spherify as sp
+from spherify import _workers
+
+
+def test_results_in_input_order_and_the_same_bits_for_one_and_two_threads():
+    rng = np.random.default_rng(4)
+    blocks = [rng.normal(size=(500, 40)) for _ in range(7)]
+
+    def work(x):
+        return np.exp(-(x @ x.T)).sum(axis=1)
+
+    before = sp.get_num_threads()
+    try:
+        sp.set_num_threads(1)
+        one = _workers.run_all(work, blocks)
+        sp.set_num_threads(2)
+        two = _workers.run_all(work, blocks)
+    finally:
+        sp.set_num_threads(before)
+    assert len(one) == len(two) == 7
+    for a, b, x in zip(one, two, blocks):
+        assert np.array_equal(a, b)
+        assert np.array_equal(a, work(x))
+
+
+def test_two_threads_run_side_by_side_and_one_thread_on_the_caller():
+    before = sp.get_num_threads()
+    try:
+        sp.set_num_threads(2)
+        barrier = threading.Barrier(2, timeout=5)
+        # Both pieces must be running at once to pass the barrier.
+        assert _workers.run_all(lambda k: (barrier.wait(), k)[1], [0, 1]) == [0, 1]
+        sp.set_num_threads(1)
+        caller = threading.get_ident()
+        assert _workers.run_all(lambda _: threading.get_ident(), [0, 1, 2]) == [caller] * 3
+    finally:
+        sp.set_num_threads(before)
+
+
+def test_the_first_error_is_raised():
+    def work(k):
+        if k == 2:
+            raise ValueError("piece 2")
+        return k
+
+    with pytest.raises(ValueError, match="piece 2"):
+        _workers.run_all(work, range(5))
