@@ -219,7 +219,13 @@ def nonrigid_icp(a: np.ndarray, a_normals: np.ndarray, area: np.ndarray,
         # instead of forming D^T diag(v) D anew, a 304 x 304 x 3000 product
         # that was a third of the ICP's time (issue 23, speed).
         every = v0 if not len(ids) else np.concatenate([v0, np.full(len(ids), landmark_weight)])
-        normal_every = design.T @ (design * every[:, None])
+        # Its two column halves are two products on two threads
+        # (spherify._workers); split so for any thread count, so the bits do
+        # not depend on it.
+        weighted = design * every[:, None]
+        half = design.shape[1] // 2
+        normal_every = np.hstack(run_all(lambda cols: design.T @ weighted[:, cols],
+                                         [slice(0, half), slice(half, None)]))
         for _ in range(steps):
             v = v0 * use
             y, weights = targets, v
