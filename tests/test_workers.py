@@ -52,3 +52,24 @@ def test_the_first_error_is_raised():
 
     with pytest.raises(ValueError, match="piece 2"):
         _workers.run_all(work, range(5))
+
+
+def test_beside_runs_both_and_pieces_inside_pieces_do_not_wait_for_ever():
+    before = sp.get_num_threads()
+    try:
+        sp.set_num_threads(2)
+        # A piece that asks for pieces (as the rigid ICP's check does inside
+        # registration) runs them on its own thread instead of queueing them
+        # behind itself on a pool of two.
+        nested = _workers.run_all(lambda k: sum(_workers.run_all(lambda j: j * k, range(4))),
+                                  range(4))
+        assert nested == [6 * k for k in range(4)]
+        here, there = _workers.beside(lambda: _workers.run_all(lambda j: j + 1, range(3)),
+                                      lambda: threading.get_ident())
+        assert here == [1, 2, 3]
+        assert there != threading.get_ident()
+        sp.set_num_threads(1)
+        assert _workers.beside(lambda: 1, lambda: threading.get_ident()) == (
+            1, threading.get_ident())
+    finally:
+        sp.set_num_threads(before)

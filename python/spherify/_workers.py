@@ -24,11 +24,11 @@ from __future__ import annotations
 
 import threading
 from concurrent.futures import Future, ThreadPoolExecutor
-from typing import Callable, Iterable, List, Optional, TypeVar
+from typing import Callable, Iterable, List, Optional, Tuple, TypeVar
 
 from . import _core
 
-__all__ = ["THREADS", "run_all"]
+__all__ = ["THREADS", "beside", "run_all"]
 
 # Pool threads: the machine's two cores (more would only queue behind the
 # core's own pool, which the workers' core calls share).
@@ -36,6 +36,7 @@ THREADS = 2
 
 T = TypeVar("T")
 R = TypeVar("R")
+S = TypeVar("S")
 
 _lock = threading.Lock()
 _pool: Optional[ThreadPoolExecutor] = None
@@ -49,17 +50,56 @@ def _executor() -> ThreadPoolExecutor:
         return _pool
 
 
-def run_all(work: Callable[[T], R], items: Iterable[T]) -> List[R]:
-    """``[work(x) for x in items]``, the calls spread over the pool when the
-    core runs on two threads or more (``sp.get_num_threads``); the first
-    error is raised after the pieces not yet started are cancelled."""
-    todo = list(items)
-    if len(todo) < 2 or _core.get_num_threads() < 2:
-        return [work(x) for x in todo]
-    futures: List[Future[R]] = [_executor().submit(work, x) for x in todo]
+_inside = threading.local()
+
+
+def _marked(work: Callable[[T], R]) -> Callable[[T], R]:
+    """``work`` marked as running on a pool thread while it runs."""
+    def run(x: T) -> R:
+        _inside.flag = True
+        try:
+            return work(x)
+        finally:
+            _inside.flag = False
+    return run
+
+
+def _parallel() -> bool:
+    # A piece that itself asks for pieces runs them on its own thread: a pool
+    # thread waiting for pieces queued behind it could wait for ever.
+    return _core.get_num_threads() >= 2 and not getattr(_inside, "flag", False)
+
+
+def _results(futures: List["Future[R]"]) -> List[R]:
     try:
         return [f.result() for f in futures]
     except BaseException:
         for f in futures:
             f.cancel()
         raise
+
+
+def run_all(work: Callable[[T], R], items: Iterable[T]) -> List[R]:
+    """``[work(x) for x in items]``, the calls spread over the pool when the
+    core runs on two threads or more (``sp.get_num_threads``) and the caller
+    is not itself a piece; the first error is raised after the pieces not
+    yet started are cancelled."""
+    todo = list(items)
+    if len(todo) < 2 or not _parallel():
+        return [work(x) for x in todo]
+    return _results([_executor().submit(_marked(work), x) for x in todo])
+
+
+def beside(here: Callable[[], R], there: Callable[[], S]) -> Tuple[R, S]:
+    """``(here(), there())``: ``there`` on a pool thread while ``here`` runs
+    on the caller, so that ``here`` can still spread its own pieces over
+    the pool (:func:`run_all`)."""
+    if not _parallel():
+        return here(), there()
+    future = _executor().submit(_marked(lambda _: there()), None)
+    try:
+        first = here()
+    except BaseException:
+        future.cancel()
+        raise
+    return first, _results([future])[0]
