@@ -207,8 +207,10 @@ def frame_candidates(m_a: SphereMap, m_b: SphereMap) -> List[np.ndarray]:
         # f1(p) = sqrt(3 / 4 pi) (c(1,1) x + c(1,-1) y + c(1,0) z): columns per axis.
         return np.stack([c[3], c[1], c[2]], axis=1)
 
-    _, _, va = np.linalg.svd(linear_part(m_a))
-    _, _, vb = np.linalg.svd(linear_part(m_b))
+    # The two fits side by side (spherify._workers; each its own bits).
+    parts = run_all(linear_part, [m_a, m_b])
+    _, _, va = np.linalg.svd(parts[0])
+    _, _, vb = np.linalg.svd(parts[1])
     out = []
     for signs in ((1, 1, 1), (1, -1, -1), (-1, 1, -1), (-1, -1, 1),
                   (-1, -1, -1), (-1, 1, 1), (1, -1, 1), (1, 1, -1)):

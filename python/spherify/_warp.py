@@ -45,7 +45,7 @@ from . import _landmarks, _nricp
 from ._align import kabsch
 from ._nearest import NearestOnSurface
 from ._spheremap import SphereMap
-from ._workers import run_all
+from ._workers import beside, run_all
 
 __all__ = ["PULL_STAGES", "ROUNDS", "SAMPLE", "STEPS", "move_rounds", "pull", "sphere_targets",
            "warp"]
@@ -151,19 +151,24 @@ def sphere_targets(map_a: SphereMap, m_b: SphereMap, *, fixed: Optional[np.ndarr
     if held:
         assert fixed is not None and fixed_on_b is not None
         sample = np.union1d(sample, fixed)
-    _, _, through_sphere = m_b.to_surface(map_a.points[sample])
+    # B's closest-point tree, B's face normals and A's vertex areas do not
+    # depend on the first targets: they are made beside them
+    # (spherify._workers; each its own bits).
+    (_, _, through_sphere), (nearest, b_normals, areas) = beside(
+        lambda: m_b.to_surface(map_a.points[sample]),
+        lambda: (NearestOnSurface(b_all, b_mesh.faces), _nricp.face_normals(b_all, b_mesh.faces),
+                 _vertex_areas(a_mesh.vertices, a_mesh.faces)))
     first = (through_sphere - b_centre) / b_scale
     spin = kabsch(a_all[sample], first)
     a_all = a_all @ spin.T
-    nearest = NearestOnSurface(b_all, b_mesh.faces)
     landmarks = None
     if held:
         assert fixed is not None and fixed_on_b is not None
         landmarks = (np.searchsorted(sample, fixed), b_all[fixed_on_b])
     normals = _nricp.vertex_normals(a_all, a_mesh.faces)
     model, icp = _nricp.nonrigid_icp(
-        a_all[sample], normals[sample], _vertex_areas(a_mesh.vertices, a_mesh.faces)[sample],
-        first, nearest, _nricp.face_normals(b_all, b_mesh.faces), landmarks=landmarks,
+        a_all[sample], normals[sample], areas[sample],
+        first, nearest, b_normals, landmarks=landmarks,
         landmark_weight=LANDMARK_WEIGHT, schedule=schedule, should_stop=should_stop)
     faces, bary, _ = nearest(model(a_all))
     targets = m_b.to_sphere(faces, bary)
