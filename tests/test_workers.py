@@ -73,3 +73,24 @@ def test_beside_runs_both_and_pieces_inside_pieces_do_not_wait_for_ever():
             1, threading.get_ident())
     finally:
         sp.set_num_threads(before)
+
+
+@pytest.mark.skipif(not hasattr(__import__("os"), "fork"), reason="needs os.fork")
+@pytest.mark.filterwarnings("ignore:.*fork.*:DeprecationWarning")
+def test_a_forked_child_makes_its_own_pool():
+    import os
+    import signal
+
+    before = sp.get_num_threads()
+    try:
+        sp.set_num_threads(2)
+        assert _workers.run_all(lambda k: k, range(4)) == [0, 1, 2, 3]  # the parent's pool
+        pid = os.fork()
+        if pid == 0:  # the child: the parent's pool threads are not here
+            signal.alarm(20)  # work queued for threads that are not there: killed, not hung
+            ok = _workers.run_all(lambda k: k * 2, range(4)) == [0, 2, 4, 6]
+            os._exit(0 if ok else 1)
+        _, status = os.waitpid(pid, 0)
+        assert os.waitstatus_to_exitcode(status) == 0
+    finally:
+        sp.set_num_threads(before)

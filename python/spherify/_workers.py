@@ -22,6 +22,7 @@ background.
 
 from __future__ import annotations
 
+import os
 import threading
 from concurrent.futures import Future, ThreadPoolExecutor
 from typing import Callable, Iterable, List, Optional, Tuple, TypeVar
@@ -40,6 +41,18 @@ S = TypeVar("S")
 
 _lock = threading.Lock()
 _pool: Optional[ThreadPoolExecutor] = None
+
+
+def _forget_pool() -> None:
+    # A forked child has the parent's pool object but not its threads: work
+    # queued on it would never run. The child makes its own on first use.
+    global _pool, _lock
+    _pool = None
+    _lock = threading.Lock()
+
+
+if hasattr(os, "register_at_fork"):
+    os.register_at_fork(after_in_child=_forget_pool)
 
 
 def _executor() -> ThreadPoolExecutor:
