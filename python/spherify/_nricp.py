@@ -40,6 +40,7 @@ from typing import Any, Callable, Dict, Optional, Sequence, Tuple
 import numpy as np
 
 from ._nearest import NearestOnSurface
+from ._workers import run_all
 
 __all__ = ["Deformation", "SCHEDULE", "fit", "nonrigid_icp"]
 
@@ -69,7 +70,6 @@ CONTROLS = 300
 # (and the passes in place) 0.15-0.37 s, the same bits (issue 23, speed).
 ROWS = 2000
 
-
 @dataclass
 class Deformation:
     """T(x) = x @ linear.T + shift + kernel(x) @ weights (module doc)."""
@@ -94,10 +94,15 @@ class Deformation:
 
     def __call__(self, x: np.ndarray) -> np.ndarray:
         out = np.empty_like(x)
-        for start in range(0, len(x), ROWS):
+
+        def block(start: int) -> None:
             part = x[start:start + ROWS]
             out[start:start + ROWS] = (part @ self.linear.T + self.shift
                                        + self.kernel(part) @ self.weights)
+
+        # Blocks side by side on two cores (spherify._workers), each written
+        # to its own rows: the same bits as one after another.
+        run_all(block, range(0, len(x), ROWS))
         return out
 
     def turn_normals(self, normals: np.ndarray) -> np.ndarray:
@@ -214,7 +219,13 @@ def nonrigid_icp(a: np.ndarray, a_normals: np.ndarray, area: np.ndarray,
         # instead of forming D^T diag(v) D anew, a 304 x 304 x 3000 product
         # that was a third of the ICP's time (issue 23, speed).
         every = v0 if not len(ids) else np.concatenate([v0, np.full(len(ids), landmark_weight)])
-        normal_every = design.T @ (design * every[:, None])
+        # Its two column halves are two products on two threads
+        # (spherify._workers); split so for any thread count, so the bits do
+        # not depend on it.
+        weighted = design * every[:, None]
+        half = design.shape[1] // 2
+        normal_every = np.hstack(run_all(lambda cols: design.T @ weighted[:, cols],
+                                         [slice(0, half), slice(half, None)]))
         for _ in range(steps):
             v = v0 * use
             y, weights = targets, v

@@ -44,6 +44,7 @@ from typing import Tuple
 import numpy as np
 
 from ._nearest import NearestOnSurface
+from ._workers import run_all
 
 __all__ = ["Pose", "best_pose", "pose_angle"]
 
@@ -94,8 +95,9 @@ class _Pair:
     def __init__(self, a: np.ndarray, a_faces: np.ndarray, b: np.ndarray,
                  b_faces: np.ndarray) -> None:
         self.a, self.b = a, b
-        self.on_a = NearestOnSurface(a, a_faces)
-        self.on_b = NearestOnSurface(b, b_faces)
+        # The two trees are built side by side (the core releases the GIL).
+        self.on_a, self.on_b = run_all(lambda shape: NearestOnSurface(*shape),
+                                       [(a, a_faces), (b, b_faces)])
 
     @staticmethod
     def sample(x: np.ndarray, k: int) -> np.ndarray:
@@ -144,14 +146,20 @@ def best_pose(a: np.ndarray, a_faces: np.ndarray, b: np.ndarray, b_faces: np.nda
     zero = np.zeros(3)
     signs = [np.diag(d) for d in ((1.0, 1.0, 1.0), (1.0, -1.0, -1.0), (-1.0, 1.0, -1.0),
                                   (-1.0, -1.0, 1.0))]
-    rough = [pair.icp(vb @ g @ va.T, zero, RANKING_SAMPLE, RANKING_ITERATIONS) for g in signs]
+    # The starts are independent: the map pose's polish and the four rough
+    # runs go side by side on two threads (spherify._workers; each run's bits
+    # are its own), the long polish first so that the rough runs fill the
+    # other thread.
+    runs = [(map_rotation, zero, SAMPLE, ITERATIONS)]
+    runs += [(vb @ g @ va.T, zero, RANKING_SAMPLE, RANKING_ITERATIONS) for g in signs]
+    from_map, *rough = run_all(lambda run: pair.icp(*run), runs)
     order = np.argsort([p.residual for p in rough], kind="stable")[:REFINED_STARTS]
-    from_map = pair.icp(map_rotation, zero, SAMPLE, ITERATIONS)
     # A start that has already come to the map pose is not polished again: it
     # would only polish the same pose (on most shapes the best start does);
     # nor one too far behind the map pose to overtake it (HOPELESS).
-    polished = [pair.icp(rough[i].rotation, rough[i].shift, SAMPLE, ITERATIONS) for i in order
-                if pose_angle(rough[i].rotation, from_map.rotation) > SAME_POSE
-                and rough[i].residual < HOPELESS * from_map.residual]
+    polished = run_all(lambda i: pair.icp(rough[i].rotation, rough[i].shift, SAMPLE, ITERATIONS),
+                       [i for i in order
+                        if pose_angle(rough[i].rotation, from_map.rotation) > SAME_POSE
+                        and rough[i].residual < HOPELESS * from_map.residual])
     best = min(polished + [from_map], key=lambda p: p.residual)
     return best, from_map

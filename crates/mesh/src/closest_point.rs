@@ -18,8 +18,15 @@ use rayon::prelude::*;
 
 /// Leaves hold at most this many triangles.
 const LEAF_SIZE: usize = 4;
-/// Queries a worker answers between two checks of `go_on`.
+/// Most queries a worker answers between two checks of `go_on`.
 const CHUNK: usize = 4096;
+/// Fewest queries of a chunk: below this a chunk's scheduling costs more
+/// than it saves.
+const MIN_CHUNK: usize = 64;
+/// Chunks per worker thread at least (where the queries allow): the ICP's
+/// calls are of 300-3000 queries, which in one chunk of [`CHUNK`] ran on
+/// one core of two (issue 23, register's wall time).
+const CHUNKS_PER_THREAD: usize = 4;
 
 #[derive(Debug, Clone, Copy)]
 struct Node {
@@ -253,11 +260,13 @@ impl ClosestPoints {
         go_on: &(dyn Fn(usize, usize) -> bool + Sync),
     ) -> Option<Vec<SurfacePoint>> {
         let missing = SurfacePoint { face: u32::MAX, bary: [f64::NAN; 3], point: [f64::NAN; 3] };
+        // Each query is answered alone, so the chunking changes no bits.
+        let size = chunk_size(points.len(), rayon::current_num_threads());
         let chunks: Vec<Option<Vec<SurfacePoint>>> = points
-            .par_chunks(CHUNK)
+            .par_chunks(size)
             .enumerate()
             .map(|(k, chunk)| {
-                if !go_on(k * CHUNK, points.len()) {
+                if !go_on(k * size, points.len()) {
                     return None;
                 }
                 Some(chunk.iter().map(|&p| self.closest(p).unwrap_or(missing)).collect())
@@ -269,6 +278,12 @@ impl ClosestPoints {
         }
         Some(out)
     }
+}
+
+/// Queries per chunk for `queries` on `threads` workers: about
+/// [`CHUNKS_PER_THREAD`] chunks a worker, within [`MIN_CHUNK`]..=[`CHUNK`].
+fn chunk_size(queries: usize, threads: usize) -> usize {
+    queries.div_ceil(CHUNKS_PER_THREAD * threads.max(1)).clamp(MIN_CHUNK, CHUNK)
 }
 
 #[cfg(test)]
@@ -367,5 +382,14 @@ mod tests {
             u32::MAX
         );
         assert!(ClosestPoints::new(vec![], vec![]).closest([0.0; 3]).is_none());
+    }
+
+    #[test]
+    fn small_calls_split_over_the_workers() {
+        // 600 queries on 2 workers: 8 chunks of 75, not one of 600.
+        assert_eq!(chunk_size(600, 2), 75);
+        assert_eq!(chunk_size(10, 2), MIN_CHUNK);
+        assert_eq!(chunk_size(1_000_000, 2), CHUNK);
+        assert_eq!(chunk_size(600, 0), 150);
     }
 }

@@ -22,7 +22,18 @@ use spherify_mesh::{validate, HalfEdgeMesh, Mesh, TopologyError, TopologyProblem
 pub struct GenusZeroMesh {
     mesh: Arc<Mesh>,
     half_edges: OnceLock<HalfEdgeMesh>,
+    neighbourhoods: OnceLock<Arc<Neighbourhoods>>,
     reoriented_faces: usize,
+}
+
+/// The vertex rings (counter-clockwise seen from outside) and their greedy
+/// colour classes, as the flip-free moves take them. Made on the first
+/// `move_towards` or `pull_towards` of a mesh and kept with it: registration's
+/// warp calls them 13 times on one mesh, and each call made them anew.
+#[derive(Debug)]
+pub struct Neighbourhoods {
+    pub rings: Vec<Vec<u32>>,
+    pub classes: Vec<Vec<u32>>,
 }
 
 impl GenusZeroMesh {
@@ -46,7 +57,12 @@ impl GenusZeroMesh {
             let (oriented, info) = orient(&mesh)?;
             (Arc::new(oriented), info.flipped_faces)
         };
-        Ok(GenusZeroMesh { mesh, half_edges: OnceLock::new(), reoriented_faces })
+        Ok(GenusZeroMesh {
+            mesh,
+            half_edges: OnceLock::new(),
+            neighbourhoods: OnceLock::new(),
+            reoriented_faces,
+        })
     }
 
     /// The oriented mesh: faces counter-clockwise seen from outside.
@@ -70,6 +86,12 @@ impl GenusZeroMesh {
         self.half_edges.get_or_init(|| {
             HalfEdgeMesh::new(&self.mesh).expect("a validated, oriented genus-0 mesh")
         })
+    }
+
+    /// Where the [`Neighbourhoods`] are kept once made
+    /// (`methods::progressive::neighbourhoods_of` makes them).
+    pub(crate) fn neighbourhoods_cell(&self) -> &OnceLock<Arc<Neighbourhoods>> {
+        &self.neighbourhoods
     }
 
     pub fn positions(&self) -> &[[f64; 3]] {

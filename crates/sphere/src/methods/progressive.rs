@@ -48,6 +48,7 @@ mod placement;
 mod ring_mesh;
 pub mod target_pull;
 
+use std::sync::Arc;
 use std::time::Instant;
 
 use rayon::prelude::*;
@@ -57,7 +58,7 @@ use spherify_mesh::vec3::triangle_area;
 use crate::certificate::validity::SphereReport;
 use crate::embedding::{normalize, SphereEmbedding, Status};
 use crate::error::SphereError;
-use crate::genus_zero::GenusZeroMesh;
+use crate::genus_zero::{GenusZeroMesh, Neighbourhoods};
 use crate::memory_budget::filled;
 use crate::methods::progressive::authalic_newton::{
     authalic_newton, authalic_newton_rings, AuthalicSteps,
@@ -808,6 +809,21 @@ pub(crate) fn area_floor(mesh: &GenusZeroMesh) -> f64 {
 /// system refuses their memory.
 pub(crate) fn rings_of(mesh: &GenusZeroMesh) -> Result<Vec<Vec<u32>>, SphereError> {
     Ok(RingMesh::from_faces(mesh.n_vertices(), mesh.faces())?.rings)
+}
+
+/// The rings of `mesh` and their colour classes, made on the first call and
+/// kept with the mesh ([`Neighbourhoods`]).
+///
+/// # Errors
+/// As [`rings_of`].
+pub(crate) fn neighbourhoods_of(mesh: &GenusZeroMesh) -> Result<Arc<Neighbourhoods>, SphereError> {
+    if let Some(made) = mesh.neighbourhoods_cell().get() {
+        return Ok(Arc::clone(made));
+    }
+    let rings = rings_of(mesh)?;
+    let classes = flip_free::colour_classes(&rings);
+    let made = Arc::new(Neighbourhoods { rings, classes });
+    Ok(Arc::clone(mesh.neighbourhoods_cell().get_or_init(|| made)))
 }
 
 fn insert(rings: &mut RingMesh, points: &mut [[f64; 3]], c: &mut Collapse, q: [f64; 3]) {

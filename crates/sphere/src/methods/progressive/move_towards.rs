@@ -17,9 +17,8 @@ use crate::embedding::{normalize, SphereEmbedding, Status};
 use crate::error::SphereError;
 use crate::genus_zero::GenusZeroMesh;
 use crate::methods::progressive::distortion_energy::Energy;
-use crate::methods::progressive::flip_free::colour_classes;
 use crate::methods::progressive::landmarks::{angle, drag_above, slerp};
-use crate::methods::progressive::{require_valid_start, rings_of, whole_mesh_problem};
+use crate::methods::progressive::{neighbourhoods_of, require_valid_start, whole_mesh_problem};
 use spherify_mesh::vec3::det3;
 
 #[derive(Debug, Clone, PartialEq)]
@@ -112,8 +111,9 @@ pub fn move_towards(
     let started = Instant::now();
     let total = params.passes + params.energy_sweeps;
     let cancelled = |done: usize| SphereError::Cancelled { stage: "move_towards", done, total };
-    let rings = rings_of(mesh)?;
-    let classes = colour_classes(&rings);
+    // Kept with the mesh: the warp's rounds call this ten times on one mesh.
+    let neighbourhoods = neighbourhoods_of(mesh)?;
+    let (rings, classes) = (&neighbourhoods.rings, &neighbourhoods.classes);
     // No drag takes a face below this fraction of the mean det at the start.
     let mean_det = mesh
         .faces()
@@ -124,7 +124,7 @@ pub fn move_towards(
     let floor = FLOOR * mean_det;
     let mut points = points.to_vec();
     for pass in 0..params.passes {
-        for class in &classes {
+        for class in classes {
             if !progress(0, 0) {
                 return Err(cancelled(pass));
             }
@@ -162,7 +162,7 @@ pub fn move_towards(
     if params.energy_sweeps > 0 {
         let problem = whole_mesh_problem(params.energy, mesh);
         let end = problem
-            .optimise_holding(&rings, &mut points, params.energy_sweeps, 0.0, Some(&held), &|_| {
+            .optimise_holding(rings, &mut points, params.energy_sweeps, 0.0, Some(&held), &|_| {
                 !progress(0, 0)
             })
             .map_err(|_| cancelled(params.passes))?;

@@ -32,7 +32,7 @@ use crate::error::SphereError;
 use crate::genus_zero::GenusZeroMesh;
 use crate::methods::progressive::distortion_energy::Energy;
 use crate::methods::progressive::flip_free::{check_tolerance, Problem};
-use crate::methods::progressive::{area_floor, require_valid_start, rings_of};
+use crate::methods::progressive::{area_floor, neighbourhoods_of, require_valid_start};
 
 /// One target direction and one weight per vertex (weight 0: no pull).
 #[derive(Debug, Clone)]
@@ -190,10 +190,11 @@ pub fn pull_towards(
     // pulled on, not the whole mesh (the warp pulls on a third of horse and
     // on nothing of igea). So k is the region's own ratio of chord to
     // surface area: the distortion is measured at the region's scale.
-    let rings: Vec<Vec<u32>> = rings_of(mesh)?
-        .into_iter()
+    let rings: Vec<Vec<u32>> = neighbourhoods_of(mesh)?
+        .rings
+        .iter()
         .zip(&held)
-        .map(|(ring, &h)| if h { Vec::new() } else { ring })
+        .map(|(ring, &h)| if h { Vec::new() } else { ring.clone() })
         .collect();
     let (surface, floor) = match rest {
         Some(rest) => (rest, rest_area_floor(mesh, rest)),

@@ -179,3 +179,22 @@ fn final_sweeps_that_wake_only_on_larger_moves_move_fewer_vertices_and_stay_vali
     let stretch = ProgressiveParams::for_energy(Energy::Stretch);
     assert_eq!(final_sweeps(&stretch, 60_000, limbed), (flip_free::NOTICEABLE, 50));
 }
+
+#[test]
+fn neighbourhoods_are_made_once_and_match_the_rings() {
+    let mesh = GenusZeroMesh::new(icosphere(2)).unwrap();
+    let first = neighbourhoods_of(&mesh).unwrap();
+    let again = neighbourhoods_of(&mesh).unwrap();
+    assert!(Arc::ptr_eq(&first, &again));
+    assert_eq!(first.rings, rings_of(&mesh).unwrap());
+    assert_eq!(first.classes, flip_free::colour_classes(&first.rings));
+    // Every vertex in exactly one class, no two neighbours in one class.
+    let mut seen = vec![0usize; mesh.n_vertices()];
+    for class in &first.classes {
+        for &v in class {
+            seen[v as usize] += 1;
+            assert!(first.rings[v as usize].iter().all(|w| !class.contains(w)));
+        }
+    }
+    assert!(seen.iter().all(|&k| k == 1));
+}

@@ -1,0 +1,118 @@
+"""Two Python threads for registration's independent pieces of numpy work.
+
+On two quiet cores the mapping of two shapes runs on both, while most of
+registration's Python side (the non-rigid ICP's kernel blocks, the rigid
+ICP's starts) ran on one: issue 23 measured register at 3.3-4.2x the wall
+time of mapping both with 2.5-3.2x its CPU time. numpy releases the GIL in
+its matrix products and large ufuncs, and the core's calls release it too, so
+independent pieces run side by side on a small thread pool.
+
+Bits: each piece is computed exactly as it would be alone (numpy's BLAS is
+held to one thread for the whole process during registration,
+:mod:`spherify._blas`, so a product in a worker takes the same path as in
+the caller) and its result is taken in the order of the inputs, so the
+output does not depend on the number of threads. With
+``sp.set_num_threads(1)`` the pieces run one after another on the caller.
+
+Ctrl-C: the caller waits on each result with an interruptible wait; when it
+is interrupted the pieces not yet started are cancelled, and the ones
+running (milliseconds to a few tenths of a second each) finish in the
+background.
+"""
+
+from __future__ import annotations
+
+import os
+import threading
+from concurrent.futures import Future, ThreadPoolExecutor
+from typing import Callable, Iterable, List, Optional, Tuple, TypeVar
+
+from . import _core
+
+__all__ = ["THREADS", "beside", "run_all"]
+
+# Pool threads: the machine's two cores (more would only queue behind the
+# core's own pool, which the workers' core calls share).
+THREADS = 2
+
+T = TypeVar("T")
+R = TypeVar("R")
+S = TypeVar("S")
+
+_lock = threading.Lock()
+_pool: Optional[ThreadPoolExecutor] = None
+
+
+def _forget_pool() -> None:
+    # A forked child has the parent's pool object but not its threads: work
+    # queued on it would never run. The child makes its own on first use.
+    global _pool, _lock
+    _pool = None
+    _lock = threading.Lock()
+
+
+if hasattr(os, "register_at_fork"):
+    os.register_at_fork(after_in_child=_forget_pool)
+
+
+def _executor() -> ThreadPoolExecutor:
+    global _pool
+    with _lock:
+        if _pool is None:
+            _pool = ThreadPoolExecutor(THREADS, thread_name_prefix="spherify-register")
+        return _pool
+
+
+_inside = threading.local()
+
+
+def _marked(work: Callable[[T], R]) -> Callable[[T], R]:
+    """``work`` marked as running on a pool thread while it runs."""
+    def run(x: T) -> R:
+        _inside.flag = True
+        try:
+            return work(x)
+        finally:
+            _inside.flag = False
+    return run
+
+
+def _parallel() -> bool:
+    # A piece that itself asks for pieces runs them on its own thread: a pool
+    # thread waiting for pieces queued behind it could wait for ever.
+    return _core.get_num_threads() >= 2 and not getattr(_inside, "flag", False)
+
+
+def _results(futures: List["Future[R]"]) -> List[R]:
+    try:
+        return [f.result() for f in futures]
+    except BaseException:
+        for f in futures:
+            f.cancel()
+        raise
+
+
+def run_all(work: Callable[[T], R], items: Iterable[T]) -> List[R]:
+    """``[work(x) for x in items]``, the calls spread over the pool when the
+    core runs on two threads or more (``sp.get_num_threads``) and the caller
+    is not itself a piece; the first error is raised after the pieces not
+    yet started are cancelled."""
+    todo = list(items)
+    if len(todo) < 2 or not _parallel():
+        return [work(x) for x in todo]
+    return _results([_executor().submit(_marked(work), x) for x in todo])
+
+
+def beside(here: Callable[[], R], there: Callable[[], S]) -> Tuple[R, S]:
+    """``(here(), there())``: ``there`` on a pool thread while ``here`` runs
+    on the caller, so that ``here`` can still spread its own pieces over
+    the pool (:func:`run_all`)."""
+    if not _parallel():
+        return here(), there()
+    future = _executor().submit(_marked(lambda _: there()), None)
+    try:
+        first = here()
+    except BaseException:
+        future.cancel()
+        raise
+    return first, _results([future])[0]
