@@ -94,3 +94,28 @@ def test_a_forked_child_makes_its_own_pool():
         assert os.waitstatus_to_exitcode(status) == 0
     finally:
         sp.set_num_threads(before)
+
+
+def test_under_an_address_space_limit_the_pieces_run_on_the_caller():
+    # The pool's threads reserve hundreds of MiB of address space (arenas,
+    # stacks, BLAS buffers) that the memory budget does not see; under
+    # RLIMIT_AS that room belongs to the budgeted work.
+    resource = pytest.importorskip("resource")
+    import subprocess
+    import sys
+    import textwrap
+
+    code = textwrap.dedent("""
+        import resource, threading
+        import spherify as sp
+        from spherify import _workers
+        sp.set_num_threads(2)
+        free = _workers.run_all(lambda _: threading.get_ident(), [0, 1, 2, 3])
+        resource.setrlimit(resource.RLIMIT_AS, (8 << 30, resource.RLIM_INFINITY))
+        caller = threading.get_ident()
+        limited = _workers.run_all(lambda _: threading.get_ident(), [0, 1, 2, 3])
+        print(any(t != caller for t in free), limited == [caller] * 4)
+    """)
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         timeout=120, check=True)
+    assert out.stdout.split() == ["True", "True"], out.stdout + out.stderr

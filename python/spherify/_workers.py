@@ -12,7 +12,9 @@ held to one thread for the whole process during registration,
 :mod:`spherify._blas`, so a product in a worker takes the same path as in
 the caller) and its result is taken in the order of the inputs, so the
 output does not depend on the number of threads. With
-``sp.set_num_threads(1)`` the pieces run one after another on the caller.
+``sp.set_num_threads(1)``, or under an address-space limit (``RLIMIT_AS``;
+see ``_address_space_limited``), the pieces run one after another on the
+caller.
 
 Ctrl-C: the caller waits on each result with an interruptible wait; when it
 is interrupted the pieces not yet started are cancelled, and the ones
@@ -77,10 +79,28 @@ def _marked(work: Callable[[T], R]) -> Callable[[T], R]:
     return run
 
 
+def _address_space_limited() -> bool:
+    # Each pool thread reserves address space the memory budget cannot see
+    # coming: a malloc arena or two (64 MiB each), its stack (8 MiB) and
+    # OpenBLAS's buffer for a new calling thread (32 MiB); measured, two
+    # threads took a process from 387 to 696 MiB of address space. Under an
+    # address-space limit (RLIMIT_AS) that is room the budgeted work itself
+    # may need (a small register under 908 MiB was refused its point
+    # locator), so there the pieces run on the caller: the same results,
+    # only slower.
+    try:
+        import resource
+    except ImportError:  # not on POSIX: no RLIMIT_AS either
+        return False
+    soft, _ = resource.getrlimit(resource.RLIMIT_AS)
+    return soft != resource.RLIM_INFINITY
+
+
 def _parallel() -> bool:
     # A piece that itself asks for pieces runs them on its own thread: a pool
     # thread waiting for pieces queued behind it could wait for ever.
-    return _core.get_num_threads() >= 2 and not getattr(_inside, "flag", False)
+    return (_core.get_num_threads() >= 2 and not getattr(_inside, "flag", False)
+            and not _address_space_limited())
 
 
 def _results(futures: List["Future[R]"]) -> List[R]:
