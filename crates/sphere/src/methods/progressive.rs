@@ -786,9 +786,32 @@ pub(crate) fn require_valid_start(report: &SphereReport) -> Result<(), SphereErr
     })
 }
 
+/// Per vertex, whether it is among the `fixed` ids (held still by the moves).
+///
+/// # Errors
+/// [`SphereError::InvalidParameter`] naming an id that is not a vertex.
+pub(crate) fn held_vertices(fixed: &[i64], n: usize) -> Result<Vec<bool>, SphereError> {
+    let mut held = vec![false; n];
+    for &i in fixed {
+        if i < 0 || i as u64 >= n as u64 {
+            return Err(SphereError::InvalidParameter {
+                name: "fixed",
+                value: format!("id {i}"),
+                expected: "vertex ids of the mesh",
+            });
+        }
+        held[i as usize] = true;
+    }
+    Ok(held)
+}
+
 /// Surface triangles below a millionth of the mean area count as that large.
 pub(crate) fn area_floor(mesh: &GenusZeroMesh) -> f64 {
-    let p = mesh.positions();
+    area_floor_of(mesh, mesh.positions())
+}
+
+/// [`area_floor`] of the mesh's triangles at the points `p` (one per vertex).
+pub(crate) fn area_floor_of(mesh: &GenusZeroMesh, p: &[[f64; 3]]) -> f64 {
     let total: f64 = mesh
         .faces()
         .iter()

@@ -18,7 +18,9 @@ use crate::error::SphereError;
 use crate::genus_zero::GenusZeroMesh;
 use crate::methods::progressive::distortion_energy::Energy;
 use crate::methods::progressive::landmarks::{angle, drag_above, slerp};
-use crate::methods::progressive::{neighbourhoods_of, require_valid_start, whole_mesh_problem};
+use crate::methods::progressive::{
+    held_vertices, neighbourhoods_of, require_valid_start, whole_mesh_problem,
+};
 use spherify_mesh::vec3::det3;
 
 #[derive(Debug, Clone, PartialEq)]
@@ -87,13 +89,7 @@ pub fn move_towards(
             "finite and >= 0",
         ));
     }
-    let mut held = vec![false; n];
-    for &i in fixed {
-        if i < 0 || i as u64 >= n as u64 {
-            return Err(invalid("fixed", format!("id {i}"), "vertex ids of the mesh"));
-        }
-        held[i as usize] = true;
-    }
+    let held = held_vertices(fixed, n)?;
     let mut goals: Vec<Option<[f64; 3]>> = vec![None; n];
     for i in 0..n {
         if weights[i] > 0.0 && !held[i] {

@@ -24,7 +24,7 @@
 
 use std::time::Instant;
 
-use spherify_mesh::vec3::{dot, sub, triangle_area};
+use spherify_mesh::vec3::{dot, sub};
 
 use crate::certificate::validity::check_sphere;
 use crate::embedding::{normalize, SphereEmbedding, Status};
@@ -32,7 +32,9 @@ use crate::error::SphereError;
 use crate::genus_zero::GenusZeroMesh;
 use crate::methods::progressive::distortion_energy::Energy;
 use crate::methods::progressive::flip_free::{check_tolerance, Problem};
-use crate::methods::progressive::{area_floor, neighbourhoods_of, require_valid_start};
+use crate::methods::progressive::{
+    area_floor, area_floor_of, held_vertices, neighbourhoods_of, require_valid_start,
+};
 
 /// One target direction and one weight per vertex (weight 0: no pull).
 #[derive(Debug, Clone)]
@@ -176,13 +178,7 @@ pub fn pull_towards(
         }
     }
     let pull = TargetPull::new(targets, weights)?;
-    let mut held = vec![false; n];
-    for &i in fixed {
-        if i < 0 || i as u64 >= n as u64 {
-            return Err(invalid("fixed", format!("id {i}"), "vertex ids of the mesh"));
-        }
-        held[i as usize] = true;
-    }
+    let held = held_vertices(fixed, n)?;
     require_valid_start(&check_sphere(mesh.faces(), points))?;
     let started = Instant::now();
     // Only the free vertices' stars are gathered: the sweeps, the area
@@ -197,7 +193,7 @@ pub fn pull_towards(
         .map(|(ring, &h)| if h { Vec::new() } else { ring.clone() })
         .collect();
     let (surface, floor) = match rest {
-        Some(rest) => (rest, rest_area_floor(mesh, rest)),
+        Some(rest) => (rest, area_floor_of(mesh, rest)),
         None => (mesh.positions(), area_floor(mesh)),
     };
     let problem = Problem {
@@ -235,21 +231,6 @@ pub fn pull_towards(
         ),
         seconds: vec![("pull_towards", started.elapsed().as_secs_f64())],
     })
-}
-
-/// [`area_floor`] of the triangles of `rest`: a millionth of their mean area.
-fn rest_area_floor(mesh: &GenusZeroMesh, rest: &[[f64; 3]]) -> f64 {
-    let total: f64 = mesh
-        .faces()
-        .iter()
-        .map(|&[a, b, c]| triangle_area(rest[a as usize], rest[b as usize], rest[c as usize]))
-        .sum();
-    let floor = 1e-6 * total / mesh.n_faces().max(1) as f64;
-    if floor > 0.0 && floor.is_finite() {
-        floor
-    } else {
-        f64::MIN_POSITIVE
-    }
 }
 
 #[cfg(test)]
