@@ -2,7 +2,7 @@
 
     python benches/default_at_scale.py [--shapes helix_tube tentacles bumpy_blob ellipsoid]
                                        [--n 1000000] [--slope 10000 100000 1000000 2000000]
-                                       [--threads] [--no-cholmod]
+                                       [--threads] [--no-cholmod] [--repeat K]
 
 Each measurement runs in a fresh process (the driver holds no mesh):
 
@@ -19,6 +19,9 @@ Each measurement runs in a fresh process (the driver holds no mesh):
   ``pip install "scikit-sparse<0.5"``).
 * ``--threads``: the default map of the first shape on 1 and on 2 worker
   threads (``sp.set_num_threads``), each in its own process.
+* ``--repeat K``: every row above K times, each in a fresh process, and the
+  medians: of each shape's embed / CHOLMOD ratios, and of the optimisation
+  stage's 1-thread over 2-thread time (the two alternate, pair by pair).
 * ``--slope``: tentacles at each size, the default alone; the log-log slope
   of the time against the vertex count.
 
@@ -135,17 +138,43 @@ def main() -> int:
     parser.add_argument("--slope", type=int, nargs="*", default=[])
     parser.add_argument("--threads", action="store_true")
     parser.add_argument("--no-cholmod", action="store_true")
+    parser.add_argument("--repeat", type=int, default=1,
+                        help="measure every row this many times (fresh processes) and "
+                             "print the medians")
     args = parser.parse_args()
     print(f"load average {os.getloadavg()}, {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}")
     print("| shape | vertices | threads | embed (s) | hierarchy | insertion | optimisation | "
           "certify | bytes / vertex | certified | points SHA-1 | CHOLMOD s (AMD / METIS) | "
           "embed / CHOLMOD |")
     print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
-    for shape in args.shapes:
-        print(row(run(shape, args.n, None, not args.no_cholmod)), flush=True)
+    # With --repeat K every row is measured K times, each in a fresh process
+    # (the embed and CHOLMOD alike), and the medians are printed below the
+    # rows: one process's wall time on this machine varies by 15-25%.
+    ratios: Dict[str, List[float]] = {}
+    for _ in range(args.repeat):
+        for shape in args.shapes:
+            r = run(shape, args.n, None, not args.no_cholmod)
+            print(row(r), flush=True)
+            if r.get("cholmod"):
+                ratios.setdefault(shape, []).append(r["seconds"] / r["cholmod"])
+    speedups: List[float] = []
     if args.threads:
-        for count in (1, 2):
-            print(row(run(args.shapes[0], args.n, count, False)), flush=True)
+        for _ in range(args.repeat):
+            # One and two threads alternate, so that both see the same load.
+            one, two = (run(args.shapes[0], args.n, count, False) for count in (1, 2))
+            print(row(one), flush=True)
+            print(row(two), flush=True)
+            if "error" not in one and "error" not in two:
+                speedups.append(one["stages"]["optimisation"] / two["stages"]["optimisation"])
+    if args.repeat > 1:
+        for shape, values in ratios.items():
+            print(f"{shape}: embed / CHOLMOD, median of {len(values)} processes "
+                  f"{float(np.median(values)):.2f} (each: "
+                  f"{', '.join(f'{v:.2f}' for v in values)})")
+        if speedups:
+            print(f"{args.shapes[0]}: optimisation stage on 1 thread over 2, median of "
+                  f"{len(speedups)} pairs {float(np.median(speedups)):.2f}x (each: "
+                  f"{', '.join(f'{v:.2f}' for v in speedups)})")
     points: List[Any] = []
     for n in args.slope:
         r = run("tentacles", n, None, False)
