@@ -326,11 +326,14 @@ def best_rotation(m_a: SphereMap, m_b: SphereMap,
 
 def best_rotation_then(m_a: SphereMap, m_b: SphereMap,
                        landmark_rotation: Optional[np.ndarray] = None,
-                       then: Optional[Callable[[np.ndarray], T]] = None
+                       then: Optional[Callable[[np.ndarray], T]] = None,
+                       b_tree: Optional[_nearest.OnDemand] = None
                        ) -> Tuple[np.ndarray, str, int, Optional[T]]:
     """:func:`best_rotation` and ``then(rotation)`` (registration's Möbius
     fit): the rotation, its start's name, its steps and what ``then``
-    returned (None without ``then``).
+    returned (None without ``then``). ``b_tree``, if given, is the
+    closest-point tree of B's vertices normalised (:func:`normalised`), for
+    the check in space (registration shares it with the warp).
 
     ``then`` runs beside the check in space, from the map rotation, on two
     threads (spherify._workers): on issue 23's pairs the check switched the
@@ -371,7 +374,7 @@ def best_rotation_then(m_a: SphereMap, m_b: SphereMap,
     rotation, name, iterations = best[1], best[2], best[3]
     # The check on this thread (its own pieces go to the pool), ``then`` on
     # a pool thread beside it.
-    switched, result = beside(lambda: _pose_in_space(m_a, m_b, rotation, cost),
+    switched, result = beside(lambda: _pose_in_space(m_a, m_b, rotation, cost, b_tree),
                               lambda: after(rotation))
     if switched is not None:
         rotation, iterations = switched
@@ -380,8 +383,9 @@ def best_rotation_then(m_a: SphereMap, m_b: SphereMap,
     return rotation, name, iterations, result
 
 
-def _pose_in_space(m_a: SphereMap, m_b: SphereMap, rotation: np.ndarray,
-                   cost: Cost) -> Optional[Tuple[np.ndarray, int]]:
+def _pose_in_space(m_a: SphereMap, m_b: SphereMap, rotation: np.ndarray, cost: Cost,
+                   b_tree: Optional[_nearest.OnDemand] = None
+                   ) -> Optional[Tuple[np.ndarray, int]]:
     """The sphere rotation of a better pose in space (:mod:`spherify._rigid_icp`),
     or None where the map rotation's own pose is as good.
 
@@ -393,16 +397,17 @@ def _pose_in_space(m_a: SphereMap, m_b: SphereMap, rotation: np.ndarray,
     on B in that pose, and is refined by the map cost's Gauss-Newton."""
     a, b = m_a.mesh, m_b.mesh
     a_n, b_n = normalised(a.vertices), normalised(b.vertices)
+    if b_tree is None:
+        b_tree = _nearest.OnDemand(lambda: b_n, b.faces)
     _, _, xyz = m_b.to_surface(cost.p @ rotation.T)
     # The spatial pose the map rotation implies: A's subsample onto its images.
     map_pose = kabsch(cost.a, normalised(xyz))
-    best, from_map = _rigid_icp.best_pose(a_n, a.faces, b_n, b.faces, map_pose)
+    best, from_map = _rigid_icp.best_pose(a_n, a.faces, b_n, b.faces, map_pose, b_tree)
     if (_rigid_icp.pose_angle(best.rotation, from_map.rotation) <= SWITCH_ANGLE
             or best.residual >= SWITCH_RATIO * from_map.residual):
         return None
     pick = np.unique(np.linspace(0, len(m_a.points) - 1, SUBSAMPLE).astype(np.int64))
-    faces, bary, _ = _nearest.NearestOnSurface(b_n, b.faces)(
-        a_n[pick] @ best.rotation.T + best.shift)
+    faces, bary, _ = b_tree()(a_n[pick] @ best.rotation.T + best.shift)
     start = kabsch(m_a.points[pick], m_b.to_sphere(faces, bary))
     return refine_rotation(cost, start)
 

@@ -28,11 +28,12 @@ from typing import Any, Dict, Optional, Tuple
 import numpy as np
 import numpy.typing as npt
 
-from . import _align, _blas, _core, _landmarks, _warp
+from . import _align, _blas, _core, _landmarks, _nearest, _warp
 from ._embed import improve
 from ._errors import MapError, MeshError
 from ._progress import as_callback
 from ._spheremap import SphereMap
+from ._workers import run_all
 
 __all__ = ["Correspondence", "SurfacePoints", "TRANSFORMS", "landmark_pairs", "register"]
 
@@ -363,31 +364,46 @@ def _registered(m_a: SphereMap, m_b: SphereMap, pairs: np.ndarray, transform: st
     landmark_rotation = None
     if len(pairs) >= 2:
         landmark_rotation = _align.kabsch(m_a.points[pairs[:, 0]], m_b.points[pairs[:, 1]])
+    # B's closest-point tree (B centred and scaled to unit rms radius) is
+    # made once, for the rotation's check in space and the warp.
+    b_tree = _nearest.OnDemand(lambda: _align.normalised(m_b.mesh.vertices), m_b.mesh.faces)
     # The Möbius fit from the rotation runs beside the rotation's check in
     # space (spherify._align.best_rotation_then): its seconds are counted in
     # the rotation stage's.
     rotation, start, steps, fitted = _align.best_rotation_then(
         m_a, m_b, landmark_rotation,
         (lambda r: _align.best_moebius(m_a, m_b, r)) if transform in ("moebius", "warp")
-        else None)
+        else None, b_tree)
     details.update(start=start, rotation_steps=steps)
-    map_a = _moved(m_a, m_a.points @ rotation.T)
-    seconds["rotation"] = time.perf_counter() - started
     total = 2 + (_warp.STEPS if transform == "warp" else 0)
+    moebius: Optional[Dict[str, np.ndarray]] = None
+    if transform == "rotation":
+        map_a = _moved(m_a, m_a.points @ rotation.T)
+    seconds["rotation"] = time.perf_counter() - started
     if report:
         report(1, total)
-    moebius: Optional[Dict[str, np.ndarray]] = None
-    if transform in ("moebius", "warp"):
+    if transform != "rotation":
         started = time.perf_counter()
         assert fitted is not None
         turn, boost, steps = fitted
-        candidate = _moved(map_a, _align.moebius_transform(turn, boost)(m_a.points))
+        # The rotated map and the Möbius candidate are certified side by side,
+        # then their costs are computed side by side (spherify._workers; each
+        # its own bits, as one after the other).
+        turned = m_a.points @ rotation.T
+        boosted = _align.moebius_transform(turn, boost)(m_a.points)
+        map_a, candidate = run_all(lambda p: SphereMap.from_points(m_a.mesh, p),
+                                   [turned, boosted])
+        if not map_a.valid:
+            map_a = _moved(m_a, turned)
+        if not candidate.valid:
+            candidate = _moved(map_a, boosted)
 
         def cost(m: SphereMap) -> float:
             return _align.Cost(m_a.mesh.vertices, m.points, m_b)(lambda p: p)
 
         # Kept only where it is better than the rotation on all of A's vertices.
-        if cost(candidate) < cost(map_a):
+        candidate_cost, rotation_cost = run_all(cost, [candidate, map_a])
+        if candidate_cost < rotation_cost:
             map_a = candidate
             rotation = turn
             moebius = {"rotation": _read_only(turn), "boost": _read_only(boost)}
@@ -415,7 +431,7 @@ def _registered(m_a: SphereMap, m_b: SphereMap, pairs: np.ndarray, transform: st
 
         map_a, run = _warp.warp(map_a, m_b, fixed=fixed,
                                 fixed_on_b=None if fixed is None else pairs[:, 1],
-                                should_stop=heard)
+                                should_stop=heard, b_tree=b_tree)
         details["warp_icp_distance"] = run["icp"]
         details["warp_moved"] = run["moved"]
         details["warp_pulled"] = run["pulled"]

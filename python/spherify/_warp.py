@@ -43,7 +43,7 @@ import numpy as np
 
 from . import _landmarks, _nricp
 from ._align import kabsch
-from ._nearest import NearestOnSurface
+from ._nearest import OnDemand
 from ._spheremap import SphereMap
 from ._workers import beside, run_all
 
@@ -135,16 +135,20 @@ def _angles(p: np.ndarray, q: np.ndarray) -> np.ndarray:
 def sphere_targets(map_a: SphereMap, m_b: SphereMap, *, fixed: Optional[np.ndarray] = None,
                    fixed_on_b: Optional[np.ndarray] = None,
                    schedule: Sequence[Tuple[float, float, int]] = _nricp.SCHEDULE,
-                   should_stop: Callable[[int, int], bool] = lambda done, total: False
-                   ) -> Tuple[np.ndarray, Dict[str, Any]]:
+                   should_stop: Callable[[int, int], bool] = lambda done, total: False,
+                   b_tree: Optional[OnDemand] = None) -> Tuple[np.ndarray, Dict[str, Any]]:
     """Steps 1-3 of the module doc: where on the sphere each vertex of A
     should go, (n_a, 3) unit vectors in B's map (the ``fixed`` vertices keep
-    their places), and the ICP's record."""
+    their places), and the ICP's record. ``b_tree``, if given, is the
+    closest-point tree of B's vertices centred and scaled to unit rms radius
+    (made once for the registration)."""
     a_mesh, b_mesh = map_a.mesh, m_b.mesh
     a_centre, a_scale = _frame(a_mesh.vertices)
     b_centre, b_scale = _frame(b_mesh.vertices)
     a_all = (a_mesh.vertices - a_centre) / a_scale
     b_all = (b_mesh.vertices - b_centre) / b_scale
+    if b_tree is None:
+        b_tree = OnDemand(lambda: b_all, b_mesh.faces)
     n = len(a_all)
     sample = np.unique(np.linspace(0, n - 1, min(n, SAMPLE)).astype(np.int64))
     held = fixed is not None and fixed_on_b is not None and len(fixed) > 0
@@ -156,7 +160,7 @@ def sphere_targets(map_a: SphereMap, m_b: SphereMap, *, fixed: Optional[np.ndarr
     # (spherify._workers; each its own bits).
     (_, _, through_sphere), (nearest, b_normals, areas) = beside(
         lambda: m_b.to_surface(map_a.points[sample]),
-        lambda: (NearestOnSurface(b_all, b_mesh.faces), _nricp.face_normals(b_all, b_mesh.faces),
+        lambda: (b_tree(), _nricp.face_normals(b_all, b_mesh.faces),
                  _vertex_areas(a_mesh.vertices, a_mesh.faces)))
     first = (through_sphere - b_centre) / b_scale
     spin = kabsch(a_all[sample], first)
@@ -180,14 +184,15 @@ def sphere_targets(map_a: SphereMap, m_b: SphereMap, *, fixed: Optional[np.ndarr
 
 def warp(map_a: SphereMap, m_b: SphereMap, *, fixed: Optional[np.ndarray] = None,
          fixed_on_b: Optional[np.ndarray] = None,
-         should_stop: Callable[[int, int], bool] = lambda done, total: False
-         ) -> Tuple[SphereMap, Dict[str, Any]]:
+         should_stop: Callable[[int, int], bool] = lambda done, total: False,
+         b_tree: Optional[OnDemand] = None) -> Tuple[SphereMap, Dict[str, Any]]:
     """Warp ``map_a`` (A's certified map, already in B's frame) onto B's map.
 
     ``fixed`` are A's vertices that do not move (landmarks already at their
     targets) and ``fixed_on_b`` B's vertices they pair with. ``should_stop(done,
     total)`` is asked after every ICP iteration, every round of moves and
-    every stage of the pull. Returns the warped, certified map and a record
+    every stage of the pull. ``b_tree`` is as in :func:`sphere_targets`.
+    Returns the warped, certified map and a record
     of the run (``icp``: the mean distance from the deformed sample to B at
     each iteration, ``moved``: the mean angle still to go after each round
     of moves and each stage of the pull, ``pulled``: the fraction of A's
@@ -201,7 +206,7 @@ def warp(map_a: SphereMap, m_b: SphereMap, *, fixed: Optional[np.ndarray] = None
         return should_stop(done, STEPS)
 
     targets, icp = sphere_targets(map_a, m_b, fixed=fixed, fixed_on_b=fixed_on_b,
-                                  should_stop=step)
+                                  should_stop=step, b_tree=b_tree)
     current, left, stopped = move_rounds(map_a, targets, fixed=fixed, should_stop=step)
     if stopped:
         return current, {"icp": icp["distance"], "moved": left, "pulled": 0.0}
