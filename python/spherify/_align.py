@@ -43,7 +43,7 @@ import numpy as np
 
 from . import _nearest, _rigid_icp, harmonics
 from ._spheremap import SphereMap
-from ._workers import beside, run_all
+from ._workers import beside, parallel, run_all
 
 T = TypeVar("T")
 
@@ -329,17 +329,20 @@ def best_rotation_then(m_a: SphereMap, m_b: SphereMap,
                        then: Optional[Callable[[np.ndarray], T]] = None,
                        b_tree: Optional[_nearest.OnDemand] = None
                        ) -> Tuple[np.ndarray, str, int, Optional[T]]:
-    """:func:`best_rotation` and ``then(rotation)`` (registration's Möbius
-    fit): the rotation, its start's name, its steps and what ``then``
-    returned (None without ``then``). ``b_tree``, if given, is the
-    closest-point tree of B's vertices normalised (:func:`normalised`), for
-    the check in space (registration shares it with the warp).
+    """:func:`best_rotation` and ``then(rotation)`` (the rest of a
+    registration: the Möbius fit and the warp): the rotation, its start's
+    name, its steps and what ``then`` returned (None without ``then``).
+    ``b_tree``, if given, is the closest-point tree of B's vertices
+    normalised (:func:`normalised`), for the check in space (registration
+    shares it with the warp).
 
-    ``then`` runs beside the check in space, from the map rotation, on two
-    threads (spherify._workers): on issue 23's pairs the check switched the
-    rotation only on human_man, so its time is mostly hidden. Where the check
+    ``then`` runs from the map rotation on this thread (its own pieces go to
+    the pool) while the check in space runs on a pool thread beside it
+    (spherify._workers): on issue 23's pairs the check switched the rotation
+    only on human_man, so its time is mostly hidden. Where the check
     switches, ``then`` runs again from the new rotation, so the results are
-    those of the two steps one after the other."""
+    those of the check first and ``then`` after it, to the bit. Where the
+    pieces cannot run side by side (one thread), the check goes first."""
     def after(rotation: np.ndarray) -> Optional[T]:
         return None if then is None else then(rotation)
 
@@ -372,10 +375,18 @@ def best_rotation_then(m_a: SphereMap, m_b: SphereMap,
             best = (value, rotation, name, iterations)
     assert best is not None
     rotation, name, iterations = best[1], best[2], best[3]
-    # The check on this thread (its own pieces go to the pool), ``then`` on
-    # a pool thread beside it.
-    switched, result = beside(lambda: _pose_in_space(m_a, m_b, rotation, cost, b_tree),
-                              lambda: after(rotation))
+
+    def check() -> Optional[Tuple[np.ndarray, int]]:
+        return _pose_in_space(m_a, m_b, rotation, cost, b_tree)
+
+    if then is None or not parallel():
+        switched, result = check(), None
+        if switched is None:
+            result = after(rotation)
+    else:
+        # ``then`` on this thread, from the map rotation, while the check
+        # runs beside it; where the check switches, its result is dropped.
+        result, switched = beside(lambda: after(rotation), check)
     if switched is not None:
         rotation, iterations = switched
         name = "rigid ICP in space"

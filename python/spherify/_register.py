@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass
-from typing import Any, Dict, Optional, Tuple
+from typing import Any, Callable, Dict, Optional, Tuple
 
 import numpy as np
 import numpy.typing as npt
@@ -154,8 +154,9 @@ class Correspondence:
         sphere and B's) and ``max_distance`` (of A's landmark's image on B to
         B's landmark vertex, relative to B's diagonal).
     seconds : dict
-        Wall time of each stage (the Möbius fit runs beside the rotation's
-        check in space and is counted in ``rotation``).
+        Wall time of each stage. The rotation's check in space runs beside
+        the later stages (and where it switches the rotation, they run again
+        and ``rotation`` counts the time until then).
     """
 
     def __init__(self, transform: str, map_a: SphereMap, map_b: SphereMap, rotation: np.ndarray,
@@ -233,7 +234,7 @@ class Correspondence:
 
     @property
     def seconds(self) -> Dict[str, float]:
-        """Wall time of each stage (the Möbius fit is counted in ``rotation``)."""
+        """Wall time of each stage (the rotation's check in space runs beside the later ones)."""
         return dict(self._seconds)
 
     @property
@@ -356,36 +357,56 @@ def register(m_a: SphereMap, m_b: SphereMap, *, landmarks: Any = None,
 def _registered(m_a: SphereMap, m_b: SphereMap, pairs: np.ndarray, transform: str,
                 progress: Any) -> Correspondence:
     """:func:`register` after its checks."""
-    report = as_callback(progress, "register")
-    seconds: Dict[str, float] = {}
-    details: Dict[str, Any] = {}
-    started = time.perf_counter()
+    callback = as_callback(progress, "register")
+    reported = [0]
 
+    def report(done: int, total: int) -> None:
+        # Where the check in space switches the rotation, the later stages
+        # run again: the bar does not go back.
+        if callback and done > reported[0]:
+            reported[0] = done
+            callback(done, total)
+
+    started = time.perf_counter()
+    total = 2 + (_warp.STEPS if transform == "warp" else 0)
     landmark_rotation = None
     if len(pairs) >= 2:
         landmark_rotation = _align.kabsch(m_a.points[pairs[:, 0]], m_b.points[pairs[:, 1]])
     # B's closest-point tree (B centred and scaled to unit rms radius) is
     # made once, for the rotation's check in space and the warp.
     b_tree = _nearest.OnDemand(lambda: _align.normalised(m_b.mesh.vertices), m_b.mesh.faces)
-    # The Möbius fit from the rotation runs beside the rotation's check in
-    # space (spherify._align.best_rotation_then): its seconds are counted in
-    # the rotation stage's.
-    rotation, start, steps, fitted = _align.best_rotation_then(
+    # The stages after the rotation run from the map rotation beside the
+    # rotation's check in space (spherify._align.best_rotation_then), and
+    # again from the check's rotation where it switches.
+    rotation, start, steps, rest = _align.best_rotation_then(
         m_a, m_b, landmark_rotation,
-        (lambda r: _align.best_moebius(m_a, m_b, r)) if transform in ("moebius", "warp")
-        else None, b_tree)
-    details.update(start=start, rotation_steps=steps)
-    total = 2 + (_warp.STEPS if transform == "warp" else 0)
+        lambda r: _after_rotation(m_a, m_b, r, pairs, transform, b_tree, report, total), b_tree)
+    assert rest is not None
+    map_a, rotation, moebius, seconds, details = rest
+    seconds = {"rotation": seconds.pop("began") - started, **seconds}
+    details = {"start": start, "rotation_steps": steps, **details}
+    report(total, total)
+    return Correspondence(transform, map_a, m_b, rotation, moebius, pairs, seconds, details)
+
+
+def _after_rotation(m_a: SphereMap, m_b: SphereMap, rotation: np.ndarray, pairs: np.ndarray,
+                    transform: str, b_tree: _nearest.OnDemand,
+                    report: Callable[[int, int], None], total: int
+                    ) -> Tuple[SphereMap, np.ndarray, Optional[Dict[str, np.ndarray]],
+                               Dict[str, float], Dict[str, Any]]:
+    """The stages of :func:`register` after the sphere rotation: A's map
+    turned, the Möbius fit and the warp. Returns A's map, the rotation, the
+    Möbius transformation, the stages' seconds (and ``"began"``, when they
+    began) and details."""
+    seconds: Dict[str, float] = {"began": time.perf_counter()}
+    details: Dict[str, Any] = {}
+    report(1, total)
     moebius: Optional[Dict[str, np.ndarray]] = None
     if transform == "rotation":
         map_a = _moved(m_a, m_a.points @ rotation.T)
-    seconds["rotation"] = time.perf_counter() - started
-    if report:
-        report(1, total)
-    if transform != "rotation":
+    else:
         started = time.perf_counter()
-        assert fitted is not None
-        turn, boost, steps = fitted
+        turn, boost, steps = _align.best_moebius(m_a, m_b, rotation)
         # The rotated map and the Möbius candidate are certified side by side,
         # then their costs are computed side by side (spherify._workers; each
         # its own bits, as one after the other).
@@ -411,8 +432,7 @@ def _registered(m_a: SphereMap, m_b: SphereMap, pairs: np.ndarray, transform: st
             moebius = {"rotation": _read_only(rotation), "boost": _read_only(np.zeros(3))}
         details["moebius_steps"] = steps
         seconds["moebius"] = time.perf_counter() - started
-    if report:
-        report(2, total)
+    report(2, total)
     if transform == "warp":
         started = time.perf_counter()
         fixed = None
@@ -425,8 +445,7 @@ def _registered(m_a: SphereMap, m_b: SphereMap, pairs: np.ndarray, transform: st
         started = time.perf_counter()
 
         def heard(done: int, _: int) -> bool:
-            if report:
-                report(2 + done, total)
+            report(2 + done, total)
             return False
 
         map_a, run = _warp.warp(map_a, m_b, fixed=fixed,
@@ -436,6 +455,4 @@ def _registered(m_a: SphereMap, m_b: SphereMap, pairs: np.ndarray, transform: st
         details["warp_moved"] = run["moved"]
         details["warp_pulled"] = run["pulled"]
         seconds["warp"] = time.perf_counter() - started
-    if report:
-        report(total, total)
-    return Correspondence(transform, map_a, m_b, rotation, moebius, pairs, seconds, details)
+    return map_a, rotation, moebius, seconds, details

@@ -31,7 +31,7 @@ from typing import Callable, Iterable, List, Optional, Tuple, TypeVar
 
 from . import _core
 
-__all__ = ["THREADS", "beside", "run_all"]
+__all__ = ["THREADS", "beside", "parallel", "run_all"]
 
 # Pool threads: the machine's two cores (more would only queue behind the
 # core's own pool, which the workers' core calls share).
@@ -94,6 +94,13 @@ def _address_space_limited() -> bool:
         return False
     soft, _ = resource.getrlimit(resource.RLIMIT_AS)
     return soft != resource.RLIM_INFINITY
+
+
+def parallel() -> bool:
+    """Whether :func:`run_all` and :func:`beside` would spread their pieces
+    over the pool from this thread (two threads or more, not inside a piece,
+    no address-space limit)."""
+    return _parallel()
 
 
 def _parallel() -> bool:
