@@ -115,14 +115,17 @@ class Deformation:
 
 def fit(a: np.ndarray, y: np.ndarray, v: np.ndarray, controls: np.ndarray, sigma: float,
         stiffness: float, phi: Optional[np.ndarray] = None,
-        normal: Optional[np.ndarray] = None) -> Deformation:
+        normal: Optional[np.ndarray] = None, design: Optional[np.ndarray] = None,
+        gram: Optional[np.ndarray] = None) -> Deformation:
     """The deformation minimising the module doc's energy for points ``a``,
     targets ``y`` and weights ``v`` (lambda = stiffness times the weights'
-    sum); ``phi`` is the kernel between ``a`` and the controls if known, and
+    sum); ``phi`` is the kernel between ``a`` and the controls if known,
     ``normal`` the data term's normal matrix D^T diag(v) D (D = [a, 1, phi])
-    if known."""
+    if known, ``design`` D itself if known and ``gram`` the kernel between
+    the controls if known (the ICP's fits of one width share them)."""
     model = Deformation(np.eye(3), np.zeros(3), controls, np.zeros((len(controls), 3)), sigma)
-    design = _design(a, model.kernel(a) if phi is None else phi)
+    if design is None:
+        design = _design(a, model.kernel(a) if phi is None else phi)
     if normal is None:
         normal = design.T @ (design * v[:, None])
     else:
@@ -132,7 +135,8 @@ def fit(a: np.ndarray, y: np.ndarray, v: np.ndarray, controls: np.ndarray, sigma
     k = len(controls)
     normal[:3, :3] += AFFINE_STIFFNESS * total * np.eye(3)
     rhs[:3] += AFFINE_STIFFNESS * total * np.eye(3)
-    gram = model.kernel(controls)
+    if gram is None:
+        gram = model.kernel(controls)
     normal[4:, 4:] += stiffness * total * gram
     # The kernel between close controls is nearly singular; a whisker of
     # ridge keeps the solve well posed without changing the fit.
@@ -216,8 +220,11 @@ def nonrigid_icp(a: np.ndarray, a_normals: np.ndarray, area: np.ndarray,
     for sigma, stiffness, steps in schedule:
         # A's points do not move between fits, so their kernel is computed
         # once a width.
-        phi = Deformation(np.eye(3), np.zeros(3), controls, np.zeros((0, 3)), sigma).kernel(a)
+        width = Deformation(np.eye(3), np.zeros(3), controls, np.zeros((0, 3)), sigma)
+        phi = width.kernel(a)
         design = _design(a, phi)
+        # The kernel between the controls, once a width too.
+        gram = width.kernel(controls)
         # The normal matrix with every pair in, once a width: a fit takes
         # out the few pairs the normal test leaves out (a tenth or less)
         # instead of forming D^T diag(v) D anew, a 304 x 304 x 3000 product
@@ -239,7 +246,7 @@ def nonrigid_icp(a: np.ndarray, a_normals: np.ndarray, area: np.ndarray,
             out = np.flatnonzero(~use)
             left = design[out]
             normal = normal_every - left.T @ (left * v0[out, None])
-            model = fit(a, y, weights, controls, sigma, stiffness, phi, normal)
+            model = fit(a, y, weights, controls, sigma, stiffness, phi, normal, design, gram)
             theta = np.vstack([model.linear.T, model.shift, model.weights])
             moved = (design @ theta)[:n]
             faces, _, on_b = nearest(moved)
