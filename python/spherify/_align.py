@@ -317,8 +317,11 @@ def refine_rotations(cost: Cost, rotations: Sequence[np.ndarray],
             if (np.linalg.norm(step[k]) < 1e-9
                     or previous - current[k] <= TOLERANCE * max(previous, 1e-300)):
                 ended[k] = iteration
-    return [(rodrigues(params[k]) @ bases[k], max_iter if ended[k] is None else ended[k])
-            for k in range(k_all)]
+    out: List[Tuple[np.ndarray, int]] = []
+    for k in range(k_all):
+        end = ended[k]
+        out.append((rodrigues(params[k]) @ bases[k], max_iter if end is None else end))
+    return out
 
 
 def _batched_gauss_newton(cost: Cost, rotations: np.ndarray, steps: int,

@@ -39,7 +39,7 @@ switch (:func:`spherify._align.best_rotation`).
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Optional, Tuple
+from typing import Callable, List, Optional, Tuple
 
 import numpy as np
 
@@ -96,9 +96,9 @@ class _Pair:
                  b_faces: np.ndarray, b_tree: Optional[OnDemand] = None) -> None:
         self.a, self.b = a, b
         on_b = b_tree if b_tree is not None else OnDemand(lambda: b, b_faces)
+        makers: List[Callable[[], NearestOnSurface]] = [lambda: NearestOnSurface(a, a_faces), on_b]
         # The two trees are built side by side (the core releases the GIL).
-        self.on_a, self.on_b = run_all(lambda make: make(),
-                                       [lambda: NearestOnSurface(a, a_faces), on_b])
+        self.on_a, self.on_b = run_all(lambda make: make(), makers)
 
     @staticmethod
     def sample(x: np.ndarray, k: int) -> np.ndarray:
