@@ -40,7 +40,7 @@ from typing import Any, Callable, Dict, Optional, Sequence, Tuple
 import numpy as np
 
 from ._nearest import NearestOnSurface
-from ._workers import run_all
+from ._workers import beside, run_all
 
 __all__ = ["Deformation", "SCHEDULE", "fit", "nonrigid_icp"]
 
@@ -217,48 +217,68 @@ def nonrigid_icp(a: np.ndarray, a_normals: np.ndarray, area: np.ndarray,
     model: Optional[Deformation] = None
     if len(ids):
         a = np.vstack([a, a[ids]])
-    for sigma, stiffness, steps in schedule:
-        # A's points do not move between fits, so their kernel is computed
-        # once a width.
-        width = Deformation(np.eye(3), np.zeros(3), controls, np.zeros((0, 3)), sigma)
-        phi = width.kernel(a)
+    every = v0 if not len(ids) else np.concatenate([v0, np.full(len(ids), landmark_weight)])
+
+    def width(sigma: float) -> Tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """What the fits of one kernel width share: A's kernel, the design
+        matrix, the controls' kernel and the normal matrix with every pair in.
+        None of it depends on the fits: A's points do not move between them."""
+        kernel = Deformation(np.eye(3), np.zeros(3), controls, np.zeros((0, 3)), sigma).kernel
+        phi = kernel(a)
         design = _design(a, phi)
-        # The kernel between the controls, once a width too.
-        gram = width.kernel(controls)
         # The normal matrix with every pair in, once a width: a fit takes
         # out the few pairs the normal test leaves out (a tenth or less)
         # instead of forming D^T diag(v) D anew, a 304 x 304 x 3000 product
-        # that was a third of the ICP's time (issue 23, speed).
-        every = v0 if not len(ids) else np.concatenate([v0, np.full(len(ids), landmark_weight)])
-        # Its two column halves are two products on two threads
-        # (spherify._workers); split so for any thread count, so the bits do
-        # not depend on it.
+        # that was a third of the ICP's time (issue 23, speed). Its two
+        # column halves are two products on two threads (spherify._workers;
+        # run one after the other inside a piece); split so for any thread
+        # count, so the bits do not depend on it.
         weighted = design * every[:, None]
         half = design.shape[1] // 2
         normal_every = np.hstack(run_all(lambda cols: design.T @ weighted[:, cols],
                                          [slice(0, half), slice(half, None)]))
-        for _ in range(steps):
-            v = v0 * use
-            y, weights = targets, v
-            if len(ids):
-                y = np.vstack([targets, targets_l])
-                weights = np.concatenate([v, np.full(len(ids), landmark_weight)])
-            out = np.flatnonzero(~use)
-            left = design[out]
-            normal = normal_every - left.T @ (left * v0[out, None])
-            model = fit(a, y, weights, controls, sigma, stiffness, phi, normal, design, gram)
-            theta = np.vstack([model.linear.T, model.shift, model.weights])
-            moved = (design @ theta)[:n]
-            faces, _, on_b = nearest(moved)
-            distance = np.linalg.norm(on_b - moved, axis=1)
-            agree = (model.turn_normals(a_normals) * b_face_normals[faces]).sum(1)
-            use = agree > NORMAL_COSINE
-            targets = on_b
-            record["kept"].append(float(use.mean()))
-            record["distance"].append(float(distance.mean()))
-            done += 1
-            if should_stop(done, total):
-                assert model is not None
-                return model, record
+        return phi, design, kernel(controls), normal_every
+
+    # The next width's matrices are made beside the fits of this one
+    # (spherify._workers): the same bits, off the fits' serial chain.
+    upcoming: Optional[Tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]] = \
+        width(schedule[0][0]) if len(schedule) else None
+    for w, (sigma, stiffness, steps) in enumerate(schedule):
+        assert upcoming is not None
+        phi, design, gram, normal_every = upcoming
+
+        def fits(phi: np.ndarray = phi, design: np.ndarray = design, gram: np.ndarray = gram,
+                 normal_every: np.ndarray = normal_every, sigma: float = sigma,
+                 stiffness: float = stiffness, steps: int = steps) -> bool:
+            """This width's fits; True where ``should_stop`` stopped them."""
+            nonlocal model, use, targets, done
+            for _ in range(steps):
+                v = v0 * use
+                y, weights = targets, v
+                if len(ids):
+                    y = np.vstack([targets, targets_l])
+                    weights = np.concatenate([v, np.full(len(ids), landmark_weight)])
+                out = np.flatnonzero(~use)
+                left = design[out]
+                normal = normal_every - left.T @ (left * v0[out, None])
+                model = fit(a, y, weights, controls, sigma, stiffness, phi, normal, design, gram)
+                theta = np.vstack([model.linear.T, model.shift, model.weights])
+                moved = (design @ theta)[:n]
+                faces, _, on_b = nearest(moved)
+                distance = np.linalg.norm(on_b - moved, axis=1)
+                agree = (model.turn_normals(a_normals) * b_face_normals[faces]).sum(1)
+                use = agree > NORMAL_COSINE
+                targets = on_b
+                record["kept"].append(float(use.mean()))
+                record["distance"].append(float(distance.mean()))
+                done += 1
+                if should_stop(done, total):
+                    return True
+            return False
+
+        following = schedule[w + 1][0] if w + 1 < len(schedule) else None
+        stopped, upcoming = beside(fits, lambda: None if following is None else width(following))
+        if stopped:
+            break
     assert model is not None
     return model, record
