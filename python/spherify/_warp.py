@@ -287,23 +287,41 @@ def pull(current: SphereMap, targets: np.ndarray, *, fixed: Optional[np.ndarray]
             if should_stop(0, 0):
                 break
         return current, 0.0, after
-    for _ in range(PULL_RINGS):
-        region[faces[region[faces].any(axis=1)]] = True
+    def grow() -> None:
+        for _ in range(PULL_RINGS):
+            region[faces[region[faces].any(axis=1)]] = True
+
+    # The region grows beside A's vertex areas (spherify._workers).
+    _, areas = beside(grow, lambda: _vertex_areas(current.mesh.vertices, faces))
     held = ~region
     if fixed is not None:
         held[fixed] = True
     # The pull per unit of the sphere's area: each vertex stands for m_i of
     # the mean vertex's share, 4 pi / n.
-    share = _vertex_areas(current.mesh.vertices, faces) * (4.0 * np.pi / n)
+    share = areas * (4.0 * np.pi / n)
     # The work of a stage is capped at PULL_WORK moves, so the pull on a
     # large region takes fewer sweeps.
     sweeps = max(1, min(PULL_SWEEPS, PULL_WORK // int(region.sum())))
+    held_ids = np.flatnonzero(held)
+    # Each stage's core call runs beside the angle left after the stage
+    # before (as the rounds do): the same record.
+    last: Optional[np.ndarray] = None
     for strength in PULL_STAGES:
-        current = _landmarks.pull_towards(current, targets, strength * share,
-                                          fixed=np.flatnonzero(held), sweeps=sweeps)
-        after.append(float(_angles(current.points, targets).mean()))
+        moving = current
+
+        def aside(before: Optional[np.ndarray] = last) -> Optional[float]:
+            return None if before is None else float(_angles(before, targets).mean())
+
+        current, before_left = beside(
+            lambda: _landmarks.pull_towards(moving, targets, strength * share, fixed=held_ids,
+                                            sweeps=sweeps), aside)
+        if before_left is not None:
+            after.append(before_left)
+        last = current.points
         if should_stop(0, 0):
             break
+    if last is not None:
+        after.append(float(_angles(last, targets).mean()))
     return current, float(region.mean()), after
 
 
