@@ -42,7 +42,7 @@ import numpy as np
 from ._nearest import NearestOnSurface
 from ._workers import beside, run_all
 
-__all__ = ["Deformation", "SCHEDULE", "fit", "nonrigid_icp"]
+__all__ = ["Deformation", "SCHEDULE", "control_points", "fit", "nonrigid_icp"]
 
 # (sigma over the shape's rms radius, lambda per point, ICP iterations),
 # wide and stiff to narrow and soft. Measured on issue 23's pairs (targets'
@@ -184,25 +184,35 @@ def face_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
     return out
 
 
+def control_points(a: np.ndarray) -> np.ndarray:
+    """The radial part's control points: :data:`CONTROLS` of ``a``'s rows,
+    farthest-point sampled."""
+    from .datasets import farthest_points
+    out: np.ndarray = a[farthest_points(a, min(CONTROLS, len(a)))]
+    return out
+
+
 def nonrigid_icp(a: np.ndarray, a_normals: np.ndarray, area: np.ndarray,
                  first_targets: Optional[np.ndarray],
                  nearest: NearestOnSurface, b_face_normals: np.ndarray, *,
                  landmarks: Optional[Tuple[np.ndarray, np.ndarray]] = None,
                  landmark_weight: float = 50.0,
                  schedule: Sequence[Tuple[float, float, int]] = SCHEDULE,
-                 should_stop: Callable[[int, int], bool] = lambda done, total: False
+                 should_stop: Callable[[int, int], bool] = lambda done, total: False,
+                 controls: Optional[np.ndarray] = None
                  ) -> Tuple[Deformation, Dict[str, Any]]:
     """Fit a deformation of A's points ``a`` (all in one normalised frame)
     onto B's surface (``nearest``), starting from ``first_targets``.
 
     ``area`` weighs each point; ``landmarks`` are (rows of ``a``, points on
     B) that keep their pairing and weigh ``landmark_weight`` mean points
-    each. ``first_targets`` None starts from closest points. Returns the
+    each. ``first_targets`` None starts from closest points. ``controls``
+    are :func:`control_points` of ``a`` if already made. Returns the
     deformation and a record (``kept``: the fraction of
     pairs used at each iteration, ``distance``: their mean distance).
     """
-    from .datasets import farthest_points
-    controls = a[farthest_points(a, min(CONTROLS, len(a)))]
+    if controls is None:
+        controls = control_points(a)
     n = len(a)
     v0 = area / area.mean()
     ids = np.zeros(0, dtype=np.int64)

@@ -169,11 +169,14 @@ def sphere_targets(map_a: SphereMap, m_b: SphereMap, *, fixed: Optional[np.ndarr
     if held:
         assert fixed is not None and fixed_on_b is not None
         landmarks = (np.searchsorted(sample, fixed), b_all[fixed_on_b])
-    normals = _nricp.vertex_normals(a_all, a_mesh.faces)
+    # A's normals beside the fit's control points (spherify._workers).
+    normals, controls = beside(lambda: _nricp.vertex_normals(a_all, a_mesh.faces),
+                               lambda: _nricp.control_points(a_all[sample]))
     model, icp = _nricp.nonrigid_icp(
         a_all[sample], normals[sample], areas[sample],
         first, nearest, b_normals, landmarks=landmarks,
-        landmark_weight=LANDMARK_WEIGHT, schedule=schedule, should_stop=should_stop)
+        landmark_weight=LANDMARK_WEIGHT, schedule=schedule, should_stop=should_stop,
+        controls=controls)
     faces, bary, _ = nearest(model(a_all))
     targets = m_b.to_sphere(faces, bary)
     if held:
