@@ -13,7 +13,11 @@ diagonal. Where a result is right up to a rotational symmetry of A (bumpy, the
 soccer ball: see :class:`Symmetry`), its error against the truth under that
 symmetry is reported beside the raw one. With ``--landmarks K``, the warp is also run with K landmark pairs:
 A's vertices farthest-point sampled, each paired with B's vertex nearest its
-true image. Times are ratios to mapping both shapes. ``--population N`` also
+true image. Times are ratios to mapping both shapes. ``--speed N`` instead measures
+issue 23's speed bar N times per mesh (by default horse and armadillo): B of
+level 6 (about 41k vertices), mapping both (``sp.embed`` of A and of B) and
+``register`` (the warp) each timed in this process, wall time and process
+CPU time (all threads), and their ratios. ``--population N`` also
 times :func:`spherify.correspond` of N generated shapes (bumpy blobs of
 ``--population-size`` vertices, different seeds) on this machine's cores.
 """
@@ -22,6 +26,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import time
 import warnings
 from pathlib import Path
@@ -147,6 +152,36 @@ def run_mesh(name: str, mesh: sp.Mesh, landmarks: int) -> Dict[str, object]:
     return row
 
 
+def _cpu() -> float:
+    import resource
+    usage = resource.getrusage(resource.RUSAGE_SELF)
+    return usage.ru_utime + usage.ru_stime
+
+
+def speed(name: str, mesh: sp.Mesh, runs: int) -> List[Dict[str, object]]:
+    """Issue 23's speed bar: ``register`` (warp) of A and B (level 6) against
+    mapping both, wall and CPU time, ``runs`` times (the maps of each run are
+    the ones timed; A's first map, which makes B, warms the caches)."""
+    copy = sp.datasets.deformed_copy(sp.embed(mesh), level=6)
+    out = []
+    for _ in range(runs):
+        load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
+        wall, cpu = time.perf_counter(), _cpu()
+        m_a, m_b = sp.embed(mesh), sp.embed(copy.mesh)
+        map_wall, map_cpu = time.perf_counter() - wall, _cpu() - cpu
+        wall, cpu = time.perf_counter(), _cpu()
+        c = sp.register(m_a, m_b)
+        reg_wall, reg_cpu = time.perf_counter() - wall, _cpu() - cpu
+        e = errors(c, copy)
+        out.append({"mesh": name, "n_a": mesh.n_vertices, "n_b": copy.mesh.n_vertices,
+                    "load": load, "map_wall": map_wall, "map_cpu": map_cpu,
+                    "register_wall": reg_wall, "register_cpu": reg_cpu,
+                    "wall_ratio": reg_wall / map_wall, "cpu_ratio": reg_cpu / map_cpu,
+                    "stages": c.seconds, "mean": float(e.mean()),
+                    "p95": float(np.percentile(e, 95)), "valid": c.map_a.valid})
+    return out
+
+
 def population(n: int, size: int) -> Dict[str, float]:
     started = time.perf_counter()
     maps = [sp.embed(sp.datasets.bumpy_blob(size, seed=s)) for s in range(n)]
@@ -256,6 +291,9 @@ def main() -> None:
     parser.add_argument("--landmarks", type=int, default=8, help="landmark pairs (0: none)")
     parser.add_argument("--population", type=int, default=0, help="shapes for correspond")
     parser.add_argument("--population-size", type=int, default=20000)
+    parser.add_argument("--speed", type=int, default=0,
+                        help="measure register against mapping both this many times a mesh "
+                             "(B of level 6; horse and armadillo unless --only)")
     parser.add_argument("--json", default=None, help="also write the rows here")
     parser.add_argument("--pictures", default=None, help="write the docs' pictures here")
     args = parser.parse_args()
@@ -263,6 +301,19 @@ def main() -> None:
     if args.pictures:
         for path in pictures(Path(args.pictures), args.small):
             print(f"wrote {path}")
+    if args.speed:
+        timed = []
+        for name, mesh in corpus(args.small, args.only or ["horse", "armadillo"]):
+            for r in speed(name, mesh, args.speed):
+                timed.append(r)
+                print(f"{name}: register {r['register_wall']:.2f} s wall, "
+                      f"{r['register_cpu']:.2f} s CPU; mapping both {r['map_wall']:.2f} s wall, "
+                      f"{r['map_cpu']:.2f} s CPU: {r['wall_ratio']:.2f}x wall, "
+                      f"{r['cpu_ratio']:.2f}x CPU (load {r['load']:.1f}; error "
+                      f"{100 * r['mean']:.2f}% / {100 * r['p95']:.2f}%)", flush=True)
+        if args.json:
+            Path(args.json).write_text(json.dumps({"speed": timed}, indent=1))
+        return
     rows = []
     for name, mesh in corpus(args.small, args.only):
         row = run_mesh(name, mesh, args.landmarks)

@@ -294,6 +294,23 @@ def test_the_screened_ranking_picks_the_start_and_bits_of_the_full_one(
     assert np.array_equal(screened[0], full[0])
 
 
+def test_starts_refined_together_are_the_bits_of_each_refined_alone(
+        pair: "tuple[sp.datasets.DeformedCopy, sp.SphereMap]", blob: sp.SphereMap) -> None:
+    # refine_rotations puts every start's probes and line-search trials in
+    # shared to_surface calls; each start's steps stay its own.
+    from spherify import _align, _blas
+    _, m_b = pair
+    cost = _align.subsample_cost(blob, m_b)
+    starts = [_align.rodrigues(np.array(w)) for w in
+              ((0.0, 0.0, 0.0), (0.2, -0.1, 0.05), (1.5, 0.3, -0.7), (0.0, 3.0, 0.0))]
+    with _blas.one_blas_thread():
+        together = _align.refine_rotations(cost, starts, max_iter=12)
+        for start, (rotation, steps) in zip(starts, together):
+            alone = _align.refine_rotation(cost, start, max_iter=12)
+            assert steps == alone[1]
+            assert np.array_equal(rotation, alone[0])
+
+
 def test_rigid_icp_finds_the_pose_a_wrong_start_misses() -> None:
     # A shape without a symmetry and a turned copy of it: from the pose turned
     # 180 degrees about the copy's principal axis (a front-to-back start), the

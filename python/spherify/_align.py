@@ -43,7 +43,7 @@ import numpy as np
 
 from . import _nearest, _rigid_icp, harmonics
 from ._spheremap import SphereMap
-from ._workers import beside, run_all
+from ._workers import beside, parallel, run_all
 
 T = TypeVar("T")
 
@@ -258,6 +258,72 @@ def refine_rotation(cost: Cost, rotation: np.ndarray, max_iter: int = 50) -> Tup
     return rodrigues(w) @ rotation, iterations
 
 
+def refine_rotations(cost: Cost, rotations: Sequence[np.ndarray],
+                     max_iter: int = 50) -> List[Tuple[np.ndarray, int]]:
+    """:func:`refine_rotation` of each of ``rotations``, all at once: the
+    same Gauss-Newton steps and step halvings, each start's its own, but the
+    probes of every start still going in one ``to_surface`` call per step and
+    the trial points of every start still halving in one call per halving
+    (each point is located on its own, so the bits are those of one
+    :func:`refine_rotation` per start). The starts share the core's threads
+    instead of taking one each: three starts on two threads kept one thread
+    busy with two of them (issue 23, speed)."""
+    h = 1e-6
+    steps = np.eye(3) * h
+    bases = [np.asarray(r) for r in rotations]
+
+    def transform(k: int, w: np.ndarray) -> Callable[[np.ndarray], np.ndarray]:
+        return _turn(rodrigues(w) @ bases[k])
+
+    k_all = len(bases)
+    params = [np.zeros(3) for _ in range(k_all)]
+    rows = cost.residuals_of([transform(k, params[k]) for k in range(k_all)])
+    current = [float(r @ r) for r in rows]
+    ended: List[Optional[int]] = [None] * k_all
+    for iteration in range(1, max_iter + 1):
+        live = [k for k in range(k_all) if ended[k] is None]
+        if not live:
+            break
+        probes = [t for k in live for t in
+                  [transform(k, params[k])] + [transform(k, params[k] + sign * e)
+                                               for e in steps for sign in (1.0, -1.0)]]
+        rows = cost.residuals_of(probes).reshape(len(live), 7, -1)
+        step = {}
+        for i, k in enumerate(live):
+            jac = ((rows[i, 1::2] - rows[i, 2::2]) / (2 * h)).T
+            step[k] = -np.linalg.lstsq(jac, rows[i, 0], rcond=None)[0]
+        # The line searches side by side: each start halves its step until
+        # its cost does not rise (at most 30 times).
+        waiting = list(live)
+        accepted = {}
+        for _ in range(30):
+            if not waiting:
+                break
+            trials = {k: params[k] + step[k] for k in waiting}
+            rows = cost.residuals_of([transform(k, trials[k]) for k in waiting])
+            still = []
+            for k, r in zip(waiting, rows):
+                value = float(r @ r)
+                if value <= current[k]:
+                    accepted[k] = (trials[k], value)
+                else:
+                    step[k] /= 2
+                    still.append(k)
+            waiting = still
+        for k in waiting:
+            ended[k] = iteration
+        for k, (trial, value) in accepted.items():
+            params[k], previous, current[k] = trial, current[k], value
+            if (np.linalg.norm(step[k]) < 1e-9
+                    or previous - current[k] <= TOLERANCE * max(previous, 1e-300)):
+                ended[k] = iteration
+    out: List[Tuple[np.ndarray, int]] = []
+    for k in range(k_all):
+        end = ended[k]
+        out.append((rodrigues(params[k]) @ bases[k], max_iter if end is None else end))
+    return out
+
+
 def _batched_gauss_newton(cost: Cost, rotations: np.ndarray, steps: int,
                           kept: Sequence[int] = ()) -> Tuple[np.ndarray, np.ndarray]:
     """A few plain Gauss-Newton steps on every rotation at once (central
@@ -326,17 +392,23 @@ def best_rotation(m_a: SphereMap, m_b: SphereMap,
 
 def best_rotation_then(m_a: SphereMap, m_b: SphereMap,
                        landmark_rotation: Optional[np.ndarray] = None,
-                       then: Optional[Callable[[np.ndarray], T]] = None
+                       then: Optional[Callable[[np.ndarray], T]] = None,
+                       b_tree: Optional[_nearest.OnDemand] = None
                        ) -> Tuple[np.ndarray, str, int, Optional[T]]:
-    """:func:`best_rotation` and ``then(rotation)`` (registration's Möbius
-    fit): the rotation, its start's name, its steps and what ``then``
-    returned (None without ``then``).
+    """:func:`best_rotation` and ``then(rotation)`` (the rest of a
+    registration: the Möbius fit and the warp): the rotation, its start's
+    name, its steps and what ``then`` returned (None without ``then``).
+    ``b_tree``, if given, is the closest-point tree of B's vertices
+    normalised (:func:`normalised`), for the check in space (registration
+    shares it with the warp).
 
-    ``then`` runs beside the check in space, from the map rotation, on two
-    threads (spherify._workers): on issue 23's pairs the check switched the
-    rotation only on human_man, so its time is mostly hidden. Where the check
+    ``then`` runs from the map rotation on this thread (its own pieces go to
+    the pool) while the check in space runs on a pool thread beside it
+    (spherify._workers): on issue 23's pairs the check switched the rotation
+    only on human_man, so its time is mostly hidden. Where the check
     switches, ``then`` runs again from the new rotation, so the results are
-    those of the two steps one after the other."""
+    those of the check first and ``then`` after it, to the bit. Where the
+    pieces cannot run side by side (one thread), the check goes first."""
     def after(rotation: np.ndarray) -> Optional[T]:
         return None if then is None else then(rotation)
 
@@ -360,19 +432,27 @@ def best_rotation_then(m_a: SphereMap, m_b: SphereMap,
     ranked = ranked[:REFINED_STARTS]
     cost = subsample_cost(m_a, m_b)
     best: Optional[Tuple[float, np.ndarray, str, int]] = None
-    # The starts are refined side by side (spherify._workers; each its own
-    # bits) and compared in their ranked order.
+    # The starts are refined side by side (each its own bits) and compared
+    # in their ranked order.
     for (name, _), (rotation, iterations) in zip(
-            ranked, run_all(lambda item: refine_rotation(cost, item[1]), ranked)):
+            ranked, refine_rotations(cost, [r for _, r in ranked])):
         value = cost(_turn(rotation))
         if best is None or value < best[0]:
             best = (value, rotation, name, iterations)
     assert best is not None
     rotation, name, iterations = best[1], best[2], best[3]
-    # The check on this thread (its own pieces go to the pool), ``then`` on
-    # a pool thread beside it.
-    switched, result = beside(lambda: _pose_in_space(m_a, m_b, rotation, cost),
-                              lambda: after(rotation))
+
+    def check() -> Optional[Tuple[np.ndarray, int]]:
+        return _pose_in_space(m_a, m_b, rotation, cost, b_tree)
+
+    if then is None or not parallel():
+        switched, result = check(), None
+        if switched is None:
+            result = after(rotation)
+    else:
+        # ``then`` on this thread, from the map rotation, while the check
+        # runs beside it; where the check switches, its result is dropped.
+        result, switched = beside(lambda: after(rotation), check)
     if switched is not None:
         rotation, iterations = switched
         name = "rigid ICP in space"
@@ -380,8 +460,9 @@ def best_rotation_then(m_a: SphereMap, m_b: SphereMap,
     return rotation, name, iterations, result
 
 
-def _pose_in_space(m_a: SphereMap, m_b: SphereMap, rotation: np.ndarray,
-                   cost: Cost) -> Optional[Tuple[np.ndarray, int]]:
+def _pose_in_space(m_a: SphereMap, m_b: SphereMap, rotation: np.ndarray, cost: Cost,
+                   b_tree: Optional[_nearest.OnDemand] = None
+                   ) -> Optional[Tuple[np.ndarray, int]]:
     """The sphere rotation of a better pose in space (:mod:`spherify._rigid_icp`),
     or None where the map rotation's own pose is as good.
 
@@ -393,16 +474,17 @@ def _pose_in_space(m_a: SphereMap, m_b: SphereMap, rotation: np.ndarray,
     on B in that pose, and is refined by the map cost's Gauss-Newton."""
     a, b = m_a.mesh, m_b.mesh
     a_n, b_n = normalised(a.vertices), normalised(b.vertices)
+    if b_tree is None:
+        b_tree = _nearest.OnDemand(lambda: b_n, b.faces)
     _, _, xyz = m_b.to_surface(cost.p @ rotation.T)
     # The spatial pose the map rotation implies: A's subsample onto its images.
     map_pose = kabsch(cost.a, normalised(xyz))
-    best, from_map = _rigid_icp.best_pose(a_n, a.faces, b_n, b.faces, map_pose)
+    best, from_map = _rigid_icp.best_pose(a_n, a.faces, b_n, b.faces, map_pose, b_tree)
     if (_rigid_icp.pose_angle(best.rotation, from_map.rotation) <= SWITCH_ANGLE
             or best.residual >= SWITCH_RATIO * from_map.residual):
         return None
     pick = np.unique(np.linspace(0, len(m_a.points) - 1, SUBSAMPLE).astype(np.int64))
-    faces, bary, _ = _nearest.NearestOnSurface(b_n, b.faces)(
-        a_n[pick] @ best.rotation.T + best.shift)
+    faces, bary, _ = b_tree()(a_n[pick] @ best.rotation.T + best.shift)
     start = kabsch(m_a.points[pick], m_b.to_sphere(faces, bary))
     return refine_rotation(cost, start)
 

@@ -11,13 +11,14 @@ time and could miss the closest face by a fraction of an edge.
 
 from __future__ import annotations
 
-from typing import Tuple
+import threading
+from typing import Callable, Optional, Tuple
 
 import numpy as np
 
 from . import _core
 
-__all__ = ["NearestOnSurface"]
+__all__ = ["NearestOnSurface", "OnDemand"]
 
 
 class NearestOnSurface:
@@ -41,3 +42,31 @@ class NearestOnSurface:
         """Closest surface points: (face ids (q,), barycentric weights (q, 3),
         points (q, 3))."""
         return self._tree.closest(np.ascontiguousarray(queries, dtype=np.float64))
+
+
+class OnDemand:
+    """A :class:`NearestOnSurface` built at most once, by whichever caller
+    asks first (later callers, on any thread, get the same tree).
+
+    Registration searches B's surface, centred and scaled to unit rms
+    radius, in the rotation's check in space (:mod:`spherify._rigid_icp`)
+    and again in the warp (:mod:`spherify._warp`): one tree serves both.
+
+    Parameters
+    ----------
+    vertices : callable returning (n, 3) float64
+        Called once, when the tree is first asked for.
+    faces : (m, 3) int64
+    """
+
+    def __init__(self, vertices: Callable[[], np.ndarray], faces: np.ndarray) -> None:
+        self._vertices = vertices
+        self._faces = faces
+        self._lock = threading.Lock()
+        self._tree: Optional[NearestOnSurface] = None
+
+    def __call__(self) -> NearestOnSurface:
+        with self._lock:
+            if self._tree is None:
+                self._tree = NearestOnSurface(self._vertices(), self._faces)
+            return self._tree

@@ -23,16 +23,17 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass
-from typing import Any, Dict, Optional, Tuple
+from typing import Any, Callable, Dict, Optional, Tuple
 
 import numpy as np
 import numpy.typing as npt
 
-from . import _align, _blas, _core, _landmarks, _warp
+from . import _align, _blas, _core, _landmarks, _nearest, _warp
 from ._embed import improve
 from ._errors import MapError, MeshError
 from ._progress import as_callback
 from ._spheremap import SphereMap
+from ._workers import run_all
 
 __all__ = ["Correspondence", "SurfacePoints", "TRANSFORMS", "landmark_pairs", "register"]
 
@@ -153,8 +154,9 @@ class Correspondence:
         sphere and B's) and ``max_distance`` (of A's landmark's image on B to
         B's landmark vertex, relative to B's diagonal).
     seconds : dict
-        Wall time of each stage (the Möbius fit runs beside the rotation's
-        check in space and is counted in ``rotation``).
+        Wall time of each stage. The rotation's check in space runs beside
+        the later stages (and where it switches the rotation, they run again
+        and ``rotation`` counts the time until then).
     """
 
     def __init__(self, transform: str, map_a: SphereMap, map_b: SphereMap, rotation: np.ndarray,
@@ -232,7 +234,7 @@ class Correspondence:
 
     @property
     def seconds(self) -> Dict[str, float]:
-        """Wall time of each stage (the Möbius fit is counted in ``rotation``)."""
+        """Wall time of each stage (the rotation's check in space runs beside the later ones)."""
         return dict(self._seconds)
 
     @property
@@ -355,39 +357,74 @@ def register(m_a: SphereMap, m_b: SphereMap, *, landmarks: Any = None,
 def _registered(m_a: SphereMap, m_b: SphereMap, pairs: np.ndarray, transform: str,
                 progress: Any) -> Correspondence:
     """:func:`register` after its checks."""
-    report = as_callback(progress, "register")
-    seconds: Dict[str, float] = {}
-    details: Dict[str, Any] = {}
-    started = time.perf_counter()
+    callback = as_callback(progress, "register")
+    reported = [0]
 
+    def report(done: int, total: int) -> None:
+        # Where the check in space switches the rotation, the later stages
+        # run again: the bar does not go back.
+        if callback and done > reported[0]:
+            reported[0] = done
+            callback(done, total)
+
+    started = time.perf_counter()
+    total = 2 + (_warp.STEPS if transform == "warp" else 0)
     landmark_rotation = None
     if len(pairs) >= 2:
         landmark_rotation = _align.kabsch(m_a.points[pairs[:, 0]], m_b.points[pairs[:, 1]])
-    # The Möbius fit from the rotation runs beside the rotation's check in
-    # space (spherify._align.best_rotation_then): its seconds are counted in
-    # the rotation stage's.
-    rotation, start, steps, fitted = _align.best_rotation_then(
+    # B's closest-point tree (B centred and scaled to unit rms radius) is
+    # made once, for the rotation's check in space and the warp.
+    b_tree = _nearest.OnDemand(lambda: _align.normalised(m_b.mesh.vertices), m_b.mesh.faces)
+    # The stages after the rotation run from the map rotation beside the
+    # rotation's check in space (spherify._align.best_rotation_then), and
+    # again from the check's rotation where it switches.
+    rotation, start, steps, rest = _align.best_rotation_then(
         m_a, m_b, landmark_rotation,
-        (lambda r: _align.best_moebius(m_a, m_b, r)) if transform in ("moebius", "warp")
-        else None)
-    details.update(start=start, rotation_steps=steps)
-    map_a = _moved(m_a, m_a.points @ rotation.T)
-    seconds["rotation"] = time.perf_counter() - started
-    total = 2 + (_warp.STEPS if transform == "warp" else 0)
-    if report:
-        report(1, total)
+        lambda r: _after_rotation(m_a, m_b, r, pairs, transform, b_tree, report, total), b_tree)
+    assert rest is not None
+    map_a, rotation, moebius, seconds, details = rest
+    seconds = {"rotation": seconds.pop("began") - started, **seconds}
+    details = {"start": start, "rotation_steps": steps, **details}
+    report(total, total)
+    return Correspondence(transform, map_a, m_b, rotation, moebius, pairs, seconds, details)
+
+
+def _after_rotation(m_a: SphereMap, m_b: SphereMap, rotation: np.ndarray, pairs: np.ndarray,
+                    transform: str, b_tree: _nearest.OnDemand,
+                    report: Callable[[int, int], None], total: int
+                    ) -> Tuple[SphereMap, np.ndarray, Optional[Dict[str, np.ndarray]],
+                               Dict[str, float], Dict[str, Any]]:
+    """The stages of :func:`register` after the sphere rotation: A's map
+    turned, the Möbius fit and the warp. Returns A's map, the rotation, the
+    Möbius transformation, the stages' seconds (and ``"began"``, when they
+    began) and details."""
+    seconds: Dict[str, float] = {"began": time.perf_counter()}
+    details: Dict[str, Any] = {}
+    report(1, total)
     moebius: Optional[Dict[str, np.ndarray]] = None
-    if transform in ("moebius", "warp"):
+    if transform == "rotation":
+        map_a = _moved(m_a, m_a.points @ rotation.T)
+    else:
         started = time.perf_counter()
-        assert fitted is not None
-        turn, boost, steps = fitted
-        candidate = _moved(map_a, _align.moebius_transform(turn, boost)(m_a.points))
+        turn, boost, steps = _align.best_moebius(m_a, m_b, rotation)
+        # The rotated map and the Möbius candidate are certified side by side,
+        # then their costs are computed side by side (spherify._workers; each
+        # its own bits, as one after the other).
+        turned = m_a.points @ rotation.T
+        boosted = _align.moebius_transform(turn, boost)(m_a.points)
+        map_a, candidate = run_all(lambda p: SphereMap.from_points(m_a.mesh, p),
+                                   [turned, boosted])
+        if not map_a.valid:
+            map_a = _moved(m_a, turned)
+        if not candidate.valid:
+            candidate = _moved(map_a, boosted)
 
         def cost(m: SphereMap) -> float:
             return _align.Cost(m_a.mesh.vertices, m.points, m_b)(lambda p: p)
 
         # Kept only where it is better than the rotation on all of A's vertices.
-        if cost(candidate) < cost(map_a):
+        candidate_cost, rotation_cost = run_all(cost, [candidate, map_a])
+        if candidate_cost < rotation_cost:
             map_a = candidate
             rotation = turn
             moebius = {"rotation": _read_only(turn), "boost": _read_only(boost)}
@@ -395,8 +432,7 @@ def _registered(m_a: SphereMap, m_b: SphereMap, pairs: np.ndarray, transform: st
             moebius = {"rotation": _read_only(rotation), "boost": _read_only(np.zeros(3))}
         details["moebius_steps"] = steps
         seconds["moebius"] = time.perf_counter() - started
-    if report:
-        report(2, total)
+    report(2, total)
     if transform == "warp":
         started = time.perf_counter()
         fixed = None
@@ -409,17 +445,14 @@ def _registered(m_a: SphereMap, m_b: SphereMap, pairs: np.ndarray, transform: st
         started = time.perf_counter()
 
         def heard(done: int, _: int) -> bool:
-            if report:
-                report(2 + done, total)
+            report(2 + done, total)
             return False
 
         map_a, run = _warp.warp(map_a, m_b, fixed=fixed,
                                 fixed_on_b=None if fixed is None else pairs[:, 1],
-                                should_stop=heard)
+                                should_stop=heard, b_tree=b_tree)
         details["warp_icp_distance"] = run["icp"]
         details["warp_moved"] = run["moved"]
         details["warp_pulled"] = run["pulled"]
         seconds["warp"] = time.perf_counter() - started
-    if report:
-        report(total, total)
-    return Correspondence(transform, map_a, m_b, rotation, moebius, pairs, seconds, details)
+    return map_a, rotation, moebius, seconds, details

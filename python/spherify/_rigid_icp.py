@@ -39,11 +39,11 @@ switch (:func:`spherify._align.best_rotation`).
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Tuple
+from typing import Callable, List, Optional, Tuple
 
 import numpy as np
 
-from ._nearest import NearestOnSurface
+from ._nearest import NearestOnSurface, OnDemand
 from ._workers import run_all
 
 __all__ = ["Pose", "best_pose", "pose_angle"]
@@ -93,11 +93,12 @@ class _Pair:
     """The two normalised shapes, their samples and closest-point searches."""
 
     def __init__(self, a: np.ndarray, a_faces: np.ndarray, b: np.ndarray,
-                 b_faces: np.ndarray) -> None:
+                 b_faces: np.ndarray, b_tree: Optional[OnDemand] = None) -> None:
         self.a, self.b = a, b
+        on_b = b_tree if b_tree is not None else OnDemand(lambda: b, b_faces)
+        makers: List[Callable[[], NearestOnSurface]] = [lambda: NearestOnSurface(a, a_faces), on_b]
         # The two trees are built side by side (the core releases the GIL).
-        self.on_a, self.on_b = run_all(lambda shape: NearestOnSurface(*shape),
-                                       [(a, a_faces), (b, b_faces)])
+        self.on_a, self.on_b = run_all(lambda make: make(), makers)
 
     @staticmethod
     def sample(x: np.ndarray, k: int) -> np.ndarray:
@@ -132,12 +133,13 @@ def _principal_frame(x: np.ndarray) -> np.ndarray:
 
 
 def best_pose(a: np.ndarray, a_faces: np.ndarray, b: np.ndarray, b_faces: np.ndarray,
-              map_rotation: np.ndarray) -> Tuple[Pose, Pose]:
+              map_rotation: np.ndarray, b_tree: Optional[OnDemand] = None) -> Tuple[Pose, Pose]:
     """The best rigid pose of A on B in space over the module doc's starts,
     and the pose polished from ``map_rotation`` (the spatial rotation the
     sphere maps' alignment implies). ``a`` and ``b`` are normalised (centred,
-    unit rms radius)."""
-    pair = _Pair(a, a_faces, b, b_faces)
+    unit rms radius); ``b_tree``, if given, is the closest-point tree of
+    ``b`` (shared with the warp)."""
+    pair = _Pair(a, a_faces, b, b_faces, b_tree)
     va, vb = _principal_frame(a), _principal_frame(b)
     if np.linalg.det(va) < 0:
         va[:, 0] *= -1.0

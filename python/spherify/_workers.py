@@ -31,7 +31,7 @@ from typing import Callable, Iterable, List, Optional, Tuple, TypeVar
 
 from . import _core
 
-__all__ = ["THREADS", "beside", "run_all"]
+__all__ = ["THREADS", "beside", "parallel", "run_all"]
 
 # Pool threads: the machine's two cores (more would only queue behind the
 # core's own pool, which the workers' core calls share).
@@ -96,6 +96,13 @@ def _address_space_limited() -> bool:
     return soft != resource.RLIM_INFINITY
 
 
+def parallel() -> bool:
+    """Whether :func:`run_all` and :func:`beside` would spread their pieces
+    over the pool from this thread (two threads or more, not inside a piece,
+    no address-space limit)."""
+    return _parallel()
+
+
 def _parallel() -> bool:
     # A piece that itself asks for pieces runs them on its own thread: a pool
     # thread waiting for pieces queued behind it could wait for ever.
@@ -113,14 +120,25 @@ def _results(futures: List["Future[R]"]) -> List[R]:
 
 
 def run_all(work: Callable[[T], R], items: Iterable[T]) -> List[R]:
-    """``[work(x) for x in items]``, the calls spread over the pool when the
-    core runs on two threads or more (``sp.get_num_threads``) and the caller
-    is not itself a piece; the first error is raised after the pieces not
-    yet started are cancelled."""
+    """``[work(x) for x in items]``, the calls spread over the caller (the
+    first) and the pool (the rest) when the core runs on two threads or more
+    (``sp.get_num_threads``) and the caller is not itself a piece; the first
+    error is raised after the pieces not yet started are cancelled."""
     todo = list(items)
     if len(todo) < 2 or not _parallel():
         return [work(x) for x in todo]
-    return _results([_executor().submit(_marked(work), x) for x in todo])
+    # The caller takes the first piece itself instead of waiting idle: where
+    # a pool thread is busy with a long piece of its own (registration's
+    # check in space runs beside the later stages), the others still go two
+    # at a time (issue 23, speed).
+    futures = [_executor().submit(_marked(work), x) for x in todo[1:]]
+    try:
+        first = work(todo[0])
+    except BaseException:
+        for f in futures:
+            f.cancel()
+        raise
+    return [first] + _results(futures)
 
 
 def beside(here: Callable[[], R], there: Callable[[], S]) -> Tuple[R, S]:

@@ -18,8 +18,8 @@ use crate::methods::progressive::improve::{improve, ImproveParams};
 use crate::methods::progressive::landmarks::{
     pin_landmarks, pin_or_lay_out, Landmarks, PinParams, Refined,
 };
-use crate::methods::progressive::move_towards::{move_towards, TowardsParams};
-use crate::methods::progressive::target_pull::{pull_towards, PullParams};
+use crate::methods::progressive::move_towards::{move_towards_from, TowardsParams};
+use crate::methods::progressive::target_pull::{pull_towards_from, PullParams};
 use crate::methods::progressive::{progressive, require_valid_start, ProgressiveParams};
 use crate::methods::radial::kernel::KernelPoint;
 use crate::methods::radial::{radial_map, Center};
@@ -325,11 +325,13 @@ pub fn pin_or_refine_embedding(
     Ok((Embedding::certified(on, method, result, details), refined))
 }
 
-/// [`move_towards`] from `start`'s points, certified as a plain GC-embedding
-/// ([`MethodName::Improve`]).
+/// [`crate::methods::progressive::move_towards::move_towards`] from
+/// `start`'s points, certified as a plain GC-embedding
+/// ([`MethodName::Improve`]). The start is not tested again: `start` carries
+/// its certificate.
 ///
 /// # Errors
-/// As [`move_towards`].
+/// As [`crate::methods::progressive::move_towards::move_towards`].
 pub fn move_towards_embedding(
     mesh: &GenusZeroMesh,
     start: &Embedding,
@@ -339,16 +341,26 @@ pub fn move_towards_embedding(
     params: &TowardsParams,
     progress: &(dyn Fn(usize, usize) -> bool + Sync),
 ) -> Result<Embedding, SphereError> {
-    let result =
-        move_towards(mesh, &start.result.points, targets, weights, fixed, params, progress)?;
+    let result = move_towards_from(
+        mesh,
+        &start.result.points,
+        Some(&start.certificate),
+        targets,
+        weights,
+        fixed,
+        params,
+        progress,
+    )?;
     Ok(Embedding::certified(mesh, MethodName::Improve, result, Details::None))
 }
 
-/// [`pull_towards`] from `start`'s points, certified as a plain GC-embedding
-/// ([`MethodName::Improve`]).
+/// [`crate::methods::progressive::target_pull::pull_towards`] from
+/// `start`'s points, certified as a plain GC-embedding
+/// ([`MethodName::Improve`]). The start is not tested again: `start` carries
+/// its certificate.
 ///
 /// # Errors
-/// As [`pull_towards`].
+/// As [`crate::methods::progressive::target_pull::pull_towards`].
 #[allow(clippy::too_many_arguments)]
 pub fn pull_towards_embedding(
     mesh: &GenusZeroMesh,
@@ -360,8 +372,17 @@ pub fn pull_towards_embedding(
     params: &PullParams,
     progress: &(dyn Fn(usize, usize) -> bool + Sync),
 ) -> Result<Embedding, SphereError> {
-    let result =
-        pull_towards(mesh, &start.result.points, rest, targets, weights, fixed, params, progress)?;
+    let result = pull_towards_from(
+        mesh,
+        &start.result.points,
+        Some(&start.certificate),
+        rest,
+        targets,
+        weights,
+        fixed,
+        params,
+        progress,
+    )?;
     Ok(Embedding::certified(mesh, MethodName::Improve, result, Details::None))
 }
 

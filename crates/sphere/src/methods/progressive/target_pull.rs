@@ -26,7 +26,7 @@ use std::time::Instant;
 
 use spherify_mesh::vec3::{dot, sub};
 
-use crate::certificate::validity::check_sphere;
+use crate::certificate::validity::{check_sphere, SphereReport};
 use crate::embedding::{normalize, SphereEmbedding, Status};
 use crate::error::SphereError;
 use crate::genus_zero::GenusZeroMesh;
@@ -158,6 +158,25 @@ pub fn pull_towards(
     params: &PullParams,
     progress: &(dyn Fn(usize, usize) -> bool + Sync),
 ) -> Result<SphereEmbedding, SphereError> {
+    pull_towards_from(mesh, points, None, rest, targets, weights, fixed, params, progress)
+}
+
+/// [`pull_towards`], where `certificate` (when given) is the exact test of
+/// `points` on `mesh` already made ([`crate::Embedding::certificate`]): the
+/// start is then not tested again (the warp's pull starts from maps the
+/// core has just certified).
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn pull_towards_from(
+    mesh: &GenusZeroMesh,
+    points: &[[f64; 3]],
+    certificate: Option<&SphereReport>,
+    rest: Option<&[[f64; 3]]>,
+    targets: &[[f64; 3]],
+    weights: &[f64],
+    fixed: &[i64],
+    params: &PullParams,
+    progress: &(dyn Fn(usize, usize) -> bool + Sync),
+) -> Result<SphereEmbedding, SphereError> {
     let n = mesh.n_vertices();
     let invalid = |name: &'static str, value: String, expected: &'static str| {
         SphereError::InvalidParameter { name, value, expected }
@@ -179,7 +198,10 @@ pub fn pull_towards(
     }
     let pull = TargetPull::new(targets, weights)?;
     let held = held_vertices(fixed, n)?;
-    require_valid_start(&check_sphere(mesh.faces(), points))?;
+    match certificate {
+        Some(report) => require_valid_start(report)?,
+        None => require_valid_start(&check_sphere(mesh.faces(), points))?,
+    }
     let started = Instant::now();
     // Only the free vertices' stars are gathered: the sweeps, the area
     // scale k and the energy that decides convergence then cost the region
