@@ -60,6 +60,11 @@ AFFINE_STIFFNESS = 1e-3
 # horse it dropped a quarter of the pairs, exactly where the fit was still
 # wrong, and the error from the true pairs grew from 0.7% to 1.1%.
 NORMAL_COSINE = 0.0
+# The reverse pairs (experiment): each sampled point of B pulls on the
+# deformed point of A's sample nearest to it, with this share of the data
+# term's weight (0: one-way ICP).
+REVERSE = 1.0
+REVERSE_SIGMA = 0.4
 # Control points of the radial part. Fitted to the true pairs of horse's
 # bend, 100 or 300 reproduce it to 0.06-0.1% of the diagonal; 300 leave room
 # for bends less smooth than the bench's.
@@ -176,11 +181,17 @@ def face_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
     return out
 
 
+def _points_as_faces(n: int) -> np.ndarray:
+    out: np.ndarray = np.repeat(np.arange(n, dtype=np.int64)[:, None], 3, axis=1)
+    return out
+
+
 def nonrigid_icp(a: np.ndarray, a_normals: np.ndarray, area: np.ndarray,
                  first_targets: Optional[np.ndarray],
                  nearest: NearestOnSurface, b_face_normals: np.ndarray, *,
                  landmarks: Optional[Tuple[np.ndarray, np.ndarray]] = None,
                  landmark_weight: float = 50.0,
+                 b_sample: Optional[Tuple[np.ndarray, np.ndarray, np.ndarray]] = None,
                  schedule: Sequence[Tuple[float, float, int]] = SCHEDULE,
                  should_stop: Callable[[int, int], bool] = lambda done, total: False
                  ) -> Tuple[Deformation, Dict[str, Any]]:
@@ -202,6 +213,13 @@ def nonrigid_icp(a: np.ndarray, a_normals: np.ndarray, area: np.ndarray,
     if landmarks is not None and len(landmarks[0]):
         ids, targets_l = landmarks
     use = np.ones(len(a), dtype=bool)
+    # The reverse pairs' weight and weighted sum of B's points per row of a.
+    back_w = np.zeros(n)
+    back_s = np.zeros((n, 3))
+    if b_sample is not None:
+        b_pts, b_nrm, b_area = b_sample
+        b_v = REVERSE * b_area * (float(v0.sum()) / float(b_area.sum()))
+        dots = _points_as_faces(n)
     targets = nearest(a)[2] if first_targets is None else first_targets
     total = sum(s for _, _, s in schedule)
     done = 0
@@ -235,6 +253,17 @@ def nonrigid_icp(a: np.ndarray, a_normals: np.ndarray, area: np.ndarray,
             out = np.flatnonzero(~use)
             left = design[out]
             normal = normal_every - left.T @ (left * v0[out, None])
+            back = np.flatnonzero(back_w > 0)
+            if len(back):
+                rows = design[back]
+                pulled = rows * back_w[back, None]
+                normal += np.hstack(run_all(lambda cols: rows.T @ pulled[:, cols],
+                                            [slice(0, half), slice(half, None)]))
+                both = v[back] + back_w[back]
+                y = y.copy()
+                y[back] = (v[back, None] * targets[back] + back_s[back]) / both[:, None]
+                weights = weights.copy()
+                weights[back] = both
             model = fit(a, y, weights, controls, sigma, stiffness, phi, normal)
             theta = np.vstack([model.linear.T, model.shift, model.weights])
             moved = (design @ theta)[:n]
@@ -243,6 +272,17 @@ def nonrigid_icp(a: np.ndarray, a_normals: np.ndarray, area: np.ndarray,
             agree = (model.turn_normals(a_normals) * b_face_normals[faces]).sum(1)
             use = agree > NORMAL_COSINE
             targets = on_b
+            back_w = np.zeros(n)
+            if b_sample is not None and REVERSE > 0 and sigma >= REVERSE_SIGMA and not len(ids):
+                # Each point of B's sample to its nearest deformed point of
+                # A's sample (a tree of one-point triangles), pairs whose
+                # normals disagree left out.
+                turned = model.turn_normals(a_normals)
+                near, _, _ = NearestOnSurface(moved, dots)(b_pts)
+                keep = (turned[near] * b_nrm).sum(1) > NORMAL_COSINE
+                back_w = np.bincount(near[keep], b_v[keep], n)
+                back_s = np.stack([np.bincount(near[keep], b_v[keep] * b_pts[keep, c], n)
+                                   for c in range(3)], axis=1)
             record["kept"].append(float(use.mean()))
             record["distance"].append(float(distance.mean()))
             done += 1

@@ -166,9 +166,13 @@ def sphere_targets(map_a: SphereMap, m_b: SphereMap, *, fixed: Optional[np.ndarr
         assert fixed is not None and fixed_on_b is not None
         landmarks = (np.searchsorted(sample, fixed), b_all[fixed_on_b])
     normals = _nricp.vertex_normals(a_all, a_mesh.faces)
+    n_b = len(b_all)
+    b_rows = np.unique(np.linspace(0, n_b - 1, min(n_b, SAMPLE)).astype(np.int64))
+    b_sample = (b_all[b_rows], _nricp.vertex_normals(b_all, b_mesh.faces)[b_rows],
+                _vertex_areas(b_all, b_mesh.faces)[b_rows])
     model, icp = _nricp.nonrigid_icp(
         a_all[sample], normals[sample], areas[sample],
-        first, nearest, b_normals, landmarks=landmarks,
+        first, nearest, b_normals, landmarks=landmarks, b_sample=b_sample,
         landmark_weight=LANDMARK_WEIGHT, schedule=schedule, should_stop=should_stop)
     faces, bary, _ = nearest(model(a_all))
     targets = m_b.to_sphere(faces, bary)
