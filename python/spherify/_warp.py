@@ -52,6 +52,8 @@ __all__ = ["PULL_STAGES", "ROUNDS", "SAMPLE", "STEPS", "move_rounds", "pull", "s
 
 # Vertices of A the deformation is fitted on (all of a smaller mesh).
 SAMPLE = 3000
+# Vertices of B whose reverse pairs enter the fit (spherify._nricp).
+REVERSE_SAMPLE = 1000
 # Rounds of flip-free moves: HOMOTOPY rounds aimed ever closer to the
 # targets, then the rest aimed at them.
 ROUNDS = 10
@@ -167,7 +169,7 @@ def sphere_targets(map_a: SphereMap, m_b: SphereMap, *, fixed: Optional[np.ndarr
         landmarks = (np.searchsorted(sample, fixed), b_all[fixed_on_b])
     normals = _nricp.vertex_normals(a_all, a_mesh.faces)
     n_b = len(b_all)
-    b_rows = np.unique(np.linspace(0, n_b - 1, min(n_b, SAMPLE)).astype(np.int64))
+    b_rows = np.unique(np.linspace(0, n_b - 1, min(n_b, REVERSE_SAMPLE)).astype(np.int64))
     b_sample = (b_all[b_rows], _nricp.vertex_normals(b_all, b_mesh.faces)[b_rows],
                 _vertex_areas(b_all, b_mesh.faces)[b_rows])
     model, icp = _nricp.nonrigid_icp(
