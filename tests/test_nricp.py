@@ -86,7 +86,8 @@ def test_reverse_pairs_merged_into_their_rows_are_the_same_fit() -> None:
     b_area = 1.0 + 0.3 * np.cos(np.arange(len(b)))
     normals = _nricp.vertex_normals(a, faces)
     reverse = _nricp._Reverse((b, normals[::3], b_area), float(v.sum()), len(a))
-    back_w, back_s = reverse(a, normals)
+    landed = NearestOnSurface(bent, faces)(a)[2]
+    back_w, back_s = reverse(a, normals, landed)
     assert back_w.sum() > 0  # some pairs are far enough to be kept
     both = v + back_w
     merged = _nricp.fit(a, (v[:, None] * y + back_s) / both[:, None], both, controls, 0.6, 1e-4)
@@ -96,7 +97,9 @@ def test_reverse_pairs_merged_into_their_rows_are_the_same_fit() -> None:
     near = np.argmin(d2, axis=1)
     keep = (normals[near] * normals[::3]).sum(axis=1) > _nricp.NORMAL_COSINE
     gap = np.linalg.norm(a[near] - b, axis=1)
-    keep &= gap > _nricp.REVERSE_FAR * np.median(gap)
+    cover = np.sqrt(((b[:, None, :] - landed[None, :, :]) ** 2).sum(axis=2).min(axis=1))
+    keep &= ((gap > _nricp.REVERSE_FAR * np.median(gap))
+             | (cover > _nricp.REVERSE_FAR * np.median(cover)))
     weight = _nricp.REVERSE * b_area * (v.sum() / b_area.sum())
     rows = _nricp.fit(np.vstack([a, a[near[keep]]]), np.vstack([y, b[keep]]),
                       np.concatenate([v, weight[keep]]), controls, 0.6, 1e-4)

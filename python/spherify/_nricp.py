@@ -42,15 +42,15 @@ The one-way pairs only ask that A lie on B; a part of B that no part of A
 has reached (a human's arm matched to the side of the torso, a scorpion's leg
 to its neighbour) pulls on nothing. The reverse pairs ask that B be covered,
 which carries whole limbs to their counterparts while the deformation is
-still stiff enough to move them together. Only B's points farther from the
-deformed A than twice the median of those gaps pull (the parts not covered):
-on covered, smooth parts the pairs between discrete sample points only add
-noise. Measured on issue 23's pairs (docs/correspondence.md, "Reverse
-pairs"), the targets' mean / p95 error, one-way against two-way: human_man
-2.00% / 9.31% -> 0.90% / 2.34%, horse 1.22% / 2.98% -> 0.89% / 1.72%, hand
-1.15% / 2.77% -> 1.01% / 2.27%, octopus 1.31% / 2.80% -> 0.88% / 1.92%,
-scorpion 2.85% / 10.28% -> 1.73% / 7.66%; spot, knight and igea within
-0.01-0.05 points. The soft stages go on one-way (with the pairs on every
+still stiff enough to move them together. Only B's points not covered yet
+pull: those farther from the deformed A, or from the points of B that A's
+own pairs land on, than twice the median of such gaps. On covered, smooth
+parts the pairs between discrete sample points only add noise. Measured on
+issue 23's pairs (docs/correspondence.md, "Reverse pairs"), the targets'
+mean / p95 error, one-way against two-way: human_man 2.00% / 9.31% ->
+0.91% / 2.38%, horse 1.22% / 2.98% -> 0.91% / 1.72%, hand 1.15% / 2.77% ->
+1.00% / 2.27%, octopus 1.31% / 2.80% -> 0.86% / 1.89%, scorpion 2.85% /
+10.28% -> 0.93% / 3.38%; spot, knight and igea within 0.01-0.04 points. The soft stages go on one-way (with the pairs on every
 stage igea's targets went 1.19% -> 1.30%). With landmarks the pairs already
 hold the limbs and the reverse pairs made the targets a little worse (igea
 0.73% -> 0.80%, hand 0.60% -> 0.63%), so they are not used.
@@ -88,13 +88,16 @@ NORMAL_COSINE = 0.0
 # the data term (0: one-way ICP throughout; 0.5 left the targets between 0
 # and 1), in the stages whose sigma is at least REVERSE_SIGMA (the three
 # stiffest; with 0.6, the two stiffest, or 1.0 the gain shrank: human_man
-# 1.17% / 3.09% and 1.61% / 6.39% without the gap test), and only from B's
-# points whose gap to the nearest deformed point of A is above REVERSE_FAR
-# times the median gap. Without that test (0) scorpion's targets went to
-# 0.92% / 3.40% (its legs lie close to their neighbours, so the pairs that
-# move them are short ones), but spot's and igea's got worse (0.63% / 1.85%
-# -> 0.65% / 1.96%; 1.19% / 2.80% -> 1.20-1.30%); 1.5 was between; 2.5 and 3
-# gave back most of the gain on human_man, horse and scorpion.
+# 1.17% / 3.09% and 1.61% / 6.39% with every point of B pulling), and only
+# from B's points not covered yet: their gap to the nearest deformed point of
+# A, or to the nearest point of B that A's own pairs land on, above
+# REVERSE_FAR times the median of such gaps (0: every point pulls). With
+# every point pulling, spot's and igea's targets got worse (0.63% / 1.85% ->
+# 0.65% / 1.96%; 1.19% / 2.80% -> 1.20-1.30%); with the first gap alone
+# scorpion kept little of its gain (1.73% / 7.66%: its legs lie close to
+# their neighbours, but A's pairs on B's legs are missing); with the second
+# alone octopus kept less (1.04% / 2.39%); thresholds of 1.5 (spot, igea
+# worse), 2.5 and 3 (less gain) were measured too.
 REVERSE = 1.0
 REVERSE_SIGMA = 0.4
 REVERSE_FAR = 2.0
@@ -219,9 +222,10 @@ class _Reverse:
     with the nearest of A's deformed sample points (through the core's
     closest-point tree over one-point triangles: Ericson's closest point of a
     triangle whose corners coincide is that corner), pairs whose normals
-    disagree left out. Called with A's deformed points and their normals,
-    returns per point of A the weight of the B points paired with it and
-    their weighted sum."""
+    disagree left out, and only from B's points that are not covered yet
+    (see :data:`REVERSE_FAR`). Called with A's deformed points, their normals
+    and the points of B their own pairs land on, returns per point of A the
+    weight of the B points paired with it and their weighted sum."""
 
     def __init__(self, b_sample: Tuple[np.ndarray, np.ndarray, np.ndarray], a_total: float,
                  n: int) -> None:
@@ -231,12 +235,21 @@ class _Reverse:
         self.n = n
         self.faces = np.repeat(np.arange(n, dtype=np.int64)[:, None], 3, axis=1)
 
-    def __call__(self, moved: np.ndarray, normals: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
+    def __call__(self, moved: np.ndarray, normals: np.ndarray,
+                 landed: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
         near, _, _ = NearestOnSurface(moved, self.faces)(self.points)
         keep = (normals[near] * self.normals).sum(1) > NORMAL_COSINE
         if REVERSE_FAR > 0:
+            # Far from the deformed A, or far from where A's own pairs land
+            # on B (a leg of B beside A's leg, which A's pairs put on the
+            # neighbouring leg of B).
             gap = np.linalg.norm(moved[near] - self.points, axis=1)
-            keep &= gap > REVERSE_FAR * float(np.median(gap))
+            far = gap > REVERSE_FAR * float(np.median(gap))
+            if len(landed):
+                _, _, hit = NearestOnSurface(landed, self.faces[:len(landed)])(self.points)
+                cover = np.linalg.norm(hit - self.points, axis=1)
+                far |= cover > REVERSE_FAR * float(np.median(cover))
+            keep &= far
         at, w, b = near[keep], self.weight[keep], self.points[keep]
         total = np.bincount(at, w, self.n)
         summed = np.stack([np.bincount(at, w * b[:, c], self.n) for c in range(3)], axis=1)
@@ -337,7 +350,7 @@ def nonrigid_icp(a: np.ndarray, a_normals: np.ndarray, area: np.ndarray,
             targets = on_b
             back_w = np.zeros(n)
             if reverse is not None and sigma >= REVERSE_SIGMA:
-                back_w, back_s = reverse(moved, turned)
+                back_w, back_s = reverse(moved, turned, on_b[use])
             record["kept"].append(float(use.mean()))
             record["distance"].append(float(distance.mean()))
             done += 1
