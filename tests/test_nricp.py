@@ -144,3 +144,38 @@ def test_reverse_pairs_help_on_thin_parts() -> None:
         model, _ = _nricp.nonrigid_icp(*args, b_sample=given)
         errors.append(np.linalg.norm(nearest(model(v))[2] - bent, axis=1).mean())
     assert errors[1] < 0.92 * errors[0]
+
+
+def test_reverse_pairs_on_a_surface_split_over_their_face() -> None:
+    # Where the sample is all of A, a point of B pairs with the nearest point
+    # of A's deformed surface and pulls each corner of its face with its
+    # barycentric share: the fit of those pairs written out one row each.
+    mesh, bent = bent_pair()
+    a, faces = mesh.vertices, mesh.faces
+    controls = a[sp.datasets.farthest_points(a, 150)]
+    y = NearestOnSurface(bent, faces)(a)[2]
+    v = np.ones(len(a))
+    b = bent[::3] * 1.02
+    normals = _nricp.vertex_normals(a, faces)
+    reverse = _nricp._Reverse((b, _nricp.vertex_normals(bent, faces)[::3], np.ones(len(b))),
+                              float(v.sum()), len(a), faces)
+    back_w, back_s = reverse(a, normals, y)
+    assert back_w.sum() > 0
+    both = v + back_w
+    merged = _nricp.fit(a, (v[:, None] * y + back_s) / both[:, None], both, controls, 0.6, 1e-4)
+    face, bary, onto = NearestOnSurface(a, faces)(b)
+    near = (normals[faces[face]] * bary[:, :, None]).sum(axis=1)
+    keep = (near * _nricp.vertex_normals(bent, faces)[::3]).sum(axis=1) > _nricp.NORMAL_COSINE
+    gap = np.linalg.norm(onto - b, axis=1)
+    cover = np.sqrt(((b[:, None, :] - y[None, :, :]) ** 2).sum(axis=2).min(axis=1))
+    keep &= ((gap > _nricp.REVERSE_FAR * np.median(gap))
+             | (cover > _nricp.REVERSE_FAR * np.median(cover)))
+    weight = _nricp.REVERSE * len(a) / len(b)
+    rows_a, rows_y, rows_w = [a], [y], [v]
+    for k in range(3):
+        rows_a.append(a[faces[face[keep], k]])
+        rows_y.append(b[keep])
+        rows_w.append(weight * bary[keep, k])
+    rows = _nricp.fit(np.vstack(rows_a), np.vstack(rows_y), np.concatenate(rows_w),
+                      controls, 0.6, 1e-4)
+    assert np.abs(merged(a) - rows(a)).max() < 1e-9

@@ -219,40 +219,50 @@ def face_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
 
 class _Reverse:
     """The reverse pairs of the module doc: each point of B's sample paired
-    with the nearest of A's deformed sample points (through the core's
-    closest-point tree over one-point triangles: Ericson's closest point of a
-    triangle whose corners coincide is that corner), pairs whose normals
-    disagree left out, and only from B's points that are not covered yet
-    (see :data:`REVERSE_FAR`). Called with A's deformed points, their normals
-    and the points of B their own pairs land on, returns per point of A the
-    weight of the B points paired with it and their weighted sum."""
+    with the nearest point of the deformed A, pairs whose normals disagree
+    left out, and only from B's points that are not covered yet (see
+    :data:`REVERSE_FAR`). The deformed A is its sample's points (the core's
+    closest-point tree over one-point triangles: Ericson's closest point of
+    a triangle whose corners coincide is that corner) or, where the sample
+    is all of A (``faces`` given), its surface: a pair then pulls on the
+    corners of its face, each with its barycentric share of the weight (on
+    blub's 112 vertices a point of B in the middle of a large face of A
+    pulled one corner to it). Called with A's deformed points, their
+    normals and the points of B their own pairs land on, returns per point
+    of A the weight of the B points paired with it and their weighted sum."""
 
     def __init__(self, b_sample: Tuple[np.ndarray, np.ndarray, np.ndarray], a_total: float,
-                 n: int) -> None:
+                 n: int, faces: Optional[np.ndarray] = None) -> None:
         self.points, self.normals, area = b_sample
         # B's sample weighs REVERSE times A's in all.
         self.weight = REVERSE * area * (a_total / float(area.sum()))
         self.n = n
-        self.faces = np.repeat(np.arange(n, dtype=np.int64)[:, None], 3, axis=1)
+        self.dots = np.repeat(np.arange(n, dtype=np.int64)[:, None], 3, axis=1)
+        self.faces = self.dots if faces is None else faces
 
     def __call__(self, moved: np.ndarray, normals: np.ndarray,
                  landed: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
-        near, _, _ = NearestOnSurface(moved, self.faces)(self.points)
-        keep = (normals[near] * self.normals).sum(1) > NORMAL_COSINE
+        face, bary, onto = NearestOnSurface(moved, self.faces)(self.points)
+        corners = self.faces[face]
+        normal = (normals[corners] * bary[:, :, None]).sum(axis=1)
+        keep = (normal * self.normals).sum(1) > NORMAL_COSINE
         if REVERSE_FAR > 0:
             # Far from the deformed A, or far from where A's own pairs land
             # on B (a leg of B beside A's leg, which A's pairs put on the
             # neighbouring leg of B).
-            gap = np.linalg.norm(moved[near] - self.points, axis=1)
+            gap = np.linalg.norm(onto - self.points, axis=1)
             far = gap > REVERSE_FAR * float(np.median(gap))
             if len(landed):
-                _, _, hit = NearestOnSurface(landed, self.faces[:len(landed)])(self.points)
+                _, _, hit = NearestOnSurface(landed, self.dots[:len(landed)])(self.points)
                 cover = np.linalg.norm(hit - self.points, axis=1)
                 far |= cover > REVERSE_FAR * float(np.median(cover))
             keep &= far
-        at, w, b = near[keep], self.weight[keep], self.points[keep]
-        total = np.bincount(at, w, self.n)
-        summed = np.stack([np.bincount(at, w * b[:, c], self.n) for c in range(3)], axis=1)
+        w, b = self.weight[keep], self.points[keep]
+        at = corners[keep].T.ravel()
+        share = (bary[keep] * w[:, None]).T.ravel()
+        total = np.bincount(at, share, self.n)
+        summed = np.stack([np.bincount(at, share * np.tile(b[:, c], 3), self.n)
+                           for c in range(3)], axis=1)
         return total, summed
 
 
@@ -262,6 +272,7 @@ def nonrigid_icp(a: np.ndarray, a_normals: np.ndarray, area: np.ndarray,
                  landmarks: Optional[Tuple[np.ndarray, np.ndarray]] = None,
                  landmark_weight: float = 50.0,
                  b_sample: Optional[Tuple[np.ndarray, np.ndarray, np.ndarray]] = None,
+                 a_faces: Optional[np.ndarray] = None,
                  schedule: Sequence[Tuple[float, float, int]] = SCHEDULE,
                  should_stop: Callable[[int, int], bool] = lambda done, total: False
                  ) -> Tuple[Deformation, Dict[str, Any]]:
@@ -272,7 +283,8 @@ def nonrigid_icp(a: np.ndarray, a_normals: np.ndarray, area: np.ndarray,
     B) that keep their pairing and weigh ``landmark_weight`` mean points
     each. ``b_sample`` (points of B, their unit outward normals and their
     vertex areas) gives the reverse pairs of the module doc; None, or
-    landmarks, leaves them out. ``first_targets`` None starts from closest
+    landmarks, leaves them out. ``a_faces``: faces over the rows of ``a``
+    where ``a`` is all of a mesh (the reverse pairs then find its surface). ``first_targets`` None starts from closest
     points. Returns the
     deformation and a record (``kept``: the fraction of
     pairs used at each iteration, ``distance``: their mean distance).
@@ -292,7 +304,7 @@ def nonrigid_icp(a: np.ndarray, a_normals: np.ndarray, area: np.ndarray,
     back_s = np.zeros((n, 3))
     reverse = None
     if b_sample is not None and REVERSE > 0 and not len(ids):
-        reverse = _Reverse(b_sample, float(v0.sum()), n)
+        reverse = _Reverse(b_sample, float(v0.sum()), n, a_faces)
     targets = nearest(a)[2] if first_targets is None else first_targets
     total = sum(s for _, _, s in schedule)
     done = 0

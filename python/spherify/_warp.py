@@ -184,6 +184,7 @@ def sphere_targets(map_a: SphereMap, m_b: SphereMap, *, fixed: Optional[np.ndarr
     model, icp = _nricp.nonrigid_icp(
         a_all[sample], normals[sample], areas[sample],
         first, nearest, b_normals, landmarks=landmarks, b_sample=b_sample,
+        a_faces=a_mesh.faces if len(sample) == n else None,
         landmark_weight=LANDMARK_WEIGHT, schedule=schedule, should_stop=should_stop)
     faces, bary, _ = nearest(model(a_all))
     targets = m_b.to_sphere(faces, bary)
