@@ -71,3 +71,111 @@ def test_icp_finds_the_bend_from_slid_pairs() -> None:
     # does not say where along it a point belongs.
     assert after < 0.6 * before
     assert record["distance"][-1] < record["distance"][0]
+
+
+def test_reverse_pairs_merged_into_their_rows_are_the_same_fit() -> None:
+    # Each point of B's sample pulls on the nearest deformed point of A; the
+    # ICP merges the pairs of one row into one target of their summed weight.
+    # That must be the fit of the pairs written out one row each.
+    mesh, bent = bent_pair()
+    a, faces = mesh.vertices, mesh.faces
+    controls = a[sp.datasets.farthest_points(a, 150)]
+    y = NearestOnSurface(bent, faces)(a)[2]
+    v = 1.0 + 0.5 * np.sin(np.arange(len(a)))
+    b = bent[::3] + 0.01 * np.cos(np.arange(len(bent[::3])))[:, None]
+    b_area = 1.0 + 0.3 * np.cos(np.arange(len(b)))
+    normals = _nricp.vertex_normals(a, faces)
+    reverse = _nricp._Reverse((b, normals[::3], b_area), float(v.sum()), len(a))
+    landed = NearestOnSurface(bent, faces)(a)[2]
+    back_w, back_s = reverse(a, normals, landed)
+    assert back_w.sum() > 0  # some pairs are far enough to be kept
+    both = v + back_w
+    merged = _nricp.fit(a, (v[:, None] * y + back_s) / both[:, None], both, controls, 0.6, 1e-4)
+    # The same pairs one row each: B's points on the rows of their nearest
+    # points of A (brute force), with their weights.
+    d2 = ((b[:, None, :] - a[None, :, :]) ** 2).sum(axis=2)
+    near = np.argmin(d2, axis=1)
+    keep = (normals[near] * normals[::3]).sum(axis=1) > _nricp.NORMAL_COSINE
+    gap = np.linalg.norm(a[near] - b, axis=1)
+    cover = np.sqrt(((b[:, None, :] - landed[None, :, :]) ** 2).sum(axis=2).min(axis=1))
+    keep &= ((gap > _nricp.REVERSE_FAR * np.median(gap))
+             | (cover > _nricp.REVERSE_FAR * np.median(cover)))
+    weight = _nricp.REVERSE * b_area * (v.sum() / b_area.sum())
+    rows = _nricp.fit(np.vstack([a, a[near[keep]]]), np.vstack([y, b[keep]]),
+                      np.concatenate([v, weight[keep]]), controls, 0.6, 1e-4)
+    assert np.abs(merged(a) - rows(a)).max() < 1e-9
+
+
+def test_reverse_pairs_are_not_used_with_landmarks() -> None:
+    mesh, bent = bent_pair()
+    a, faces = mesh.vertices, mesh.faces
+    nearest = NearestOnSurface(bent, faces)
+    b_sample = (bent[::2], _nricp.vertex_normals(bent, faces)[::2], np.ones(len(bent[::2])))
+    landmarks = (np.array([0, 100, 700]), bent[[0, 100, 700]])
+    args = (a, _nricp.vertex_normals(a, faces), np.ones(len(a)), None, nearest,
+            _nricp.face_normals(bent, faces))
+    one_way = _nricp.nonrigid_icp(*args, landmarks=landmarks, schedule=_nricp.SCHEDULE[:2])[0]
+    given = _nricp.nonrigid_icp(*args, landmarks=landmarks, b_sample=b_sample,
+                                schedule=_nricp.SCHEDULE[:2])[0]
+    assert np.array_equal(one_way(a), given(a))
+    # Without landmarks they change the fit.
+    free = _nricp.nonrigid_icp(*args, schedule=_nricp.SCHEDULE[:2])[0]
+    both = _nricp.nonrigid_icp(*args, b_sample=b_sample, schedule=_nricp.SCHEDULE[:2])[0]
+    assert not np.array_equal(free(a), both(a))
+
+
+def test_reverse_pairs_help_on_thin_parts() -> None:
+    # Tentacles bent by two plane waves, the ICP started from closest points:
+    # B's tentacles that no part of A reached pull on A through the reverse
+    # pairs. Measured mean error to the true points 0.0320 against 0.0369
+    # one-way (0.87; p95 0.068 against 0.077).
+    mesh = sp.datasets.tentacles(3000)
+    v = mesh.vertices - mesh.vertices.mean(axis=0)
+    v /= np.sqrt((v * v).sum(axis=1).mean())
+    faces = mesh.faces
+    bent = (v + 0.4 * np.sin(1.3 * v[:, [1]] + 0.4) * np.array([1.0, 0.0, 0.3])
+            + 0.2 * np.sin(1.1 * v[:, [2]]) * np.array([0.0, 1.0, 0.0]))
+    nearest = NearestOnSurface(bent, faces)
+    args = (v, _nricp.vertex_normals(v, faces), np.ones(len(v)), None, nearest,
+            _nricp.face_normals(bent, faces))
+    b_sample = (bent[::3], _nricp.vertex_normals(bent, faces)[::3], np.ones(len(bent[::3])))
+    errors = []
+    for given in (None, b_sample):
+        model, _ = _nricp.nonrigid_icp(*args, b_sample=given)
+        errors.append(np.linalg.norm(nearest(model(v))[2] - bent, axis=1).mean())
+    assert errors[1] < 0.92 * errors[0]
+
+
+def test_reverse_pairs_on_a_surface_split_over_their_face() -> None:
+    # Where the sample is all of A, a point of B pairs with the nearest point
+    # of A's deformed surface and pulls each corner of its face with its
+    # barycentric share: the fit of those pairs written out one row each.
+    mesh, bent = bent_pair()
+    a, faces = mesh.vertices, mesh.faces
+    controls = a[sp.datasets.farthest_points(a, 150)]
+    y = NearestOnSurface(bent, faces)(a)[2]
+    v = np.ones(len(a))
+    b = bent[::3] * 1.02
+    normals = _nricp.vertex_normals(a, faces)
+    reverse = _nricp._Reverse((b, _nricp.vertex_normals(bent, faces)[::3], np.ones(len(b))),
+                              float(v.sum()), len(a), faces)
+    back_w, back_s = reverse(a, normals, y)
+    assert back_w.sum() > 0
+    both = v + back_w
+    merged = _nricp.fit(a, (v[:, None] * y + back_s) / both[:, None], both, controls, 0.6, 1e-4)
+    face, bary, onto = NearestOnSurface(a, faces)(b)
+    near = (normals[faces[face]] * bary[:, :, None]).sum(axis=1)
+    keep = (near * _nricp.vertex_normals(bent, faces)[::3]).sum(axis=1) > _nricp.NORMAL_COSINE
+    gap = np.linalg.norm(onto - b, axis=1)
+    cover = np.sqrt(((b[:, None, :] - y[None, :, :]) ** 2).sum(axis=2).min(axis=1))
+    keep &= ((gap > _nricp.REVERSE_FAR * np.median(gap))
+             | (cover > _nricp.REVERSE_FAR * np.median(cover)))
+    weight = _nricp.REVERSE * len(a) / len(b)
+    rows_a, rows_y, rows_w = [a], [y], [v]
+    for k in range(3):
+        rows_a.append(a[faces[face[keep], k]])
+        rows_y.append(b[keep])
+        rows_w.append(weight * bary[keep, k])
+    rows = _nricp.fit(np.vstack(rows_a), np.vstack(rows_y), np.concatenate(rows_w),
+                      controls, 0.6, 1e-4)
+    assert np.abs(merged(a) - rows(a)).max() < 1e-9

@@ -30,6 +30,32 @@ the typical pair, or whose normals disagree, left out. The stiffness is
 annealed: the kernel width ``sigma`` and ``lambda`` go from wide and stiff
 (the global bend, with the first targets taken through the sphere maps) to
 narrow and soft. Landmark pairs enter as targets of high weight throughout.
+
+Without landmarks, the stiff stages also use reverse pairs, as symmetric
+(two-way) ICP does: each sampled point ``b_j`` of B pulls on the deformed
+point of A's sample nearest to it, so the data term becomes
+
+    sum_i v_i |T(a_i) - y_i|^2 + sum_j u_j |T(a_{n(j)}) - b_j|^2,
+
+still linear in ``T`` (the pairs of one row merge into one weighted target).
+The one-way pairs only ask that A lie on B; a part of B that no part of A
+has reached (a human's arm matched to the side of the torso, a scorpion's leg
+to its neighbour) pulls on nothing. The reverse pairs ask that B be covered,
+which carries whole limbs to their counterparts while the deformation is
+still stiff enough to move them together. Only B's points not covered yet
+pull: those farther from the deformed A, or from the points of B that A's
+own pairs land on, than twice the median of such gaps. On covered, smooth
+parts the pairs between discrete sample points only add noise. Measured on
+issue 23's pairs (docs/correspondence.md, "Reverse pairs"), the targets'
+mean / p95 error, one-way against two-way: human_man 2.00% / 9.31% ->
+0.91% / 2.38%, horse 1.22% / 2.98% -> 0.91% / 1.72%, hand 1.15% / 2.77% ->
+1.00% / 2.27%, octopus 1.31% / 2.80% -> 0.76% / 1.87%, scorpion 2.85% /
+10.28% -> 0.93% / 3.38%; spot, knight and igea within 0.01-0.04 points;
+but blub_control (112 vertices) 1.49% / 3.21% -> 2.13% / 5.12%, which is
+not understood (see the doc). The soft stages go on one-way (with the pairs on every
+stage igea's targets went 1.19% -> 1.30%). With landmarks the pairs already
+hold the limbs and the reverse pairs made the targets a little worse (igea
+0.73% -> 0.80%, hand 0.60% -> 0.63%), so they are not used.
 """
 
 from __future__ import annotations
@@ -60,6 +86,23 @@ AFFINE_STIFFNESS = 1e-3
 # horse it dropped a quarter of the pairs, exactly where the fit was still
 # wrong, and the error from the true pairs grew from 0.7% to 1.1%.
 NORMAL_COSINE = 0.0
+# The reverse pairs (module doc): B's sample weighs this many times A's in
+# the data term (0: one-way ICP throughout; 0.5 left the targets between 0
+# and 1), in the stages whose sigma is at least REVERSE_SIGMA (the three
+# stiffest; with 0.6, the two stiffest, or 1.0 the gain shrank: human_man
+# 1.17% / 3.09% and 1.61% / 6.39% with every point of B pulling), and only
+# from B's points not covered yet: their gap to the nearest deformed point of
+# A, or to the nearest point of B that A's own pairs land on, above
+# REVERSE_FAR times the median of such gaps (0: every point pulls). With
+# every point pulling, spot's and igea's targets got worse (0.63% / 1.85% ->
+# 0.65% / 1.96%; 1.19% / 2.80% -> 1.20-1.30%); with the first gap alone
+# scorpion kept little of its gain (1.73% / 7.66%: its legs lie close to
+# their neighbours, but A's pairs on B's legs are missing); with the second
+# alone octopus kept less (1.04% / 2.39%); thresholds of 1.5 (spot, igea
+# worse), 2.5 and 3 (less gain) were measured too.
+REVERSE = 1.0
+REVERSE_SIGMA = 0.4
+REVERSE_FAR = 2.0
 # Control points of the radial part. Fitted to the true pairs of horse's
 # bend, 100 or 300 reproduce it to 0.06-0.1% of the diagonal; 300 leave room
 # for bends less smooth than the bench's.
@@ -192,11 +235,62 @@ def control_points(a: np.ndarray) -> np.ndarray:
     return out
 
 
+class _Reverse:
+    """The reverse pairs of the module doc: each point of B's sample paired
+    with the nearest point of the deformed A, pairs whose normals disagree
+    left out, and only from B's points that are not covered yet (see
+    :data:`REVERSE_FAR`). The deformed A is its sample's points (the core's
+    closest-point tree over one-point triangles: Ericson's closest point of
+    a triangle whose corners coincide is that corner) or, where the sample
+    is all of A (``faces`` given), its surface: a pair then pulls on the
+    corners of its face, each with its barycentric share of the weight (on
+    blub's 112 vertices a point of B in the middle of a large face of A
+    pulled one corner to it). Called with A's deformed points, their
+    normals and the points of B their own pairs land on, returns per point
+    of A the weight of the B points paired with it and their weighted sum."""
+
+    def __init__(self, b_sample: Tuple[np.ndarray, np.ndarray, np.ndarray], a_total: float,
+                 n: int, faces: Optional[np.ndarray] = None) -> None:
+        self.points, self.normals, area = b_sample
+        # B's sample weighs REVERSE times A's in all.
+        self.weight = REVERSE * area * (a_total / float(area.sum()))
+        self.n = n
+        self.dots = np.repeat(np.arange(n, dtype=np.int64)[:, None], 3, axis=1)
+        self.faces = self.dots if faces is None else faces
+
+    def __call__(self, moved: np.ndarray, normals: np.ndarray,
+                 landed: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
+        face, bary, onto = NearestOnSurface(moved, self.faces)(self.points)
+        corners = self.faces[face]
+        normal = (normals[corners] * bary[:, :, None]).sum(axis=1)
+        keep = (normal * self.normals).sum(1) > NORMAL_COSINE
+        if REVERSE_FAR > 0:
+            # Far from the deformed A, or far from where A's own pairs land
+            # on B (a leg of B beside A's leg, which A's pairs put on the
+            # neighbouring leg of B).
+            gap = np.linalg.norm(onto - self.points, axis=1)
+            far = gap > REVERSE_FAR * float(np.median(gap))
+            if len(landed):
+                _, _, hit = NearestOnSurface(landed, self.dots[:len(landed)])(self.points)
+                cover = np.linalg.norm(hit - self.points, axis=1)
+                far |= cover > REVERSE_FAR * float(np.median(cover))
+            keep &= far
+        w, b = self.weight[keep], self.points[keep]
+        at = corners[keep].T.ravel()
+        share = (bary[keep] * w[:, None]).T.ravel()
+        total = np.bincount(at, share, self.n)
+        summed = np.stack([np.bincount(at, share * np.tile(b[:, c], 3), self.n)
+                           for c in range(3)], axis=1)
+        return total, summed
+
+
 def nonrigid_icp(a: np.ndarray, a_normals: np.ndarray, area: np.ndarray,
                  first_targets: Optional[np.ndarray],
                  nearest: NearestOnSurface, b_face_normals: np.ndarray, *,
                  landmarks: Optional[Tuple[np.ndarray, np.ndarray]] = None,
                  landmark_weight: float = 50.0,
+                 b_sample: Optional[Tuple[np.ndarray, np.ndarray, np.ndarray]] = None,
+                 a_faces: Optional[np.ndarray] = None,
                  schedule: Sequence[Tuple[float, float, int]] = SCHEDULE,
                  should_stop: Callable[[int, int], bool] = lambda done, total: False,
                  controls: Optional[np.ndarray] = None
@@ -206,8 +300,12 @@ def nonrigid_icp(a: np.ndarray, a_normals: np.ndarray, area: np.ndarray,
 
     ``area`` weighs each point; ``landmarks`` are (rows of ``a``, points on
     B) that keep their pairing and weigh ``landmark_weight`` mean points
-    each. ``first_targets`` None starts from closest points. ``controls``
-    are :func:`control_points` of ``a`` if already made. Returns the
+    each. ``b_sample`` (points of B, their unit outward normals and their
+    vertex areas) gives the reverse pairs of the module doc; None, or
+    landmarks, leaves them out. ``a_faces``: faces over the rows of ``a``
+    where ``a`` is all of a mesh (the reverse pairs then find its surface).
+    ``first_targets`` None starts from closest points. ``controls`` are
+    :func:`control_points` of ``a`` if already made. Returns the
     deformation and a record (``kept``: the fraction of
     pairs used at each iteration, ``distance``: their mean distance).
     """
@@ -220,6 +318,13 @@ def nonrigid_icp(a: np.ndarray, a_normals: np.ndarray, area: np.ndarray,
     if landmarks is not None and len(landmarks[0]):
         ids, targets_l = landmarks
     use = np.ones(len(a), dtype=bool)
+    # The reverse pairs' weight and weighted sum of B's points per row of a
+    # (none before the first fit: its targets come through the sphere maps).
+    back_w = np.zeros(n)
+    back_s = np.zeros((n, 3))
+    reverse = None
+    if b_sample is not None and REVERSE > 0 and not len(ids):
+        reverse = _Reverse(b_sample, float(v0.sum()), n, a_faces)
     targets = nearest(a)[2] if first_targets is None else first_targets
     total = sum(s for _, _, s in schedule)
     done = 0
@@ -261,7 +366,7 @@ def nonrigid_icp(a: np.ndarray, a_normals: np.ndarray, area: np.ndarray,
                  normal_every: np.ndarray = normal_every, sigma: float = sigma,
                  stiffness: float = stiffness, steps: int = steps) -> bool:
             """This width's fits; True where ``should_stop`` stopped them."""
-            nonlocal model, use, targets, done
+            nonlocal model, use, targets, done, back_w, back_s
             for _ in range(steps):
                 v = v0 * use
                 y, weights = targets, v
@@ -271,14 +376,33 @@ def nonrigid_icp(a: np.ndarray, a_normals: np.ndarray, area: np.ndarray,
                 out = np.flatnonzero(~use)
                 left = design[out]
                 normal = normal_every - left.T @ (left * v0[out, None])
+                # The reverse pairs of a row merge with its own pair into
+                # one target of their summed weight (the same least-squares
+                # problem).
+                back = np.flatnonzero(back_w > 0)
+                if len(back):
+                    rows = design[back]
+                    pulled = rows * back_w[back, None]
+                    half = design.shape[1] // 2
+                    normal = normal + np.hstack(run_all(lambda cols: rows.T @ pulled[:, cols],
+                                                        [slice(0, half), slice(half, None)]))
+                    both = v[back] + back_w[back]
+                    y = y.copy()
+                    y[back] = (v[back, None] * targets[back] + back_s[back]) / both[:, None]
+                    weights = weights.copy()
+                    weights[back] = both
                 model = fit(a, y, weights, controls, sigma, stiffness, phi, normal, design, gram)
                 theta = np.vstack([model.linear.T, model.shift, model.weights])
                 moved = (design @ theta)[:n]
                 faces, _, on_b = nearest(moved)
                 distance = np.linalg.norm(on_b - moved, axis=1)
-                agree = (model.turn_normals(a_normals) * b_face_normals[faces]).sum(1)
+                turned = model.turn_normals(a_normals)
+                agree = (turned * b_face_normals[faces]).sum(1)
                 use = agree > NORMAL_COSINE
                 targets = on_b
+                back_w = np.zeros(n)
+                if reverse is not None and sigma >= REVERSE_SIGMA:
+                    back_w, back_s = reverse(moved, turned, on_b[use])
                 record["kept"].append(float(use.mean()))
                 record["distance"].append(float(distance.mean()))
                 done += 1
