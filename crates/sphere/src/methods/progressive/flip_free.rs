@@ -23,6 +23,7 @@ use crate::methods::progressive::chord_area::{self, chord_area, chord_area_hessi
 use crate::methods::progressive::distortion_energy::{
     face_energy, face_energy_hessian, Energy, Reference,
 };
+use crate::methods::progressive::star_lanes;
 use crate::methods::progressive::target_pull::TargetPull;
 
 /// The energy to lower and the surface it measures against.
@@ -306,7 +307,15 @@ impl Problem<'_> {
     ) -> Option<([f64; 3], f64)> {
         let p = points[i as usize];
         let star = Star::gather(refs, ring, points, corners);
-        let (mut e0, mut g, mut hess) = star.hessian(self.energy, k, chord, p);
+        // The default's isometric energy without the chord-area term: four
+        // faces at a time (the same bits; `None` where the scalar sum was
+        // infinite, which gave up the move below).
+        let lanes = chord == 0.0 && self.energy == Energy::Isometric && star_lanes::available();
+        let (mut e0, mut g, mut hess) = if lanes {
+            star_lanes::isometric_hessian(k, p, refs, star.corners)?
+        } else {
+            star.hessian(self.energy, k, chord, p)
+        };
         if let Some(pull) = self.pull {
             let (pe, pg, ph) = pull.vertex_term(i, p);
             e0 += pe;
@@ -363,7 +372,11 @@ impl Problem<'_> {
         let mut t = (SAFE_FRACTION * t_safe).min(1.0);
         for _ in 0..MAX_HALVINGS {
             if let Some(q) = normalize(add(p, scale(step, t))) {
-                let mut e = star.energy(self.energy, k, chord, q);
+                let mut e = if lanes {
+                    star_lanes::isometric_energy(k, q, refs, star.corners)
+                } else {
+                    star.energy(self.energy, k, chord, q)
+                };
                 if let Some(pull) = self.pull {
                     e += pull.energy(i, q);
                 }
