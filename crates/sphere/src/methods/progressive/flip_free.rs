@@ -333,7 +333,7 @@ impl Problem<'_> {
         if gnorm == 0.0 || !gnorm.is_finite() {
             return None;
         }
-        let reach = star.corners.iter().map(|&r| norm(sub(r, p))).fold(f64::INFINITY, f64::min);
+        let reach = star_lanes::reach(p, star.corners);
         // Newton direction in the tangent plane: p(s) = (p + s) / |p + s|
         // = p + s - |s|^2 p / 2 + ..., so the Hessian in s is E^T H E - (g . p) I.
         let he =
@@ -362,13 +362,7 @@ impl Problem<'_> {
         }
         let step = add(scale(e1, d[0]), scale(e2, d[1]));
         // det[p + t step, a, b] = det[p, a, b] + t det[step, a, b].
-        let mut t_safe = f64::INFINITY;
-        for (_, a, b) in star.faces() {
-            let rate = det3(step, a, b);
-            if rate < 0.0 {
-                t_safe = t_safe.min(-det3(p, a, b) / rate);
-            }
-        }
+        let t_safe = star_lanes::safe_step(p, step, star.corners);
         let mut t = (SAFE_FRACTION * t_safe).min(1.0);
         for _ in 0..MAX_HALVINGS {
             if let Some(q) = normalize(add(p, scale(step, t))) {
@@ -380,7 +374,7 @@ impl Problem<'_> {
                 if let Some(pull) = self.pull {
                     e += pull.energy(i, q);
                 }
-                if e <= e0 + 1e-4 * t * slope && positive_fan(q, star.corners) {
+                if e <= e0 + 1e-4 * t * slope && star_lanes::positive_fan(q, star.corners) {
                     return Some((q, reach));
                 }
             }
@@ -526,11 +520,6 @@ pub struct Stopped;
 /// Whether every face `(p, r_j, r_j+1)` is positively oriented, exactly.
 pub fn positive_star(p: [f64; 3], ring: &[u32], points: &[[f64; 3]]) -> bool {
     all_positive(p, ring.len(), |j| points[ring[j] as usize])
-}
-
-/// [`positive_star`] with the ring's points given in order.
-fn positive_fan(p: [f64; 3], corners: &[[f64; 3]]) -> bool {
-    all_positive(p, corners.len(), |j| corners[j])
 }
 
 fn all_positive(p: [f64; 3], m: usize, corner: impl Fn(usize) -> [f64; 3]) -> bool {

@@ -19,6 +19,9 @@
 //! energy is not finite gives `None`, as the scalar sum (infinite) made the
 //! move give up.
 
+use spherify_mesh::predicates::{det3_sign, Sign};
+use spherify_mesh::vec3::{det3, norm, sub};
+
 use crate::methods::progressive::distortion_energy::{
     face_energy, face_energy_hessian, Energy, Reference,
 };
@@ -75,6 +78,52 @@ pub fn isometric_energy(k: f64, p: [f64; 3], refs: &[Reference], corners: &[[f64
     scalar_energy(Energy::Isometric, k, p, refs, corners)
 }
 
+/// The largest `t` for which every face `(p + t step, a, b)` of the fan
+/// of `corners` around `p` keeps det > 0 to first order: the least of
+/// -det[p, a, b] / det[step, a, b] over the faces where the latter is
+/// negative (infinite where none is).
+pub fn safe_step(p: [f64; 3], step: [f64; 3], corners: &[[f64; 3]]) -> f64 {
+    #[cfg(target_arch = "x86_64")]
+    if available() {
+        // SAFETY: the processor has AVX2 (asked just above).
+        return unsafe { lanes::safe_step(p, step, corners) };
+    }
+    let m = corners.len();
+    let mut t_safe = f64::INFINITY;
+    for j in 0..m {
+        let (a, b) = (corners[j], corners[(j + 1) % m]);
+        let rate = det3(step, a, b);
+        if rate < 0.0 {
+            t_safe = t_safe.min(-det3(p, a, b) / rate);
+        }
+    }
+    t_safe
+}
+
+/// The distance from `p` to its nearest corner.
+pub fn reach(p: [f64; 3], corners: &[[f64; 3]]) -> f64 {
+    #[cfg(target_arch = "x86_64")]
+    if available() {
+        // SAFETY: the processor has AVX2 (asked just above).
+        return unsafe { lanes::reach(p, corners) };
+    }
+    corners.iter().map(|&r| norm(sub(r, p))).fold(f64::INFINITY, f64::min)
+}
+
+/// Whether every face `(q, corners[j], corners[j + 1])` is positively
+/// oriented, exactly: Shewchuk's first filter of `orient3d` (as the
+/// `robust` crate computes it, with the origin as fourth point) four faces
+/// at a time, and the exact [`det3_sign`] for a face it cannot decide.
+pub fn positive_fan(q: [f64; 3], corners: &[[f64; 3]]) -> bool {
+    #[cfg(target_arch = "x86_64")]
+    if available() {
+        // SAFETY: the processor has AVX2 (asked just above).
+        return unsafe { lanes::positive_fan(q, corners) };
+    }
+    let m = corners.len();
+    (0..m).all(|j| det3_sign(q, corners[j], corners[(j + 1) % m]) == Sign::Positive)
+}
+
 /// [`isometric_hessian`] one face at a time (any energy).
 fn scalar_hessian(
     energy: Energy,
@@ -121,6 +170,8 @@ mod lanes {
     use std::arch::x86_64::*;
     use std::ops::{Add, Div, Mul, Sub};
 
+    use spherify_mesh::predicates::{det3_sign, Sign};
+
     use super::{Lane, Sums, LANES};
     use crate::methods::progressive::distortion_energy::Reference;
 
@@ -137,6 +188,14 @@ mod lanes {
         #[inline(always)]
         fn load(a: &Lane) -> F4 {
             F4(unsafe { _mm256_loadu_pd(a.as_ptr()) })
+        }
+        #[inline(always)]
+        fn abs(self) -> F4 {
+            F4(unsafe { _mm256_andnot_pd(_mm256_set1_pd(-0.0), self.0) })
+        }
+        #[inline(always)]
+        fn sqrt(self) -> F4 {
+            F4(unsafe { _mm256_sqrt_pd(self.0) })
         }
         #[inline(always)]
         fn lanes(self) -> Lane {
@@ -215,6 +274,109 @@ mod lanes {
             area: F4::load(&gram[3]),
             len,
         }
+    }
+
+    /// The two corners other than the centre of the faces `first ..
+    /// first + 4` of a fan (fewer at the end; the last repeated).
+    #[inline(always)]
+    fn fan_group(corners: &[[f64; 3]], first: usize) -> ([F4; 3], [F4; 3], usize) {
+        let m = corners.len();
+        let len = (m - first).min(LANES);
+        let (mut a, mut b) = ([[0.0; LANES]; 3], [[0.0; LANES]; 3]);
+        for l in 0..LANES {
+            let j = first + l.min(len - 1);
+            let (pa, pb) = (corners[j], corners[if j + 1 == m { 0 } else { j + 1 }]);
+            for c in 0..3 {
+                a[c][l] = pa[c];
+                b[c][l] = pb[c];
+            }
+        }
+        let load = |x: &[Lane; 3]| [F4::load(&x[0]), F4::load(&x[1]), F4::load(&x[2])];
+        (load(&a), load(&b), len)
+    }
+
+    /// `cross(a, b)` by lane, as `vec3::cross`.
+    #[inline(always)]
+    fn cross(a: [F4; 3], b: [F4; 3]) -> [F4; 3] {
+        [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+    }
+
+    #[inline(always)]
+    fn splat3(p: [f64; 3]) -> [F4; 3] {
+        [F4::splat(p[0]), F4::splat(p[1]), F4::splat(p[2])]
+    }
+
+    #[target_feature(enable = "avx2")]
+    pub(super) unsafe fn safe_step(p: [f64; 3], step: [f64; 3], corners: &[[f64; 3]]) -> f64 {
+        let (pv, sv) = (splat3(p), splat3(step));
+        let mut t_safe = f64::INFINITY;
+        for first in (0..corners.len()).step_by(LANES) {
+            let (a, b, len) = fan_group(corners, first);
+            let ab = cross(a, b);
+            // det3(step, a, b) and det3(p, a, b): a dot product with a x b.
+            let (rate, det) = (dot(sv, ab).lanes(), dot(pv, ab).lanes());
+            for l in 0..len {
+                if rate[l] < 0.0 {
+                    t_safe = t_safe.min(-det[l] / rate[l]);
+                }
+            }
+        }
+        t_safe
+    }
+
+    #[target_feature(enable = "avx2")]
+    pub(super) unsafe fn reach(p: [f64; 3], corners: &[[f64; 3]]) -> f64 {
+        let pv = splat3(p);
+        let mut least = f64::INFINITY;
+        // The corners as the first corners of the fan's faces.
+        for first in (0..corners.len()).step_by(LANES) {
+            let (a, _, len) = fan_group(corners, first);
+            let e = [a[0] - pv[0], a[1] - pv[1], a[2] - pv[2]];
+            let r = dot(e, e).sqrt().lanes();
+            for x in &r[..len] {
+                least = least.min(*x);
+            }
+        }
+        least
+    }
+
+    /// `robust::orient3d`'s first error bound, (7 + 56 eps) eps.
+    const O3DERRBOUND_A: f64 = (7.0 + 56.0 * f64::EPSILON / 2.0) * (f64::EPSILON / 2.0);
+
+    #[target_feature(enable = "avx2")]
+    pub(super) unsafe fn positive_fan(q: [f64; 3], corners: &[[f64; 3]]) -> bool {
+        let qv = splat3(q);
+        let bound = F4::splat(O3DERRBOUND_A);
+        for first in (0..corners.len()).step_by(LANES) {
+            let (b, c, len) = fan_group(corners, first);
+            // orient3d(q, b, c, origin) as the robust crate evaluates it:
+            // (a, b, c) - origin is exact.
+            let [adx, ady, adz] = qv;
+            let [bdx, bdy, bdz] = b;
+            let [cdx, cdy, cdz] = c;
+            let (bdxcdy, cdxbdy) = (bdx * cdy, cdx * bdy);
+            let (cdxady, adxcdy) = (cdx * ady, adx * cdy);
+            let (adxbdy, bdxady) = (adx * bdy, bdx * ady);
+            let det = (adz * (bdxcdy - cdxbdy) + bdz * (cdxady - adxcdy)) + cdz * (adxbdy - bdxady);
+            let permanent = ((bdxcdy.abs() + cdxbdy.abs()) * adz.abs()
+                + (cdxady.abs() + adxcdy.abs()) * bdz.abs())
+                + (adxbdy.abs() + bdxady.abs()) * cdz.abs();
+            let (det, errbound) = (det.lanes(), (bound * permanent).lanes());
+            for l in 0..len {
+                if det[l] > errbound[l] {
+                    continue;
+                }
+                if -det[l] > errbound[l] {
+                    return false;
+                }
+                let m = corners.len();
+                let j = first + l;
+                if det3_sign(q, corners[j], corners[(j + 1) % m]) != Sign::Positive {
+                    return false;
+                }
+            }
+        }
+        true
     }
 
     /// `FaceTerms::new` by lane, with `a x b` (d's determinant's cross product).
@@ -458,6 +620,43 @@ mod tests {
             }
         }
         assert!(finite > 1000 && infinite > 100, "{finite} {infinite}");
+    }
+
+    #[test]
+    fn the_fan_tests_in_lanes_give_the_answers_of_one_face_at_a_time() {
+        let mut rng = Lcg::new(2027);
+        let (mut positive, mut not, mut exact) = (0, 0, 0);
+        for (p, _, corners) in stars() {
+            let m = corners.len();
+            let step = [0.1 * rng.next_f64() - 0.05, 0.1 * rng.next_f64() - 0.05, 0.0];
+            let mut t_safe = f64::INFINITY;
+            for j in 0..m {
+                let (a, b) = (corners[j], corners[(j + 1) % m]);
+                let rate = det3(step, a, b);
+                if rate < 0.0 {
+                    t_safe = t_safe.min(-det3(p, a, b) / rate);
+                }
+            }
+            assert_eq!(safe_step(p, step, &corners).to_bits(), t_safe.to_bits());
+            let near = corners.iter().map(|&r| norm(sub(r, p))).fold(f64::INFINITY, f64::min);
+            assert_eq!(reach(p, &corners).to_bits(), near.to_bits());
+            // Centres inside, outside, and exactly on a face's plane
+            // (a point on the great circle through two corners, where only
+            // the exact test can tell).
+            let (a, b) = (corners[0], corners[1]);
+            let on_edge = [a[0] + b[0], a[1] + b[1], a[2] + b[2]];
+            for q in [p, unit([0.3, 0.1, 1.0]), on_edge, a] {
+                let want = (0..m)
+                    .all(|j| det3_sign(q, corners[j], corners[(j + 1) % m]) == Sign::Positive);
+                assert_eq!(positive_fan(q, &corners), want);
+                match want {
+                    true => positive += 1,
+                    false => not += 1,
+                }
+                exact += usize::from(det3_sign(q, a, b) == Sign::Zero);
+            }
+        }
+        assert!(positive > 100 && not > 100 && exact > 100, "{positive} {not} {exact}");
     }
 
     #[test]
