@@ -46,6 +46,7 @@ pub mod mobius_centring;
 pub mod move_towards;
 mod placement;
 mod ring_mesh;
+mod star_lanes;
 pub mod target_pull;
 
 use std::sync::Arc;

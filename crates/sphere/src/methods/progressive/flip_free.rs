@@ -23,6 +23,8 @@ use crate::methods::progressive::chord_area::{self, chord_area, chord_area_hessi
 use crate::methods::progressive::distortion_energy::{
     face_energy, face_energy_hessian, Energy, Reference,
 };
+use crate::methods::progressive::ring_mesh::prefetch;
+use crate::methods::progressive::star_lanes;
 use crate::methods::progressive::target_pull::TargetPull;
 
 /// The energy to lower and the surface it measures against.
@@ -306,7 +308,15 @@ impl Problem<'_> {
     ) -> Option<([f64; 3], f64)> {
         let p = points[i as usize];
         let star = Star::gather(refs, ring, points, corners);
-        let (mut e0, mut g, mut hess) = star.hessian(self.energy, k, chord, p);
+        // The default's isometric energy without the chord-area term: four
+        // faces at a time (the same bits; `None` where the scalar sum was
+        // infinite, which gave up the move below).
+        let lanes = chord == 0.0 && self.energy == Energy::Isometric && star_lanes::available();
+        let (mut e0, mut g, mut hess) = if lanes {
+            star_lanes::isometric_hessian(k, p, refs, star.corners)?
+        } else {
+            star.hessian(self.energy, k, chord, p)
+        };
         if let Some(pull) = self.pull {
             let (pe, pg, ph) = pull.vertex_term(i, p);
             e0 += pe;
@@ -324,7 +334,7 @@ impl Problem<'_> {
         if gnorm == 0.0 || !gnorm.is_finite() {
             return None;
         }
-        let reach = star.corners.iter().map(|&r| norm(sub(r, p))).fold(f64::INFINITY, f64::min);
+        let reach = star_lanes::reach(p, star.corners);
         // Newton direction in the tangent plane: p(s) = (p + s) / |p + s|
         // = p + s - |s|^2 p / 2 + ..., so the Hessian in s is E^T H E - (g . p) I.
         let he =
@@ -353,21 +363,19 @@ impl Problem<'_> {
         }
         let step = add(scale(e1, d[0]), scale(e2, d[1]));
         // det[p + t step, a, b] = det[p, a, b] + t det[step, a, b].
-        let mut t_safe = f64::INFINITY;
-        for (_, a, b) in star.faces() {
-            let rate = det3(step, a, b);
-            if rate < 0.0 {
-                t_safe = t_safe.min(-det3(p, a, b) / rate);
-            }
-        }
+        let t_safe = star_lanes::safe_step(p, step, star.corners);
         let mut t = (SAFE_FRACTION * t_safe).min(1.0);
         for _ in 0..MAX_HALVINGS {
             if let Some(q) = normalize(add(p, scale(step, t))) {
-                let mut e = star.energy(self.energy, k, chord, q);
+                let mut e = if lanes {
+                    star_lanes::isometric_energy(k, q, refs, star.corners)
+                } else {
+                    star.energy(self.energy, k, chord, q)
+                };
                 if let Some(pull) = self.pull {
                     e += pull.energy(i, q);
                 }
-                if e <= e0 + 1e-4 * t * slope && positive_fan(q, star.corners) {
+                if e <= e0 + 1e-4 * t * slope && star_lanes::positive_fan(q, star.corners) {
                     return Some((q, reach));
                 }
             }
@@ -402,8 +410,10 @@ impl Problem<'_> {
             let shared: &[[f64; 3]] = points;
             let moves: Vec<Option<([f64; 3], bool)>> = class
                 .par_iter()
+                .enumerate()
                 .with_min_len(64)
-                .map_init(Vec::new, |corners, &i| {
+                .map_init(Vec::new, |corners, (x, &i)| {
+                    prefetch_ahead(stars, shared, class, active, x);
                     if active.is_some_and(|a| !a[i as usize]) {
                         return None;
                     }
@@ -422,6 +432,35 @@ impl Problem<'_> {
             }
         }
         Ok(moved)
+    }
+}
+
+/// Moves ahead in a class whose memory [`Problem::sweep`] asks for early:
+/// the ring and references of the vertex [`SWEEP_AHEAD`] places on, the
+/// ring's points of the one half as far (its ring fetched by then).
+const SWEEP_AHEAD: usize = 8;
+
+/// Asks the processor for what the moves a few places further down `class`
+/// will read (see [`SWEEP_AHEAD`]). Only a hint: it changes no result.
+fn prefetch_ahead(
+    stars: &Stars,
+    points: &[[f64; 3]],
+    class: &[u32],
+    active: Option<&[bool]>,
+    x: usize,
+) {
+    let awake = |v: u32| active.is_none_or(|a| a[v as usize]);
+    if let Some(&v) = class.get(x + SWEEP_AHEAD) {
+        let at = stars.start[v as usize];
+        prefetch(stars.ring.as_ptr().wrapping_add(at));
+        prefetch(stars.refs.as_ptr().wrapping_add(at));
+    }
+    if let Some(&v) = class.get(x + SWEEP_AHEAD / 2) {
+        if awake(v) {
+            for &r in stars.ring(v) {
+                prefetch(&points[r as usize]);
+            }
+        }
     }
 }
 
@@ -513,11 +552,6 @@ pub struct Stopped;
 /// Whether every face `(p, r_j, r_j+1)` is positively oriented, exactly.
 pub fn positive_star(p: [f64; 3], ring: &[u32], points: &[[f64; 3]]) -> bool {
     all_positive(p, ring.len(), |j| points[ring[j] as usize])
-}
-
-/// [`positive_star`] with the ring's points given in order.
-fn positive_fan(p: [f64; 3], corners: &[[f64; 3]]) -> bool {
-    all_positive(p, corners.len(), |j| corners[j])
 }
 
 fn all_positive(p: [f64; 3], m: usize, corner: impl Fn(usize) -> [f64; 3]) -> bool {

@@ -1,0 +1,674 @@
+//! The sums over a vertex's faces that every flip-free move evaluates
+//! ([`crate::methods::progressive::flip_free`]): the energy with its gradient
+//! and Hessian at the vertex, and the energy at a trial point. The faces are
+//! taken four at a time, laid out by lane (structure of arrays), so that
+//! each arithmetic operation on four faces compiles to one vector
+//! instruction; the thirteen divisions per face of the Hessian and the
+//! three of the energy are most of a move's time when done one face at a
+//! time (issue 27: the move is about 46% of the default map's CPU time).
+//!
+//! **The same bits as one face at a time**: each lane performs exactly the
+//! operations, in the same order, of
+//! [`crate::methods::progressive::distortion_energy::face_energy_hessian`]
+//! and [`crate::methods::progressive::distortion_energy::face_energy`]
+//! (IEEE 754 rounds a vector lane as it rounds a scalar, and Rust contracts no
+//! `a * b + c` into a fused multiply-add), and the faces' terms are then
+//! added in ring order as before. Where the processor has AVX2 the lanes
+//! run as one 256-bit vector (a copy of the code compiled for it, chosen at
+//! run time); elsewhere as two 128-bit ones. A star with any face whose
+//! energy is not finite gives `None`, as the scalar sum (infinite) made the
+//! move give up.
+
+use spherify_mesh::predicates::{det3_sign, Sign};
+use spherify_mesh::vec3::{det3, norm, sub};
+
+use crate::methods::progressive::distortion_energy::{
+    face_energy, face_energy_hessian, Energy, Reference,
+};
+
+/// Faces per group.
+const LANES: usize = 4;
+
+type Lane = [f64; LANES];
+
+/// The energy, gradient and Hessian sums of a star.
+type Sums = (f64, [f64; 3], [[f64; 3]; 3]);
+
+/// Whether the lanes can run here (x86-64 with AVX2; the answer is cached
+/// by the standard library). Elsewhere [`isometric_hessian`] and
+/// [`isometric_energy`] add the faces one at a time, with the same bits.
+#[inline]
+pub fn available() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    {
+        std::arch::is_x86_feature_detected!("avx2")
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        false
+    }
+}
+
+/// The isometric energy of the faces `(p, corners[j], corners[j + 1])`
+/// with references `refs[j]`, its gradient and its Hessian at `p`: the sums
+/// of [`face_energy_hessian`] in ring order, or `None` if a face's energy is
+/// not finite (where that sum is infinite).
+pub fn isometric_hessian(
+    k: f64,
+    p: [f64; 3],
+    refs: &[Reference],
+    corners: &[[f64; 3]],
+) -> Option<Sums> {
+    #[cfg(target_arch = "x86_64")]
+    if available() {
+        // SAFETY: the processor has AVX2 (asked just above).
+        return unsafe { lanes::hessian(k, p, refs, corners) };
+    }
+    scalar_hessian(Energy::Isometric, k, p, refs, corners)
+}
+
+/// The isometric energy of the same faces at `p`: the sum of
+/// [`face_energy`] in ring order.
+pub fn isometric_energy(k: f64, p: [f64; 3], refs: &[Reference], corners: &[[f64; 3]]) -> f64 {
+    #[cfg(target_arch = "x86_64")]
+    if available() {
+        // SAFETY: the processor has AVX2 (asked just above).
+        return unsafe { lanes::energy(k, p, refs, corners) };
+    }
+    scalar_energy(Energy::Isometric, k, p, refs, corners)
+}
+
+/// The largest `t` for which every face `(p + t step, a, b)` of the fan
+/// of `corners` around `p` keeps det > 0 to first order: the least of
+/// -det[p, a, b] / det[step, a, b] over the faces where the latter is
+/// negative (infinite where none is).
+pub fn safe_step(p: [f64; 3], step: [f64; 3], corners: &[[f64; 3]]) -> f64 {
+    #[cfg(target_arch = "x86_64")]
+    if available() {
+        // SAFETY: the processor has AVX2 (asked just above).
+        return unsafe { lanes::safe_step(p, step, corners) };
+    }
+    let m = corners.len();
+    let mut t_safe = f64::INFINITY;
+    for j in 0..m {
+        let (a, b) = (corners[j], corners[(j + 1) % m]);
+        let rate = det3(step, a, b);
+        if rate < 0.0 {
+            t_safe = t_safe.min(-det3(p, a, b) / rate);
+        }
+    }
+    t_safe
+}
+
+/// The distance from `p` to its nearest corner.
+pub fn reach(p: [f64; 3], corners: &[[f64; 3]]) -> f64 {
+    #[cfg(target_arch = "x86_64")]
+    if available() {
+        // SAFETY: the processor has AVX2 (asked just above).
+        return unsafe { lanes::reach(p, corners) };
+    }
+    corners.iter().map(|&r| norm(sub(r, p))).fold(f64::INFINITY, f64::min)
+}
+
+/// Whether every face `(q, corners[j], corners[j + 1])` is positively
+/// oriented, exactly: Shewchuk's first filter of `orient3d` (as the
+/// `robust` crate computes it, with the origin as fourth point) four faces
+/// at a time, and the exact [`det3_sign`] for a face it cannot decide.
+pub fn positive_fan(q: [f64; 3], corners: &[[f64; 3]]) -> bool {
+    #[cfg(target_arch = "x86_64")]
+    if available() {
+        // SAFETY: the processor has AVX2 (asked just above).
+        return unsafe { lanes::positive_fan(q, corners) };
+    }
+    let m = corners.len();
+    (0..m).all(|j| det3_sign(q, corners[j], corners[(j + 1) % m]) == Sign::Positive)
+}
+
+/// [`isometric_hessian`] one face at a time (any energy).
+fn scalar_hessian(
+    energy: Energy,
+    k: f64,
+    p: [f64; 3],
+    refs: &[Reference],
+    corners: &[[f64; 3]],
+) -> Option<Sums> {
+    let m = corners.len();
+    let mut total = (0.0, [0.0; 3], [[0.0; 3]; 3]);
+    for (j, r) in refs.iter().enumerate() {
+        let (e, g, h) = face_energy_hessian(energy, r, k, p, corners[j], corners[(j + 1) % m]);
+        total.0 += e;
+        total.1 = spherify_mesh::vec3::add(total.1, g);
+        for (row, h_row) in total.2.iter_mut().zip(h) {
+            *row = spherify_mesh::vec3::add(*row, h_row);
+        }
+    }
+    total.0.is_finite().then_some(total)
+}
+
+/// [`isometric_energy`] one face at a time (any energy).
+fn scalar_energy(
+    energy: Energy,
+    k: f64,
+    p: [f64; 3],
+    refs: &[Reference],
+    corners: &[[f64; 3]],
+) -> f64 {
+    let m = corners.len();
+    refs.iter()
+        .enumerate()
+        .map(|(j, r)| face_energy(energy, r, k, p, corners[j], corners[(j + 1) % m]))
+        .sum()
+}
+
+#[cfg(target_arch = "x86_64")]
+mod lanes {
+    //! Four faces per 256-bit vector. Every expression below is the scalar
+    //! one of `distortion_energy` (`FaceTerms::new`, `face_energy_hessian`,
+    //! `Energy::density` and `Energy::curvature` for the isometric energy)
+    //! with its operations in the same order.
+
+    use std::arch::x86_64::*;
+    use std::ops::{Add, Div, Mul, Sub};
+
+    use spherify_mesh::predicates::{det3_sign, Sign};
+
+    use super::{Lane, Sums, LANES};
+    use crate::methods::progressive::distortion_energy::Reference;
+
+    #[derive(Clone, Copy)]
+    struct F4(__m256d);
+
+    // The operators are inlined into the `avx2` functions below, where the
+    // intrinsics are available; they are never called elsewhere.
+    impl F4 {
+        #[inline(always)]
+        fn splat(x: f64) -> F4 {
+            F4(unsafe { _mm256_set1_pd(x) })
+        }
+        #[inline(always)]
+        fn load(a: &Lane) -> F4 {
+            F4(unsafe { _mm256_loadu_pd(a.as_ptr()) })
+        }
+        #[inline(always)]
+        fn abs(self) -> F4 {
+            F4(unsafe { _mm256_andnot_pd(_mm256_set1_pd(-0.0), self.0) })
+        }
+        #[inline(always)]
+        fn sqrt(self) -> F4 {
+            F4(unsafe { _mm256_sqrt_pd(self.0) })
+        }
+        #[inline(always)]
+        fn lanes(self) -> Lane {
+            let mut a = [0.0; LANES];
+            unsafe { _mm256_storeu_pd(a.as_mut_ptr(), self.0) };
+            a
+        }
+    }
+    impl Add for F4 {
+        type Output = F4;
+        #[inline(always)]
+        fn add(self, o: F4) -> F4 {
+            F4(unsafe { _mm256_add_pd(self.0, o.0) })
+        }
+    }
+    impl Sub for F4 {
+        type Output = F4;
+        #[inline(always)]
+        fn sub(self, o: F4) -> F4 {
+            F4(unsafe { _mm256_sub_pd(self.0, o.0) })
+        }
+    }
+    impl Mul for F4 {
+        type Output = F4;
+        #[inline(always)]
+        fn mul(self, o: F4) -> F4 {
+            F4(unsafe { _mm256_mul_pd(self.0, o.0) })
+        }
+    }
+    impl Div for F4 {
+        type Output = F4;
+        #[inline(always)]
+        fn div(self, o: F4) -> F4 {
+            F4(unsafe { _mm256_div_pd(self.0, o.0) })
+        }
+    }
+
+    /// Up to four faces `(p, a, b)` of one star, by lane: their two other
+    /// corners and references. A short last group repeats its last face in
+    /// the unused lanes, whose results are never read.
+    struct Group {
+        a: [F4; 3],
+        b: [F4; 3],
+        g00: F4,
+        g01: F4,
+        g11: F4,
+        area: F4,
+        len: usize,
+    }
+
+    #[inline(always)]
+    fn group(refs: &[Reference], corners: &[[f64; 3]], first: usize) -> Group {
+        let m = corners.len();
+        let len = (m - first).min(LANES);
+        let (mut a, mut b) = ([[0.0; LANES]; 3], [[0.0; LANES]; 3]);
+        let mut gram = [[0.0; LANES]; 4];
+        for l in 0..LANES {
+            let j = first + l.min(len - 1);
+            let (pa, pb) = (corners[j], corners[if j + 1 == m { 0 } else { j + 1 }]);
+            for c in 0..3 {
+                a[c][l] = pa[c];
+                b[c][l] = pb[c];
+            }
+            let r = &refs[j];
+            gram[0][l] = r.gram[0];
+            gram[1][l] = r.gram[1];
+            gram[2][l] = r.gram[2];
+            gram[3][l] = r.area;
+        }
+        Group {
+            a: [F4::load(&a[0]), F4::load(&a[1]), F4::load(&a[2])],
+            b: [F4::load(&b[0]), F4::load(&b[1]), F4::load(&b[2])],
+            g00: F4::load(&gram[0]),
+            g01: F4::load(&gram[1]),
+            g11: F4::load(&gram[2]),
+            area: F4::load(&gram[3]),
+            len,
+        }
+    }
+
+    /// The two corners other than the centre of the faces `first ..
+    /// first + 4` of a fan (fewer at the end; the last repeated).
+    #[inline(always)]
+    fn fan_group(corners: &[[f64; 3]], first: usize) -> ([F4; 3], [F4; 3], usize) {
+        let m = corners.len();
+        let len = (m - first).min(LANES);
+        let (mut a, mut b) = ([[0.0; LANES]; 3], [[0.0; LANES]; 3]);
+        for l in 0..LANES {
+            let j = first + l.min(len - 1);
+            let (pa, pb) = (corners[j], corners[if j + 1 == m { 0 } else { j + 1 }]);
+            for c in 0..3 {
+                a[c][l] = pa[c];
+                b[c][l] = pb[c];
+            }
+        }
+        let load = |x: &[Lane; 3]| [F4::load(&x[0]), F4::load(&x[1]), F4::load(&x[2])];
+        (load(&a), load(&b), len)
+    }
+
+    /// `cross(a, b)` by lane, as `vec3::cross`.
+    #[inline(always)]
+    fn cross(a: [F4; 3], b: [F4; 3]) -> [F4; 3] {
+        [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+    }
+
+    #[inline(always)]
+    fn splat3(p: [f64; 3]) -> [F4; 3] {
+        [F4::splat(p[0]), F4::splat(p[1]), F4::splat(p[2])]
+    }
+
+    #[target_feature(enable = "avx2")]
+    pub(super) unsafe fn safe_step(p: [f64; 3], step: [f64; 3], corners: &[[f64; 3]]) -> f64 {
+        let (pv, sv) = (splat3(p), splat3(step));
+        let mut t_safe = f64::INFINITY;
+        for first in (0..corners.len()).step_by(LANES) {
+            let (a, b, len) = fan_group(corners, first);
+            let ab = cross(a, b);
+            // det3(step, a, b) and det3(p, a, b): a dot product with a x b.
+            let (rate, det) = (dot(sv, ab).lanes(), dot(pv, ab).lanes());
+            for l in 0..len {
+                if rate[l] < 0.0 {
+                    t_safe = t_safe.min(-det[l] / rate[l]);
+                }
+            }
+        }
+        t_safe
+    }
+
+    #[target_feature(enable = "avx2")]
+    pub(super) unsafe fn reach(p: [f64; 3], corners: &[[f64; 3]]) -> f64 {
+        let pv = splat3(p);
+        let mut least = f64::INFINITY;
+        // The corners as the first corners of the fan's faces.
+        for first in (0..corners.len()).step_by(LANES) {
+            let (a, _, len) = fan_group(corners, first);
+            let e = [a[0] - pv[0], a[1] - pv[1], a[2] - pv[2]];
+            let r = dot(e, e).sqrt().lanes();
+            for x in &r[..len] {
+                least = least.min(*x);
+            }
+        }
+        least
+    }
+
+    /// `robust::orient3d`'s first error bound, (7 + 56 eps) eps.
+    const O3DERRBOUND_A: f64 = (7.0 + 56.0 * f64::EPSILON / 2.0) * (f64::EPSILON / 2.0);
+
+    #[target_feature(enable = "avx2")]
+    pub(super) unsafe fn positive_fan(q: [f64; 3], corners: &[[f64; 3]]) -> bool {
+        let qv = splat3(q);
+        let bound = F4::splat(O3DERRBOUND_A);
+        for first in (0..corners.len()).step_by(LANES) {
+            let (b, c, len) = fan_group(corners, first);
+            // orient3d(q, b, c, origin) as the robust crate evaluates it:
+            // (a, b, c) - origin is exact.
+            let [adx, ady, adz] = qv;
+            let [bdx, bdy, bdz] = b;
+            let [cdx, cdy, cdz] = c;
+            let (bdxcdy, cdxbdy) = (bdx * cdy, cdx * bdy);
+            let (cdxady, adxcdy) = (cdx * ady, adx * cdy);
+            let (adxbdy, bdxady) = (adx * bdy, bdx * ady);
+            let det = (adz * (bdxcdy - cdxbdy) + bdz * (cdxady - adxcdy)) + cdz * (adxbdy - bdxady);
+            let permanent = ((bdxcdy.abs() + cdxbdy.abs()) * adz.abs()
+                + (cdxady.abs() + adxcdy.abs()) * bdz.abs())
+                + (adxbdy.abs() + bdxady.abs()) * cdz.abs();
+            let (det, errbound) = (det.lanes(), (bound * permanent).lanes());
+            for l in 0..len {
+                if det[l] > errbound[l] {
+                    continue;
+                }
+                if -det[l] > errbound[l] {
+                    return false;
+                }
+                let m = corners.len();
+                let j = first + l;
+                if det3_sign(q, corners[j], corners[(j + 1) % m]) != Sign::Positive {
+                    return false;
+                }
+            }
+        }
+        true
+    }
+
+    /// `FaceTerms::new` by lane, with `a x b` (d's determinant's cross product).
+    struct Terms {
+        q1: [F4; 3],
+        q2: [F4; 3],
+        kdet: F4,
+        a: F4,
+        area_s: F4,
+        d: F4,
+        ab: [F4; 3],
+    }
+
+    #[inline(always)]
+    fn dot(u: [F4; 3], v: [F4; 3]) -> F4 {
+        u[0] * v[0] + u[1] * v[1] + u[2] * v[2]
+    }
+
+    #[inline(always)]
+    fn terms(k: f64, p: [f64; 3], g: &Group) -> Terms {
+        let pv = [F4::splat(p[0]), F4::splat(p[1]), F4::splat(p[2])];
+        let q1 = [g.a[0] - pv[0], g.a[1] - pv[1], g.a[2] - pv[2]];
+        let q2 = [g.b[0] - pv[0], g.b[1] - pv[1], g.b[2] - pv[2]];
+        let k = F4::splat(k);
+        let kdet = k * (g.g00 * g.g11 - g.g01 * g.g01);
+        let two = F4::splat(2.0);
+        let a = (dot(q1, q1) * g.g11 - two * dot(q1, q2) * g.g01 + dot(q2, q2) * g.g00) / kdet;
+        let area_s = k * g.area;
+        let (a3, b3) = (g.a, g.b);
+        let ab = [
+            a3[1] * b3[2] - a3[2] * b3[1],
+            a3[2] * b3[0] - a3[0] * b3[2],
+            a3[0] * b3[1] - a3[1] * b3[0],
+        ];
+        let d = F4::splat(0.5) * dot(pv, ab) / area_s;
+        Terms { q1, q2, kdet, a, area_s, d, ab }
+    }
+
+    /// Whether `Energy::density` is finite at every lane in use: it is
+    /// infinite where d <= 0 or a or d is not finite, or where f overflows.
+    #[inline(always)]
+    fn finite(a: F4, d: F4, f: F4, len: usize) -> bool {
+        let (a, d, f) = (a.lanes(), d.lanes(), f.lanes());
+        let mut all = true;
+        for l in 0..len {
+            all &= d[l] > 0.0 && d[l].is_finite() && a[l].is_finite() && f[l].is_finite();
+        }
+        all
+    }
+
+    #[target_feature(enable = "avx2")]
+    pub(super) unsafe fn hessian(
+        k: f64,
+        p: [f64; 3],
+        refs: &[Reference],
+        corners: &[[f64; 3]],
+    ) -> Option<Sums> {
+        let mut total = (0.0, [0.0; 3], [[0.0; 3]; 3]);
+        let (one, two, half) = (F4::splat(1.0), F4::splat(2.0), F4::splat(0.5));
+        for first in (0..corners.len()).step_by(LANES) {
+            let g = group(refs, corners, first);
+            let Terms { q1, q2, kdet, a, area_s, d, ab } = terms(k, p, &g);
+            // Energy::density and Energy::curvature, isometric.
+            let inv2 = one / (d * d);
+            let f = a * (one + inv2);
+            if !finite(a, d, f, g.len) {
+                return None;
+            }
+            let f_a = one + inv2;
+            let f_d = F4::splat(-2.0) * a * inv2 / d;
+            let d3 = d * d * d;
+            let f_ad = F4::splat(-2.0) / d3;
+            let f_dd = F4::splat(6.0) * a / (d3 * d);
+            // face_energy_hessian.
+            let m2 = F4::splat(-2.0);
+            // Plain loops: closures and `std::array::from_fn` were not
+            // all inlined into this function's AVX2 code.
+            let (mut da, mut dd) = ([F4::splat(0.0); 3], [F4::splat(0.0); 3]);
+            let mut grad = [[0.0; LANES]; 3];
+            for i in 0..3 {
+                da[i] = (m2 * q1[i] * g.g11 + two * (q1[i] + q2[i]) * g.g01 - two * q2[i] * g.g00)
+                    / kdet;
+                dd[i] = half * ab[i] / area_s;
+                grad[i] = (area_s * (f_a * da[i] + f_d * dd[i])).lanes();
+            }
+            let a_curv = two * (g.g11 + g.g00 - two * g.g01) / kdet;
+            let diagonal = f_a * a_curv;
+            let mut hess = [[[0.0; LANES]; 3]; 3];
+            for i in 0..3 {
+                for j in 0..3 {
+                    let mut h = f_ad * (da[i] * dd[j] + dd[i] * da[j]) + f_dd * dd[i] * dd[j];
+                    if i == j {
+                        h = h + diagonal;
+                    }
+                    hess[i][j] = (area_s * h).lanes();
+                }
+            }
+            let e = (area_s * f).lanes();
+            // Face by face in ring order, as the scalar sum.
+            for l in 0..g.len {
+                total.0 += e[l];
+                for (x, g) in total.1.iter_mut().zip(&grad) {
+                    *x += g[l];
+                }
+                for (row, h_row) in total.2.iter_mut().zip(&hess) {
+                    for (x, h) in row.iter_mut().zip(h_row) {
+                        *x += h[l];
+                    }
+                }
+            }
+        }
+        Some(total)
+    }
+
+    #[target_feature(enable = "avx2")]
+    pub(super) unsafe fn energy(
+        k: f64,
+        p: [f64; 3],
+        refs: &[Reference],
+        corners: &[[f64; 3]],
+    ) -> f64 {
+        let one = F4::splat(1.0);
+        // In ring order, as `Iterator::sum` added the faces (from -0.0;
+        // every face's energy is positive, so the start changes no bit).
+        let mut total = -0.0;
+        for first in (0..corners.len()).step_by(LANES) {
+            let g = group(refs, corners, first);
+            let t = terms(k, p, &g);
+            let inv2 = one / (t.d * t.d);
+            let f = (t.a * (one + inv2)).lanes();
+            let (a, d, area_s) = (t.a.lanes(), t.d.lanes(), t.area_s.lanes());
+            for l in 0..g.len {
+                let admissible = d[l] > 0.0 && d[l].is_finite() && a[l].is_finite();
+                total += area_s[l] * if admissible { f[l] } else { f64::INFINITY };
+            }
+        }
+        total
+    }
+}
+
+/// The sums one face at a time, as the moves made them before the lanes
+/// (`Star::hessian` and `Star::energy` of `flip_free`): what the lanes must
+/// equal bit for bit.
+#[cfg(test)]
+fn scalar_sums(k: f64, p: [f64; 3], refs: &[Reference], corners: &[[f64; 3]]) -> (Sums, f64) {
+    let m = corners.len();
+    let energy = Energy::Isometric;
+    let mut total = (0.0, [0.0; 3], [[0.0; 3]; 3]);
+    let mut plain = Vec::with_capacity(m);
+    for (j, r) in refs.iter().enumerate() {
+        let (a, b) = (corners[j], corners[(j + 1) % m]);
+        let (e, g, h) = face_energy_hessian(energy, r, k, p, a, b);
+        total.0 += e;
+        total.1 = spherify_mesh::vec3::add(total.1, g);
+        for (row, h_row) in total.2.iter_mut().zip(h) {
+            *row = spherify_mesh::vec3::add(*row, h_row);
+        }
+        plain.push(face_energy(energy, r, k, p, a, b));
+    }
+    (total, plain.into_iter().sum())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use spherify_mesh::lcg::Lcg;
+
+    fn unit(v: [f64; 3]) -> [f64; 3] {
+        let n = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+        v.map(|x| x / n)
+    }
+
+    /// A vertex, its faces' references and its ring's points.
+    type TestStar = ([f64; 3], Vec<Reference>, Vec<[f64; 3]>);
+
+    /// Random stars of 3 to 13 faces around a point near the north pole
+    /// (some with a face turned over), their references from a random
+    /// surface (some below the area floor).
+    fn stars() -> Vec<TestStar> {
+        let mut rng = Lcg::new(27);
+        let mut out = Vec::new();
+        for m in 3..=13 {
+            for _ in 0..60 {
+                let mut corners = Vec::new();
+                for j in 0..m {
+                    let angle =
+                        std::f64::consts::TAU * (j as f64 + 0.4 * rng.next_f64()) / m as f64;
+                    let r = 0.05 + 0.1 * rng.next_f64();
+                    corners.push(unit([r * angle.cos(), r * angle.sin(), 1.0]));
+                }
+                let p = unit([0.2 * rng.next_f64() - 0.1, 0.2 * rng.next_f64() - 0.1, 1.0]);
+                let s0 = [rng.next_f64(), rng.next_f64(), rng.next_f64()];
+                let refs = (0..m)
+                    .map(|_| {
+                        let s1 = [rng.next_f64(), rng.next_f64(), rng.next_f64()];
+                        let s2 = [rng.next_f64(), rng.next_f64(), rng.next_f64()];
+                        Reference::new(s0, s1, s2, 0.02)
+                    })
+                    .collect();
+                out.push((p, refs, corners));
+            }
+        }
+        out
+    }
+
+    fn bits(s: &Sums) -> Vec<u64> {
+        let mut v = vec![s.0.to_bits()];
+        v.extend(s.1.map(f64::to_bits));
+        v.extend(s.2.iter().flat_map(|row| row.map(f64::to_bits)));
+        v
+    }
+
+    #[test]
+    fn the_lanes_give_the_bits_of_one_face_at_a_time() {
+        let (mut finite, mut infinite) = (0, 0);
+        for (p, refs, corners) in stars() {
+            for k in [0.7, 1.3e-3, 40.0] {
+                let (sums, plain) = scalar_sums(k, p, &refs, &corners);
+                let ways = [
+                    isometric_hessian(k, p, &refs, &corners),
+                    scalar_hessian(Energy::Isometric, k, p, &refs, &corners),
+                ];
+                for got in ways {
+                    match got {
+                        Some(got) => {
+                            assert_eq!(bits(&got), bits(&sums));
+                            finite += 1;
+                        }
+                        None => {
+                            assert!(!sums.0.is_finite());
+                            infinite += 1;
+                        }
+                    }
+                }
+                for e in [
+                    isometric_energy(k, p, &refs, &corners),
+                    scalar_energy(Energy::Isometric, k, p, &refs, &corners),
+                ] {
+                    assert_eq!(e.to_bits(), plain.to_bits());
+                }
+            }
+        }
+        assert!(finite > 1000 && infinite > 100, "{finite} {infinite}");
+    }
+
+    #[test]
+    fn the_fan_tests_in_lanes_give_the_answers_of_one_face_at_a_time() {
+        let mut rng = Lcg::new(2027);
+        let (mut positive, mut not, mut exact) = (0, 0, 0);
+        for (p, _, corners) in stars() {
+            let m = corners.len();
+            let step = [0.1 * rng.next_f64() - 0.05, 0.1 * rng.next_f64() - 0.05, 0.0];
+            let mut t_safe = f64::INFINITY;
+            for j in 0..m {
+                let (a, b) = (corners[j], corners[(j + 1) % m]);
+                let rate = det3(step, a, b);
+                if rate < 0.0 {
+                    t_safe = t_safe.min(-det3(p, a, b) / rate);
+                }
+            }
+            assert_eq!(safe_step(p, step, &corners).to_bits(), t_safe.to_bits());
+            let near = corners.iter().map(|&r| norm(sub(r, p))).fold(f64::INFINITY, f64::min);
+            assert_eq!(reach(p, &corners).to_bits(), near.to_bits());
+            // Centres inside, outside, and exactly on a face's plane
+            // (a point on the great circle through two corners, where only
+            // the exact test can tell).
+            let (a, b) = (corners[0], corners[1]);
+            let on_edge = [a[0] + b[0], a[1] + b[1], a[2] + b[2]];
+            for q in [p, unit([0.3, 0.1, 1.0]), on_edge, a] {
+                let want = (0..m)
+                    .all(|j| det3_sign(q, corners[j], corners[(j + 1) % m]) == Sign::Positive);
+                assert_eq!(positive_fan(q, &corners), want);
+                match want {
+                    true => positive += 1,
+                    false => not += 1,
+                }
+                exact += usize::from(det3_sign(q, a, b) == Sign::Zero);
+            }
+        }
+        assert!(positive > 100 && not > 100 && exact > 100, "{positive} {not} {exact}");
+    }
+
+    #[test]
+    fn a_turned_face_makes_the_star_infinite() {
+        let corners = [[0.1, 0.0, 1.0], [0.0, 0.1, 1.0], [-0.1, 0.0, 1.0], [0.0, -0.1, 1.0]]
+            .map(unit)
+            .to_vec();
+        let refs = vec![Reference::new([0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], 1e-12); 4];
+        let inside = unit([0.0, 0.0, 1.0]);
+        let outside = unit([0.3, 0.0, 1.0]);
+        assert!(isometric_hessian(1.0, inside, &refs, &corners).is_some());
+        assert!(isometric_hessian(1.0, outside, &refs, &corners).is_none());
+        assert_eq!(isometric_energy(1.0, outside, &refs, &corners), f64::INFINITY);
+    }
+}
