@@ -14,8 +14,8 @@
 //! (IEEE 754 rounds a vector lane as it rounds a scalar, and Rust contracts no
 //! `a * b + c` into a fused multiply-add), and the faces' terms are then
 //! added in ring order as before. Where the processor has AVX2 the lanes
-//! run as one 256-bit vector (a copy of the code compiled for it, chosen at
-//! run time); elsewhere as two 128-bit ones. A star with any face whose
+//! run as one 256-bit vector (code compiled for it, chosen at run time);
+//! elsewhere the faces go one at a time, as before. A star with any face whose
 //! energy is not finite gives `None`, as the scalar sum (infinite) made the
 //! move give up.
 
