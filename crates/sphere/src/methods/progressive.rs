@@ -56,7 +56,7 @@ use rayon::prelude::*;
 use spherify_mesh::predicates::{det3_sign, Sign};
 use spherify_mesh::vec3::triangle_area;
 
-use crate::certificate::validity::SphereReport;
+use crate::certificate::validity::{check_sphere, SphereReport};
 use crate::embedding::{normalize, SphereEmbedding, Status};
 use crate::error::SphereError;
 use crate::genus_zero::{GenusZeroMesh, Neighbourhoods};
@@ -785,6 +785,20 @@ pub(crate) fn require_valid_start(report: &SphereReport) -> Result<(), SphereErr
         flipped: report.flipped_faces.len(),
         degree: report.covering_degree,
     })
+}
+
+/// [`require_valid_start`] of `points` on `mesh`, from `certificate` where
+/// their exact test was already made (a map's own certificate), else by
+/// testing them.
+pub(crate) fn require_valid_points(
+    mesh: &GenusZeroMesh,
+    points: &[[f64; 3]],
+    certificate: Option<&SphereReport>,
+) -> Result<(), SphereError> {
+    match certificate {
+        Some(report) => require_valid_start(report),
+        None => require_valid_start(&check_sphere(mesh.faces(), points)),
+    }
 }
 
 /// Per vertex, whether it is among the `fixed` ids (held still by the moves).

@@ -483,26 +483,8 @@ impl<'a> Star<'a> {
         Star { refs, corners }
     }
 
-    /// Each face's reference and its two corners other than the vertex.
-    fn faces(&self) -> impl Iterator<Item = (&Reference, [f64; 3], [f64; 3])> + '_ {
-        let m = self.corners.len();
-        self.refs
-            .iter()
-            .enumerate()
-            .map(move |(j, r)| (r, self.corners[j], self.corners[(j + 1) % m]))
-    }
-
     fn energy(&self, energy: Energy, k: f64, chord: f64, p: [f64; 3]) -> f64 {
-        self.faces()
-            .map(|(r, a, b)| {
-                let e = face_energy(energy, r, k, p, a, b);
-                if chord == 0.0 {
-                    e
-                } else {
-                    e + chord * chord_area(p, a, b)
-                }
-            })
-            .sum()
+        star_energy(energy, k, chord, p, self.refs, self.corners)
     }
 
     fn hessian(
@@ -512,25 +494,67 @@ impl<'a> Star<'a> {
         chord: f64,
         p: [f64; 3],
     ) -> (f64, [f64; 3], [[f64; 3]; 3]) {
-        let mut total = (0.0, [0.0; 3], [[0.0; 3]; 3]);
-        for (r, a, b) in self.faces() {
-            let (mut e, mut g, mut h) = face_energy_hessian(energy, r, k, p, a, b);
-            if chord != 0.0 && e.is_finite() {
-                let (ca, cg, ch) = chord_area_hessian(p, a, b);
-                e += chord * ca;
-                g = add(g, scale(cg, chord));
-                for (row, c_row) in h.iter_mut().zip(ch) {
-                    *row = add(*row, scale(c_row, chord));
-                }
+        star_hessian(energy, k, chord, p, self.refs, self.corners)
+    }
+}
+
+/// The energy of the faces `(p, corners[j], corners[j + 1])` with references
+/// `refs[j]`, plus `chord` times their chord areas, one face at a time in
+/// ring order (what [`crate::methods::progressive::star_lanes`] matches bit
+/// for bit, four faces at a time).
+pub(crate) fn star_energy(
+    energy: Energy,
+    k: f64,
+    chord: f64,
+    p: [f64; 3],
+    refs: &[Reference],
+    corners: &[[f64; 3]],
+) -> f64 {
+    let m = corners.len();
+    refs.iter()
+        .enumerate()
+        .map(|(j, r)| {
+            let (a, b) = (corners[j], corners[(j + 1) % m]);
+            let e = face_energy(energy, r, k, p, a, b);
+            if chord == 0.0 {
+                e
+            } else {
+                e + chord * chord_area(p, a, b)
             }
-            total.0 += e;
-            total.1 = add(total.1, g);
-            for (row, h_row) in total.2.iter_mut().zip(h) {
-                *row = add(*row, h_row);
+        })
+        .sum()
+}
+
+/// [`star_energy`] with its gradient and Hessian at `p`, one face at a time
+/// in ring order.
+pub(crate) fn star_hessian(
+    energy: Energy,
+    k: f64,
+    chord: f64,
+    p: [f64; 3],
+    refs: &[Reference],
+    corners: &[[f64; 3]],
+) -> (f64, [f64; 3], [[f64; 3]; 3]) {
+    let m = corners.len();
+    let mut total = (0.0, [0.0; 3], [[0.0; 3]; 3]);
+    for (j, r) in refs.iter().enumerate() {
+        let (a, b) = (corners[j], corners[(j + 1) % m]);
+        let (mut e, mut g, mut h) = face_energy_hessian(energy, r, k, p, a, b);
+        if chord != 0.0 && e.is_finite() {
+            let (ca, cg, ch) = chord_area_hessian(p, a, b);
+            e += chord * ca;
+            g = add(g, scale(cg, chord));
+            for (row, c_row) in h.iter_mut().zip(ch) {
+                *row = add(*row, scale(c_row, chord));
             }
         }
-        total
+        total.0 += e;
+        total.1 = add(total.1, g);
+        for (row, h_row) in total.2.iter_mut().zip(h) {
+            *row = add(*row, h_row);
+        }
     }
+    total
 }
 
 /// Refuses a stopping tolerance that is negative or not finite.

@@ -12,14 +12,14 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
-use crate::certificate::validity::{check_sphere, SphereReport};
+use crate::certificate::validity::SphereReport;
 use crate::embedding::{normalize, SphereEmbedding, Status};
 use crate::error::SphereError;
 use crate::genus_zero::GenusZeroMesh;
 use crate::methods::progressive::distortion_energy::Energy;
 use crate::methods::progressive::landmarks::{angle, drag_above, slerp};
 use crate::methods::progressive::{
-    held_vertices, neighbourhoods_of, require_valid_start, whole_mesh_problem,
+    held_vertices, neighbourhoods_of, require_valid_points, whole_mesh_problem,
 };
 use spherify_mesh::vec3::det3;
 
@@ -122,10 +122,7 @@ pub(crate) fn move_towards_from(
             goals[i] = Some(if weights[i] >= 1.0 { t } else { slerp(points[i], t, weights[i]) });
         }
     }
-    match certificate {
-        Some(report) => require_valid_start(report)?,
-        None => require_valid_start(&check_sphere(mesh.faces(), points))?,
-    }
+    require_valid_points(mesh, points, certificate)?;
     let started = Instant::now();
     let total = params.passes + params.energy_sweeps;
     let cancelled = |done: usize| SphereError::Cancelled { stage: "move_towards", done, total };

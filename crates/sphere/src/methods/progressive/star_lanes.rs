@@ -22,9 +22,8 @@
 use spherify_mesh::predicates::{det3_sign, Sign};
 use spherify_mesh::vec3::{det3, norm, sub};
 
-use crate::methods::progressive::distortion_energy::{
-    face_energy, face_energy_hessian, Energy, Reference,
-};
+use crate::methods::progressive::distortion_energy::{Energy, Reference};
+use crate::methods::progressive::flip_free::{star_energy, star_hessian};
 
 /// Faces per group.
 const LANES: usize = 4;
@@ -51,7 +50,7 @@ pub fn available() -> bool {
 
 /// The isometric energy of the faces `(p, corners[j], corners[j + 1])`
 /// with references `refs[j]`, its gradient and its Hessian at `p`: the sums
-/// of [`face_energy_hessian`] in ring order, or `None` if a face's energy is
+/// of [`crate::methods::progressive::distortion_energy::face_energy_hessian`] in ring order, or `None` if a face's energy is
 /// not finite (where that sum is infinite).
 pub fn isometric_hessian(
     k: f64,
@@ -64,18 +63,18 @@ pub fn isometric_hessian(
         // SAFETY: the processor has AVX2 (asked just above).
         return unsafe { lanes::hessian(k, p, refs, corners) };
     }
-    scalar_hessian(Energy::Isometric, k, p, refs, corners)
+    scalar_hessian(k, p, refs, corners)
 }
 
 /// The isometric energy of the same faces at `p`: the sum of
-/// [`face_energy`] in ring order.
+/// [`crate::methods::progressive::distortion_energy::face_energy`] in ring order.
 pub fn isometric_energy(k: f64, p: [f64; 3], refs: &[Reference], corners: &[[f64; 3]]) -> f64 {
     #[cfg(target_arch = "x86_64")]
     if available() {
         // SAFETY: the processor has AVX2 (asked just above).
         return unsafe { lanes::energy(k, p, refs, corners) };
     }
-    scalar_energy(Energy::Isometric, k, p, refs, corners)
+    star_energy(Energy::Isometric, k, 0.0, p, refs, corners)
 }
 
 /// The largest `t` for which every face `(p + t step, a, b)` of the fan
@@ -124,40 +123,11 @@ pub fn positive_fan(q: [f64; 3], corners: &[[f64; 3]]) -> bool {
     (0..m).all(|j| det3_sign(q, corners[j], corners[(j + 1) % m]) == Sign::Positive)
 }
 
-/// [`isometric_hessian`] one face at a time (any energy).
-fn scalar_hessian(
-    energy: Energy,
-    k: f64,
-    p: [f64; 3],
-    refs: &[Reference],
-    corners: &[[f64; 3]],
-) -> Option<Sums> {
-    let m = corners.len();
-    let mut total = (0.0, [0.0; 3], [[0.0; 3]; 3]);
-    for (j, r) in refs.iter().enumerate() {
-        let (e, g, h) = face_energy_hessian(energy, r, k, p, corners[j], corners[(j + 1) % m]);
-        total.0 += e;
-        total.1 = spherify_mesh::vec3::add(total.1, g);
-        for (row, h_row) in total.2.iter_mut().zip(h) {
-            *row = spherify_mesh::vec3::add(*row, h_row);
-        }
-    }
+/// [`isometric_hessian`] one face at a time, as the moves of the other
+/// energies add them.
+fn scalar_hessian(k: f64, p: [f64; 3], refs: &[Reference], corners: &[[f64; 3]]) -> Option<Sums> {
+    let total = star_hessian(Energy::Isometric, k, 0.0, p, refs, corners);
     total.0.is_finite().then_some(total)
-}
-
-/// [`isometric_energy`] one face at a time (any energy).
-fn scalar_energy(
-    energy: Energy,
-    k: f64,
-    p: [f64; 3],
-    refs: &[Reference],
-    corners: &[[f64; 3]],
-) -> f64 {
-    let m = corners.len();
-    refs.iter()
-        .enumerate()
-        .map(|(j, r)| face_energy(energy, r, k, p, corners[j], corners[(j + 1) % m]))
-        .sum()
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -517,28 +487,6 @@ mod lanes {
     }
 }
 
-/// The sums one face at a time, as the moves made them before the lanes
-/// (`Star::hessian` and `Star::energy` of `flip_free`): what the lanes must
-/// equal bit for bit.
-#[cfg(test)]
-fn scalar_sums(k: f64, p: [f64; 3], refs: &[Reference], corners: &[[f64; 3]]) -> (Sums, f64) {
-    let m = corners.len();
-    let energy = Energy::Isometric;
-    let mut total = (0.0, [0.0; 3], [[0.0; 3]; 3]);
-    let mut plain = Vec::with_capacity(m);
-    for (j, r) in refs.iter().enumerate() {
-        let (a, b) = (corners[j], corners[(j + 1) % m]);
-        let (e, g, h) = face_energy_hessian(energy, r, k, p, a, b);
-        total.0 += e;
-        total.1 = spherify_mesh::vec3::add(total.1, g);
-        for (row, h_row) in total.2.iter_mut().zip(h) {
-            *row = spherify_mesh::vec3::add(*row, h_row);
-        }
-        plain.push(face_energy(energy, r, k, p, a, b));
-    }
-    (total, plain.into_iter().sum())
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -594,10 +542,12 @@ mod tests {
         let (mut finite, mut infinite) = (0, 0);
         for (p, refs, corners) in stars() {
             for k in [0.7, 1.3e-3, 40.0] {
-                let (sums, plain) = scalar_sums(k, p, &refs, &corners);
+                // One face at a time, as the moves add them without the lanes.
+                let sums = star_hessian(Energy::Isometric, k, 0.0, p, &refs, &corners);
+                let plain = star_energy(Energy::Isometric, k, 0.0, p, &refs, &corners);
                 let ways = [
                     isometric_hessian(k, p, &refs, &corners),
-                    scalar_hessian(Energy::Isometric, k, p, &refs, &corners),
+                    scalar_hessian(k, p, &refs, &corners),
                 ];
                 for got in ways {
                     match got {
@@ -611,12 +561,7 @@ mod tests {
                         }
                     }
                 }
-                for e in [
-                    isometric_energy(k, p, &refs, &corners),
-                    scalar_energy(Energy::Isometric, k, p, &refs, &corners),
-                ] {
-                    assert_eq!(e.to_bits(), plain.to_bits());
-                }
+                assert_eq!(isometric_energy(k, p, &refs, &corners).to_bits(), plain.to_bits());
             }
         }
         assert!(finite > 1000 && infinite > 100, "{finite} {infinite}");

@@ -26,14 +26,14 @@ use std::time::Instant;
 
 use spherify_mesh::vec3::{dot, sub};
 
-use crate::certificate::validity::{check_sphere, SphereReport};
+use crate::certificate::validity::SphereReport;
 use crate::embedding::{normalize, SphereEmbedding, Status};
 use crate::error::SphereError;
 use crate::genus_zero::GenusZeroMesh;
 use crate::methods::progressive::distortion_energy::Energy;
 use crate::methods::progressive::flip_free::{check_tolerance, Problem};
 use crate::methods::progressive::{
-    area_floor, area_floor_of, held_vertices, neighbourhoods_of, require_valid_start,
+    area_floor, area_floor_of, held_vertices, neighbourhoods_of, require_valid_points,
 };
 
 /// One target direction and one weight per vertex (weight 0: no pull).
@@ -198,10 +198,7 @@ pub(crate) fn pull_towards_from(
     }
     let pull = TargetPull::new(targets, weights)?;
     let held = held_vertices(fixed, n)?;
-    match certificate {
-        Some(report) => require_valid_start(report)?,
-        None => require_valid_start(&check_sphere(mesh.faces(), points))?,
-    }
+    require_valid_points(mesh, points, certificate)?;
     let started = Instant::now();
     // Only the free vertices' stars are gathered: the sweeps, the area
     // scale k and the energy that decides convergence then cost the region
@@ -258,6 +255,7 @@ pub(crate) fn pull_towards_from(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::certificate::validity::check_sphere;
     use spherify_mesh::solids::octasphere;
 
     #[test]

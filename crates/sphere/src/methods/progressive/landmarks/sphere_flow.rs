@@ -132,8 +132,8 @@ pub(super) fn flow(
             let mut rep = check_sphere(faces, &moved);
             // A few faces the field turns over (faces far longer than the
             // widths, whose corners the field moves apart): their corners
-            // stay where they are for this increment, and the faces that
-            // turns over in turn, a few times; what passes the exact test
+            // stay where they are for this increment, and so do those of the
+            // faces that this turns over, a few times; what passes the exact test
             // is kept. A landmark held back this way is behind the others
             // and sets the pace of the next increments.
             for _ in 0..LOCAL_RESETS {
