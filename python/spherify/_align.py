@@ -224,59 +224,27 @@ def _gauss_newton(cost: Cost, params: np.ndarray,
                   transform: Callable[[np.ndarray], Callable[[np.ndarray], np.ndarray]],
                   max_iter: int) -> Tuple[np.ndarray, int]:
     """Gauss-Newton on ``params`` (central differences, step halving when the
-    cost does not fall); ``transform(params)`` is the sphere map they stand for."""
-    current = cost(transform(params))
+    cost does not fall); ``transform(params)`` is the sphere map they stand
+    for. Returns the parameters and the iterations taken."""
+    return _gauss_newton_many(cost, [params], lambda _, w: transform(w), max_iter)[0]
+
+
+def _gauss_newton_many(cost: Cost, starts: Sequence[np.ndarray],
+                       transform: Callable[[int, np.ndarray],
+                                           Callable[[np.ndarray], np.ndarray]],
+                       max_iter: int) -> List[Tuple[np.ndarray, int]]:
+    """:func:`_gauss_newton` from each of ``starts`` (``transform(k, params)``
+    the sphere map of start k's parameters), all at once: each start takes
+    its own steps and halvings, but the probes of every start still going
+    are located in one ``to_surface`` call per step, and the trial points of
+    every start still halving in one call per halving (each point is located
+    on its own, so the bits are those of one start at a time). The starts
+    share the core's threads instead of taking one each: three starts on two
+    threads kept one thread busy with two of them (issue 23, speed)."""
     h = 1e-6
-    steps = np.eye(len(params)) * h
-    for iteration in range(1, max_iter + 1):
-        # The residual and both probes of every parameter in one call
-        # (each ``to_surface`` call costs about a millisecond besides its points).
-        probes = [transform(params)] + [transform(params + sign * e)
-                                        for e in steps for sign in (1.0, -1.0)]
-        rows = cost.residuals_of(probes)
-        r = rows[0]
-        jac = ((rows[1::2] - rows[2::2]) / (2 * h)).T
-        step = -np.linalg.lstsq(jac, r, rcond=None)[0]
-        for _ in range(30):
-            trial = params + step
-            value = cost(transform(trial))
-            if value <= current:
-                break
-            step /= 2
-        else:
-            return params, iteration
-        params, previous, current = trial, current, value
-        if np.linalg.norm(step) < 1e-9 or previous - current <= TOLERANCE * max(previous, 1e-300):
-            return params, iteration
-    return params, max_iter
-
-
-def refine_rotation(cost: Cost, rotation: np.ndarray, max_iter: int = 50) -> Tuple[np.ndarray, int]:
-    """Gauss-Newton on the rotation, w in R^3 with R <- exp(w) R."""
-    w, iterations = _gauss_newton(cost, np.zeros(3),
-                                  lambda w: _turn(rodrigues(w) @ rotation), max_iter)
-    return rodrigues(w) @ rotation, iterations
-
-
-def refine_rotations(cost: Cost, rotations: Sequence[np.ndarray],
-                     max_iter: int = 50) -> List[Tuple[np.ndarray, int]]:
-    """:func:`refine_rotation` of each of ``rotations``, all at once: the
-    same Gauss-Newton steps and step halvings, each start's its own, but the
-    probes of every start still going in one ``to_surface`` call per step and
-    the trial points of every start still halving in one call per halving
-    (each point is located on its own, so the bits are those of one
-    :func:`refine_rotation` per start). The starts share the core's threads
-    instead of taking one each: three starts on two threads kept one thread
-    busy with two of them (issue 23, speed)."""
-    h = 1e-6
-    steps = np.eye(3) * h
-    bases = [np.asarray(r) for r in rotations]
-
-    def transform(k: int, w: np.ndarray) -> Callable[[np.ndarray], np.ndarray]:
-        return _turn(rodrigues(w) @ bases[k])
-
-    k_all = len(bases)
-    params = [np.zeros(3) for _ in range(k_all)]
+    k_all = len(starts)
+    params = [np.asarray(w, dtype=np.float64) for w in starts]
+    steps = [np.eye(len(w)) * h for w in params]
     rows = cost.residuals_of([transform(k, params[k]) for k in range(k_all)])
     current = [float(r @ r) for r in rows]
     ended: List[Optional[int]] = [None] * k_all
@@ -284,14 +252,20 @@ def refine_rotations(cost: Cost, rotations: Sequence[np.ndarray],
         live = [k for k in range(k_all) if ended[k] is None]
         if not live:
             break
+        # The residual and both probes of every parameter of every start
+        # going on in one call (each ``to_surface`` call costs about a
+        # millisecond besides its points).
         probes = [t for k in live for t in
                   [transform(k, params[k])] + [transform(k, params[k] + sign * e)
-                                               for e in steps for sign in (1.0, -1.0)]]
-        rows = cost.residuals_of(probes).reshape(len(live), 7, -1)
+                                               for e in steps[k] for sign in (1.0, -1.0)]]
+        rows = cost.residuals_of(probes)
         step = {}
-        for i, k in enumerate(live):
-            jac = ((rows[i, 1::2] - rows[i, 2::2]) / (2 * h)).T
-            step[k] = -np.linalg.lstsq(jac, rows[i, 0], rcond=None)[0]
+        at = 0
+        for k in live:
+            block = rows[at:at + 1 + 2 * len(params[k])]
+            at += len(block)
+            jac = ((block[1::2] - block[2::2]) / (2 * h)).T
+            step[k] = -np.linalg.lstsq(jac, block[0], rcond=None)[0]
         # The line searches side by side: each start halves its step until
         # its cost does not rise (at most 30 times).
         waiting = list(live)
@@ -317,11 +291,22 @@ def refine_rotations(cost: Cost, rotations: Sequence[np.ndarray],
             if (np.linalg.norm(step[k]) < 1e-9
                     or previous - current[k] <= TOLERANCE * max(previous, 1e-300)):
                 ended[k] = iteration
-    out: List[Tuple[np.ndarray, int]] = []
-    for k in range(k_all):
-        end = ended[k]
-        out.append((rodrigues(params[k]) @ bases[k], max_iter if end is None else end))
-    return out
+    return [(w, max_iter if end is None else end) for w, end in zip(params, ended)]
+
+
+def refine_rotation(cost: Cost, rotation: np.ndarray, max_iter: int = 50) -> Tuple[np.ndarray, int]:
+    """Gauss-Newton on the rotation, w in R^3 with R <- exp(w) R."""
+    return refine_rotations(cost, [rotation], max_iter)[0]
+
+
+def refine_rotations(cost: Cost, rotations: Sequence[np.ndarray],
+                     max_iter: int = 50) -> List[Tuple[np.ndarray, int]]:
+    """:func:`refine_rotation` of each of ``rotations``, all at once
+    (:func:`_gauss_newton_many`: the bits of one start at a time)."""
+    bases = [np.asarray(r) for r in rotations]
+    done = _gauss_newton_many(cost, [np.zeros(3) for _ in bases],
+                              lambda k, w: _turn(rodrigues(w) @ bases[k]), max_iter)
+    return [(rodrigues(w) @ base, iterations) for (w, iterations), base in zip(done, bases)]
 
 
 def _batched_gauss_newton(cost: Cost, rotations: np.ndarray, steps: int,
