@@ -8,7 +8,7 @@
 //! A texture atlas is written with one `vt` per face corner
 //! ([`write_per_corner`], for `sp.texture`).
 
-use super::text::{self, next_token, skip_space, take_f64, trim_end, Lines};
+use super::text::{self, next_token, skip_space, take_float, trim_end, Lines};
 use super::{
     finish, line_error, polygon_too_large, LoadedMesh, Triangles, VertexAttributes,
     MAX_POLYGON_CORNERS,
@@ -146,7 +146,7 @@ impl<'n> Reader<'n> {
     fn vertex(&mut self, number: u64, mut rest: &[u8]) -> Result<(), MeshError> {
         let mut p = [0.0; 3];
         for (axis, slot) in p.iter_mut().enumerate() {
-            let value = take_f64(&mut rest).ok_or_else(|| {
+            let value = take_float::<f64>(&mut rest).ok_or_else(|| {
                 let found = text::show_next(rest);
                 line_error(
                     self.name,
@@ -176,12 +176,12 @@ impl<'n> Reader<'n> {
                 format!("vt needs numbers, found {}", text::show_next(rest)),
             )
         };
-        let u = take_f64(&mut rest).ok_or_else(|| bad(rest))?;
+        let u = take_float::<f64>(&mut rest).ok_or_else(|| bad(rest))?;
         // v is optional in OBJ and defaults to 0.
         let v = if skip_space(rest).is_empty() {
             0.0
         } else {
-            take_f64(&mut rest).ok_or_else(|| bad(rest))?
+            take_float::<f64>(&mut rest).ok_or_else(|| bad(rest))?
         };
         self.texcoords.push([u, v]);
         Ok(())

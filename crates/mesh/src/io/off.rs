@@ -8,7 +8,7 @@
 //! A first line that joins the keyword and the vertex count (`OFF490 518 0`,
 //! as in the ModelNet data sets) is read as `OFF 490 518 0`.
 
-use super::text::{self, next_token, take_f64, Lines};
+use super::text::{self, next_token, take_float, Lines};
 use super::{
     finish, line_error, polygon_too_large, LoadedMesh, Triangles, VertexAttributes,
     MAX_POLYGON_CORNERS,
@@ -124,7 +124,7 @@ fn vertices(lines: &mut Lines<'_>, name: &str, nv: u64) -> Result<Vec<[f64; 3]>,
         })?;
         let mut p = [0.0; 3];
         for (axis, slot) in p.iter_mut().enumerate() {
-            let value = take_f64(&mut rest).ok_or_else(|| {
+            let value = take_float::<f64>(&mut rest).ok_or_else(|| {
                 let found = text::show_next(rest);
                 line_error(
                     name,

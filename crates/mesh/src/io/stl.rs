@@ -8,7 +8,7 @@
 //! Ascii coordinates are parsed straight to `f32` like binary ones, so both
 //! encodings of the same mesh load identically.
 
-use super::text::{self, next_token, take_f32, Lines};
+use super::text::{self, next_token, take_float, Lines};
 use super::{byte_error, finish, line_error, LoadedMesh, Triangles, VertexAttributes};
 use crate::error::MeshError;
 use crate::Mesh;
@@ -104,7 +104,7 @@ fn read_ascii(bytes: &[u8], name: &str) -> Result<LoadedMesh, MeshError> {
             Some(b"vertex") => {
                 let mut p = [0.0f32; 3];
                 for slot in &mut p {
-                    *slot = take_f32(&mut rest).ok_or_else(|| {
+                    *slot = take_float::<f32>(&mut rest).ok_or_else(|| {
                         let msg =
                             format!("vertex needs 3 numbers, found {}", text::show_next(rest));
                         line_error(name, number, msg)

@@ -86,28 +86,14 @@ pub(crate) fn next_token<'a>(s: &mut &'a [u8]) -> Option<&'a [u8]> {
     Some(token)
 }
 
-/// Parses the next token as a float, advancing `s`. The number must end at
-/// whitespace or the end of the line, so `1.5abc` is rejected rather than read as 1.5.
+/// Parses the next token as a float of type `T`, advancing `s`. The decimal is
+/// rounded once, straight to `T` (so STL's single-precision coordinates are not
+/// rounded twice through `f64`). The number must end at whitespace or the end of
+/// the line, so `1.5abc` is rejected rather than read as 1.5.
 #[inline]
-pub(crate) fn take_f64(s: &mut &[u8]) -> Option<f64> {
+pub(crate) fn take_float<T: fast_float2::FastFloat>(s: &mut &[u8]) -> Option<T> {
     let rest = skip_space(s);
-    let (value, used) = fast_float2::parse_partial::<f64, _>(rest).ok()?;
-    let tail = rest.get(used..)?;
-    match tail.first() {
-        Some(&b) if !is_space(b) => None,
-        _ => {
-            *s = tail;
-            Some(value)
-        }
-    }
-}
-
-/// Like [`take_f64`] but rounds the decimal straight to `f32` (single rounding),
-/// for STL whose coordinates are single precision.
-#[inline]
-pub(crate) fn take_f32(s: &mut &[u8]) -> Option<f32> {
-    let rest = skip_space(s);
-    let (value, used) = fast_float2::parse_partial::<f32, _>(rest).ok()?;
+    let (value, used) = fast_float2::parse_partial::<T, _>(rest).ok()?;
     let tail = rest.get(used..)?;
     match tail.first() {
         Some(&b) if !is_space(b) => None,
@@ -288,9 +274,9 @@ mod tests {
     #[test]
     fn numbers_parse_strictly() {
         let mut s: &[u8] = b"  1.5 -2e3\t7x";
-        assert_eq!(take_f64(&mut s), Some(1.5));
-        assert_eq!(take_f64(&mut s), Some(-2000.0));
-        assert_eq!(take_f64(&mut s), None);
+        assert_eq!(take_float::<f64>(&mut s), Some(1.5));
+        assert_eq!(take_float::<f64>(&mut s), Some(-2000.0));
+        assert_eq!(take_float::<f64>(&mut s), None);
         assert_eq!(parse_u64(b"123"), Some(123));
         assert_eq!(parse_u64(b"99999999999999999999"), None);
         assert_eq!(parse_i64(b"-17"), Some(-17));
