@@ -1,28 +1,40 @@
 //! The sums over a vertex's faces that every flip-free move evaluates
 //! ([`crate::methods::progressive::flip_free`]): the energy with its gradient
-//! and Hessian at the vertex, and the energy at a trial point. The faces are
-//! taken four at a time, laid out by lane (structure of arrays), so that
-//! each arithmetic operation on four faces compiles to one vector
-//! instruction; the thirteen divisions per face of the Hessian and the
-//! three of the energy are most of a move's time when done one face at a
-//! time (issue 27: the move is about 46% of the default map's CPU time).
+//! and Hessian at the vertex, and the energy at a trial point, with the
+//! chord-area term ([`crate::methods::progressive::chord_area`]) where the
+//! energy pays for it. The faces are taken four at a time, laid out by lane
+//! (structure of arrays), so that each arithmetic operation on four faces
+//! compiles to one vector instruction; the thirteen or more divisions per
+//! face of the Hessian (and the chord term's square root and two more) and
+//! the three of the energy are most of a move's time when done one face at a
+//! time (issue 27: the move is about 46% of the default map's CPU time;
+//! issue 22: the balanced energy's moves dominate its sweeps).
+//!
+//! The densities with lanes: the isometric energy (the default), and the
+//! stretch family, stretch and balanced with their coarse-level and weighted
+//! forms (f = a / (2 d^2), plus w (d + 1/d) for the balanced area term,
+//! plus x a for the coarse levels' expansion cost). The conformal and
+//! authalic energies take the scalar path ([`handles`] is false for them).
 //!
 //! **The same bits as one face at a time**: each lane performs exactly the
 //! operations, in the same order, of
-//! [`crate::methods::progressive::distortion_energy::face_energy_hessian`]
-//! and [`crate::methods::progressive::distortion_energy::face_energy`]
-//! (IEEE 754 rounds a vector lane as it rounds a scalar, and Rust contracts no
-//! `a * b + c` into a fused multiply-add), and the faces' terms are then
-//! added in ring order as before. Where the processor has AVX2 the lanes
-//! run as one 256-bit vector (code compiled for it, chosen at run time);
-//! elsewhere the faces go one at a time, as before. A star with any face whose
-//! energy is not finite gives `None`, as the scalar sum (infinite) made the
-//! move give up.
+//! [`crate::methods::progressive::distortion_energy::face_energy_hessian`],
+//! [`crate::methods::progressive::distortion_energy::face_energy`] (with
+//! `Energy::density` and `Energy::curvature`),
+//! [`crate::methods::progressive::chord_area::chord_area_hessian`] and
+//! [`crate::methods::progressive::chord_area::chord_area`], and of their
+//! combination in `flip_free::star_hessian` / `star_energy` (IEEE 754 rounds
+//! a vector lane as it rounds a scalar, and Rust contracts no `a * b + c`
+//! into a fused multiply-add); the faces' terms are then added in ring order
+//! as before. Where the processor has AVX2 the lanes run as one 256-bit
+//! vector (code compiled for it, chosen at run time); elsewhere the faces go
+//! one at a time, as before. A star with any face whose energy is not finite
+//! gives `None`, as the scalar sum (infinite) made the move give up.
 
 use spherify_mesh::predicates::{det3_sign, Sign};
 use spherify_mesh::vec3::{det3, norm, sub};
 
-use crate::methods::progressive::distortion_energy::{Energy, Reference};
+use crate::methods::progressive::distortion_energy::{Energy, Reference, COARSE_STRETCH_EXPANSION};
 use crate::methods::progressive::flip_free::{star_energy, star_hessian};
 
 /// Faces per group.
@@ -34,8 +46,8 @@ type Lane = [f64; LANES];
 type Sums = (f64, [f64; 3], [[f64; 3]; 3]);
 
 /// Whether the lanes can run here (x86-64 with AVX2; the answer is cached
-/// by the standard library). Elsewhere [`isometric_hessian`] and
-/// [`isometric_energy`] add the faces one at a time, with the same bits.
+/// by the standard library). Elsewhere [`hessian`] and [`energy`] add the
+/// faces one at a time, with the same bits.
 #[inline]
 pub fn available() -> bool {
     #[cfg(target_arch = "x86_64")]
@@ -48,33 +60,74 @@ pub fn available() -> bool {
     }
 }
 
-/// The isometric energy of the faces `(p, corners[j], corners[j + 1])`
-/// with references `refs[j]`, its gradient and its Hessian at `p`: the sums
-/// of [`crate::methods::progressive::distortion_energy::face_energy_hessian`] in ring order, or `None` if a face's energy is
-/// not finite (where that sum is infinite).
-pub fn isometric_hessian(
+/// A density the lanes evaluate, with its weights (see [`Energy::density`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Density {
+    /// a (1 + 1 / d^2).
+    Isometric,
+    /// a / (2 d^2), plus `area` times (d + 1/d) (the balanced energies),
+    /// plus `expansion` times a (the coarse levels' cost of growth).
+    Stretch { area: Option<f64>, expansion: Option<f64> },
+}
+
+/// The lanes' form of `energy`'s density, or `None` (conformal, authalic).
+fn density(energy: Energy) -> Option<Density> {
+    let stretch = |area, expansion| Some(Density::Stretch { area, expansion });
+    match energy {
+        Energy::Isometric => Some(Density::Isometric),
+        Energy::Stretch => stretch(None, None),
+        Energy::CoarseStretch => stretch(None, Some(COARSE_STRETCH_EXPANSION)),
+        Energy::Balanced | Energy::BalancedWeighted(_) => stretch(Some(energy.area_weight()), None),
+        Energy::CoarseBalanced => {
+            stretch(Some(energy.area_weight()), Some(COARSE_STRETCH_EXPANSION))
+        }
+        Energy::Conformal | Energy::Authalic => None,
+    }
+}
+
+/// Whether [`hessian`] and [`energy`] run `energy`'s faces in lanes here.
+#[inline]
+pub fn handles(energy: Energy) -> bool {
+    density(energy).is_some() && available()
+}
+
+/// `energy`'s density over the faces `(p, corners[j], corners[j + 1])` with
+/// references `refs[j]`, plus `chord` times their chord areas, its gradient
+/// and its Hessian at `p`: the sums of `flip_free::star_hessian` (bit for
+/// bit), or `None` if a face's energy is not finite (where that sum is
+/// infinite).
+pub fn hessian(
+    energy: Energy,
     k: f64,
+    chord: f64,
     p: [f64; 3],
     refs: &[Reference],
     corners: &[[f64; 3]],
 ) -> Option<Sums> {
     #[cfg(target_arch = "x86_64")]
-    if available() {
+    if let (Some(density), true) = (density(energy), available()) {
         // SAFETY: the processor has AVX2 (asked just above).
-        return unsafe { lanes::hessian(k, p, refs, corners) };
+        return unsafe { lanes::hessian(density, k, chord, p, refs, corners) };
     }
-    scalar_hessian(k, p, refs, corners)
+    scalar_hessian(energy, k, chord, p, refs, corners)
 }
 
-/// The isometric energy of the same faces at `p`: the sum of
-/// [`crate::methods::progressive::distortion_energy::face_energy`] in ring order.
-pub fn isometric_energy(k: f64, p: [f64; 3], refs: &[Reference], corners: &[[f64; 3]]) -> f64 {
+/// The same energy of the same faces at `p`: `flip_free::star_energy`, bit
+/// for bit.
+pub fn energy(
+    energy: Energy,
+    k: f64,
+    chord: f64,
+    p: [f64; 3],
+    refs: &[Reference],
+    corners: &[[f64; 3]],
+) -> f64 {
     #[cfg(target_arch = "x86_64")]
-    if available() {
+    if let (Some(density), true) = (density(energy), available()) {
         // SAFETY: the processor has AVX2 (asked just above).
-        return unsafe { lanes::energy(k, p, refs, corners) };
+        return unsafe { lanes::energy(density, k, chord, p, refs, corners) };
     }
-    star_energy(Energy::Isometric, k, 0.0, p, refs, corners)
+    star_energy(energy, k, chord, p, refs, corners)
 }
 
 /// The largest `t` for which every face `(p + t step, a, b)` of the fan
@@ -123,10 +176,17 @@ pub fn positive_fan(q: [f64; 3], corners: &[[f64; 3]]) -> bool {
     (0..m).all(|j| det3_sign(q, corners[j], corners[(j + 1) % m]) == Sign::Positive)
 }
 
-/// [`isometric_hessian`] one face at a time, as the moves of the other
-/// energies add them.
-fn scalar_hessian(k: f64, p: [f64; 3], refs: &[Reference], corners: &[[f64; 3]]) -> Option<Sums> {
-    let total = star_hessian(Energy::Isometric, k, 0.0, p, refs, corners);
+/// [`hessian`] one face at a time, as the moves of the other energies add
+/// them.
+fn scalar_hessian(
+    energy: Energy,
+    k: f64,
+    chord: f64,
+    p: [f64; 3],
+    refs: &[Reference],
+    corners: &[[f64; 3]],
+) -> Option<Sums> {
+    let total = star_hessian(energy, k, chord, p, refs, corners);
     total.0.is_finite().then_some(total)
 }
 
@@ -134,15 +194,16 @@ fn scalar_hessian(k: f64, p: [f64; 3], refs: &[Reference], corners: &[[f64; 3]])
 mod lanes {
     //! Four faces per 256-bit vector. Every expression below is the scalar
     //! one of `distortion_energy` (`FaceTerms::new`, `face_energy_hessian`,
-    //! `Energy::density` and `Energy::curvature` for the isometric energy)
-    //! with its operations in the same order.
+    //! `Energy::density` and `Energy::curvature`), of `chord_area` and of
+    //! `flip_free::star_hessian` / `star_energy`, with its operations in the
+    //! same order.
 
     use std::arch::x86_64::*;
     use std::ops::{Add, Div, Mul, Sub};
 
     use spherify_mesh::predicates::{det3_sign, Sign};
 
-    use super::{Lane, Sums, LANES};
+    use super::{Density, Lane, Sums, LANES};
     use crate::methods::progressive::distortion_energy::Reference;
 
     #[derive(Clone, Copy)]
@@ -162,6 +223,21 @@ mod lanes {
         #[inline(always)]
         fn abs(self) -> F4 {
             F4(unsafe { _mm256_andnot_pd(_mm256_set1_pd(-0.0), self.0) })
+        }
+        /// `-x`: the sign bit flipped, as the scalar negation.
+        #[inline(always)]
+        fn neg(self) -> F4 {
+            F4(unsafe { _mm256_xor_pd(_mm256_set1_pd(-0.0), self.0) })
+        }
+        /// Each lane where `keep` holds, and +0.0 elsewhere.
+        #[inline(always)]
+        fn and(self, keep: F4) -> F4 {
+            F4(unsafe { _mm256_and_pd(self.0, keep.0) })
+        }
+        /// All bits set where `self > o` (ordered: false for a NaN).
+        #[inline(always)]
+        fn gt(self, o: F4) -> F4 {
+            F4(unsafe { _mm256_cmp_pd::<_CMP_GT_OQ>(self.0, o.0) })
         }
         #[inline(always)]
         fn sqrt(self) -> F4 {
@@ -397,61 +473,243 @@ mod lanes {
         all
     }
 
+    /// A density by lane: f, f_a, f_d (`Energy::density`) and f_ad, f_dd
+    /// (`Energy::curvature`), each in the scalar code's order.
+    trait LaneDensity: Copy {
+        fn first(self, a: F4, d: F4) -> (F4, F4, F4);
+        fn second(self, a: F4, d: F4) -> (F4, F4);
+        /// f alone (the trial energy).
+        fn value(self, a: F4, d: F4) -> F4;
+    }
+
+    #[derive(Clone, Copy)]
+    struct Isometric;
+
+    impl LaneDensity for Isometric {
+        #[inline(always)]
+        fn first(self, a: F4, d: F4) -> (F4, F4, F4) {
+            let one = F4::splat(1.0);
+            let inv2 = one / (d * d);
+            (a * (one + inv2), one + inv2, F4::splat(-2.0) * a * inv2 / d)
+        }
+        #[inline(always)]
+        fn second(self, a: F4, d: F4) -> (F4, F4) {
+            let d3 = d * d * d;
+            (F4::splat(-2.0) / d3, F4::splat(6.0) * a / (d3 * d))
+        }
+        #[inline(always)]
+        fn value(self, a: F4, d: F4) -> F4 {
+            let one = F4::splat(1.0);
+            a * (one + one / (d * d))
+        }
+    }
+
+    /// a / (2 d^2), plus w (d + 1/d) if `AREA`, plus x a if `EXPANSION`
+    /// (stretch, balanced and their coarse-level forms), `two_w` = 2 w.
+    #[derive(Clone, Copy)]
+    struct Stretch<const AREA: bool, const EXPANSION: bool> {
+        w: F4,
+        two_w: F4,
+        x: F4,
+    }
+
+    impl<const AREA: bool, const EXPANSION: bool> Stretch<AREA, EXPANSION> {
+        #[inline(always)]
+        fn f(self, a: F4, d: F4, inv2: F4) -> F4 {
+            let mut f = F4::splat(0.5) * a * inv2;
+            if AREA {
+                f = f + self.w * (d + F4::splat(1.0) / d);
+            }
+            if EXPANSION {
+                f = f + self.x * a;
+            }
+            f
+        }
+    }
+
+    impl<const AREA: bool, const EXPANSION: bool> LaneDensity for Stretch<AREA, EXPANSION> {
+        #[inline(always)]
+        fn first(self, a: F4, d: F4) -> (F4, F4, F4) {
+            let inv2 = F4::splat(1.0) / (d * d);
+            let mut f_a = F4::splat(0.5) * inv2;
+            if EXPANSION {
+                f_a = f_a + self.x;
+            }
+            let mut f_d = a.neg() * inv2 / d;
+            if AREA {
+                f_d = f_d + self.w * (F4::splat(1.0) - inv2);
+            }
+            (self.f(a, d, inv2), f_a, f_d)
+        }
+        #[inline(always)]
+        fn second(self, a: F4, d: F4) -> (F4, F4) {
+            let d3 = d * d * d;
+            let mut f_dd = F4::splat(3.0) * a / (d3 * d);
+            if AREA {
+                f_dd = f_dd + self.two_w / d3;
+            }
+            (F4::splat(-1.0) / d3, f_dd)
+        }
+        #[inline(always)]
+        fn value(self, a: F4, d: F4) -> F4 {
+            self.f(a, d, F4::splat(1.0) / (d * d))
+        }
+    }
+
+    /// Calls `$run` with `$density` as its [`LaneDensity`] type.
+    macro_rules! with_density {
+        ($density:expr, $run:ident($($arg:expr),*)) => {
+            match $density {
+                Density::Isometric => $run(Isometric, $($arg),*),
+                Density::Stretch { area, expansion } => {
+                    let w = area.unwrap_or(0.0);
+                    let x = expansion.unwrap_or(0.0);
+                    let s = |w: f64| (F4::splat(w), F4::splat(2.0 * w), F4::splat(x));
+                    let (w, two_w, x) = s(w);
+                    match (area.is_some(), expansion.is_some()) {
+                        (false, false) => $run(Stretch::<false, false> { w, two_w, x }, $($arg),*),
+                        (false, true) => $run(Stretch::<false, true> { w, two_w, x }, $($arg),*),
+                        (true, false) => $run(Stretch::<true, false> { w, two_w, x }, $($arg),*),
+                        (true, true) => $run(Stretch::<true, true> { w, two_w, x }, $($arg),*),
+                    }
+                }
+            }
+        };
+    }
+
+    /// `chord_area_hessian(p, a, b)` by lane, with q1 = a - p, q2 = b - p:
+    /// the chord area, its gradient and its Hessian at p, zero where the
+    /// chord triangle is degenerate (|n| zero or not finite).
+    #[inline(always)]
+    fn chord_terms(
+        q1: [F4; 3],
+        q2: [F4; 3],
+        a: [F4; 3],
+        b: [F4; 3],
+    ) -> (F4, [F4; 3], [[F4; 3]; 3]) {
+        let n = cross(q1, q2);
+        let len = dot(n, n).sqrt();
+        // len != 0 and finite: len is a square root, so 0 < len < inf.
+        let keep = len.gt(F4::splat(0.0)).and(F4::splat(f64::INFINITY).gt(len));
+        let inv = F4::splat(1.0) / len;
+        let u = [n[0] * inv, n[1] * inv, n[2] * inv];
+        let e = [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+        let w = cross(u, e);
+        let (ee, half) = (dot(e, e), F4::splat(0.5) / len);
+        let (zero, minus_half) = (F4::splat(0.0), F4::splat(-0.5));
+        let mut hess = [[zero; 3]; 3];
+        for i in 0..3 {
+            for j in i..3 {
+                let diagonal = if i == j { ee } else { zero };
+                // Symmetric: e_i e_j and w_i w_j are products of two factors.
+                hess[i][j] = ((diagonal - e[i] * e[j] - w[i] * w[j]) * half).and(keep);
+                hess[j][i] = hess[i][j];
+            }
+        }
+        let grad = [
+            (w[0] * minus_half).and(keep),
+            (w[1] * minus_half).and(keep),
+            (w[2] * minus_half).and(keep),
+        ];
+        ((F4::splat(0.5) * len).and(keep), grad, hess)
+    }
+
     #[target_feature(enable = "avx2")]
     pub(super) unsafe fn hessian(
+        density: Density,
         k: f64,
+        chord: f64,
+        p: [f64; 3],
+        refs: &[Reference],
+        corners: &[[f64; 3]],
+    ) -> Option<Sums> {
+        with_density!(density, hessian_with(k, chord, p, refs, corners))
+    }
+
+    #[target_feature(enable = "avx2")]
+    pub(super) unsafe fn energy(
+        density: Density,
+        k: f64,
+        chord: f64,
+        p: [f64; 3],
+        refs: &[Reference],
+        corners: &[[f64; 3]],
+    ) -> f64 {
+        with_density!(density, energy_with(k, chord, p, refs, corners))
+    }
+
+    #[target_feature(enable = "avx2")]
+    unsafe fn hessian_with<D: LaneDensity>(
+        density: D,
+        k: f64,
+        chord: f64,
         p: [f64; 3],
         refs: &[Reference],
         corners: &[[f64; 3]],
     ) -> Option<Sums> {
         let mut total = (0.0, [0.0; 3], [[0.0; 3]; 3]);
-        let (one, two, half) = (F4::splat(1.0), F4::splat(2.0), F4::splat(0.5));
+        let (two, half, c) = (F4::splat(2.0), F4::splat(0.5), F4::splat(chord));
         for first in (0..corners.len()).step_by(LANES) {
             let g = group(refs, corners, first);
             let Terms { q1, q2, kdet, a, area_s, d, ab } = terms(k, p, &g);
-            // Energy::density and Energy::curvature, isometric.
-            let inv2 = one / (d * d);
-            let f = a * (one + inv2);
+            // Energy::density and Energy::curvature.
+            let (f, f_a, f_d) = density.first(a, d);
             if !finite(a, d, f, g.len) {
                 return None;
             }
-            let f_a = one + inv2;
-            let f_d = F4::splat(-2.0) * a * inv2 / d;
-            let d3 = d * d * d;
-            let f_ad = F4::splat(-2.0) / d3;
-            let f_dd = F4::splat(6.0) * a / (d3 * d);
+            let (f_ad, f_dd) = density.second(a, d);
             // face_energy_hessian.
             let m2 = F4::splat(-2.0);
             // Plain loops: closures and `std::array::from_fn` were not
             // all inlined into this function's AVX2 code.
             let (mut da, mut dd) = ([F4::splat(0.0); 3], [F4::splat(0.0); 3]);
-            let mut grad = [[0.0; LANES]; 3];
+            let mut grad = [F4::splat(0.0); 3];
             for i in 0..3 {
                 da[i] = (m2 * q1[i] * g.g11 + two * (q1[i] + q2[i]) * g.g01 - two * q2[i] * g.g00)
                     / kdet;
                 dd[i] = half * ab[i] / area_s;
-                grad[i] = (area_s * (f_a * da[i] + f_d * dd[i])).lanes();
+                grad[i] = area_s * (f_a * da[i] + f_d * dd[i]);
             }
             let a_curv = two * (g.g11 + g.g00 - two * g.g01) / kdet;
             let diagonal = f_a * a_curv;
-            let mut hess = [[[0.0; LANES]; 3]; 3];
+            let mut hess = [[F4::splat(0.0); 3]; 3];
             for i in 0..3 {
                 for j in 0..3 {
                     let mut h = f_ad * (da[i] * dd[j] + dd[i] * da[j]) + f_dd * dd[i] * dd[j];
                     if i == j {
                         h = h + diagonal;
                     }
-                    hess[i][j] = (area_s * h).lanes();
+                    hess[i][j] = area_s * h;
                 }
             }
-            let e = (area_s * f).lanes();
+            let mut e = area_s * f;
+            // star_hessian's chord-area term: e + chord ca, g + cg chord,
+            // h + ch chord.
+            if chord != 0.0 {
+                let (ca, cg, ch) = chord_terms(q1, q2, g.a, g.b);
+                e = e + c * ca;
+                for i in 0..3 {
+                    grad[i] = grad[i] + cg[i] * c;
+                    for j in 0..3 {
+                        hess[i][j] = hess[i][j] + ch[i][j] * c;
+                    }
+                }
+            }
+            let e = e.lanes();
+            let grad = [grad[0].lanes(), grad[1].lanes(), grad[2].lanes()];
+            let mut h = [[[0.0; LANES]; 3]; 3];
+            for i in 0..3 {
+                for j in 0..3 {
+                    h[i][j] = hess[i][j].lanes();
+                }
+            }
             // Face by face in ring order, as the scalar sum.
             for l in 0..g.len {
                 total.0 += e[l];
                 for (x, g) in total.1.iter_mut().zip(&grad) {
                     *x += g[l];
                 }
-                for (row, h_row) in total.2.iter_mut().zip(&hess) {
+                for (row, h_row) in total.2.iter_mut().zip(&h) {
                     for (x, h) in row.iter_mut().zip(h_row) {
                         *x += h[l];
                     }
@@ -462,25 +720,34 @@ mod lanes {
     }
 
     #[target_feature(enable = "avx2")]
-    pub(super) unsafe fn energy(
+    unsafe fn energy_with<D: LaneDensity>(
+        density: D,
         k: f64,
+        chord: f64,
         p: [f64; 3],
         refs: &[Reference],
         corners: &[[f64; 3]],
     ) -> f64 {
-        let one = F4::splat(1.0);
+        let (c, half) = (F4::splat(chord), F4::splat(0.5));
         // In ring order, as `Iterator::sum` added the faces (from -0.0;
         // every face's energy is positive, so the start changes no bit).
         let mut total = -0.0;
         for first in (0..corners.len()).step_by(LANES) {
             let g = group(refs, corners, first);
             let t = terms(k, p, &g);
-            let inv2 = one / (t.d * t.d);
-            let f = (t.a * (one + inv2)).lanes();
+            let f = density.value(t.a, t.d).lanes();
             let (a, d, area_s) = (t.a.lanes(), t.d.lanes(), t.area_s.lanes());
+            // chord * chord_area(p, a, b), chord_area = 0.5 |q1 x q2|.
+            let chord_term = if chord != 0.0 {
+                let n = cross(t.q1, t.q2);
+                (c * (half * dot(n, n).sqrt())).lanes()
+            } else {
+                [0.0; LANES]
+            };
             for l in 0..g.len {
                 let admissible = d[l] > 0.0 && d[l].is_finite() && a[l].is_finite();
-                total += area_s[l] * if admissible { f[l] } else { f64::INFINITY };
+                let e = area_s[l] * if admissible { f[l] } else { f64::INFINITY };
+                total += if chord == 0.0 { e } else { e + chord_term[l] };
             }
         }
         total
@@ -489,6 +756,7 @@ mod lanes {
 
 #[cfg(test)]
 mod tests {
+    use super::energy as energy_of;
     use super::*;
     use spherify_mesh::lcg::Lcg;
 
@@ -537,34 +805,55 @@ mod tests {
         v
     }
 
+    /// Every energy, those with lanes and those without.
+    const ENERGIES: [Energy; 10] = [
+        Energy::Isometric,
+        Energy::Stretch,
+        Energy::CoarseStretch,
+        Energy::Balanced,
+        Energy::BalancedWeighted(20),
+        Energy::BalancedWeighted(1300),
+        Energy::BalancedWeighted(457),
+        Energy::CoarseBalanced,
+        Energy::Conformal,
+        Energy::Authalic,
+    ];
+
     #[test]
     fn the_lanes_give_the_bits_of_one_face_at_a_time() {
         let (mut finite, mut infinite) = (0, 0);
         for (p, refs, corners) in stars() {
-            for k in [0.7, 1.3e-3, 40.0] {
-                // One face at a time, as the moves add them without the lanes.
-                let sums = star_hessian(Energy::Isometric, k, 0.0, p, &refs, &corners);
-                let plain = star_energy(Energy::Isometric, k, 0.0, p, &refs, &corners);
-                let ways = [
-                    isometric_hessian(k, p, &refs, &corners),
-                    scalar_hessian(k, p, &refs, &corners),
-                ];
-                for got in ways {
-                    match got {
-                        Some(got) => {
-                            assert_eq!(bits(&got), bits(&sums));
-                            finite += 1;
+            for energy in ENERGIES {
+                for k in [0.7, 1.3e-3, 40.0] {
+                    for chord in [0.0, 0.37, 12.5] {
+                        // One face at a time, as the moves add them without the lanes.
+                        let sums = star_hessian(energy, k, chord, p, &refs, &corners);
+                        let plain = star_energy(energy, k, chord, p, &refs, &corners);
+                        let ways = [
+                            hessian(energy, k, chord, p, &refs, &corners),
+                            scalar_hessian(energy, k, chord, p, &refs, &corners),
+                        ];
+                        for got in ways {
+                            match got {
+                                Some(got) => {
+                                    assert_eq!(bits(&got), bits(&sums), "{energy:?} {chord}");
+                                    finite += 1;
+                                }
+                                None => {
+                                    assert!(!sums.0.is_finite());
+                                    infinite += 1;
+                                }
+                            }
                         }
-                        None => {
-                            assert!(!sums.0.is_finite());
-                            infinite += 1;
-                        }
+                        let got = energy_of(energy, k, chord, p, &refs, &corners);
+                        assert_eq!(got.to_bits(), plain.to_bits(), "{energy:?} {chord}");
                     }
                 }
-                assert_eq!(isometric_energy(k, p, &refs, &corners).to_bits(), plain.to_bits());
             }
         }
-        assert!(finite > 1000 && infinite > 100, "{finite} {infinite}");
+        assert!(finite > 50_000 && infinite > 5_000, "{finite} {infinite}");
+        assert_eq!(handles(Energy::Balanced), available());
+        assert!(!handles(Energy::Conformal) && !handles(Energy::Authalic));
     }
 
     #[test]
@@ -612,8 +901,12 @@ mod tests {
         let refs = vec![Reference::new([0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], 1e-12); 4];
         let inside = unit([0.0, 0.0, 1.0]);
         let outside = unit([0.3, 0.0, 1.0]);
-        assert!(isometric_hessian(1.0, inside, &refs, &corners).is_some());
-        assert!(isometric_hessian(1.0, outside, &refs, &corners).is_none());
-        assert_eq!(isometric_energy(1.0, outside, &refs, &corners), f64::INFINITY);
+        for e in ENERGIES {
+            for chord in [0.0, 0.5] {
+                assert!(hessian(e, 1.0, chord, inside, &refs, &corners).is_some());
+                assert!(hessian(e, 1.0, chord, outside, &refs, &corners).is_none());
+                assert_eq!(energy_of(e, 1.0, chord, outside, &refs, &corners), f64::INFINITY);
+            }
+        }
     }
 }
