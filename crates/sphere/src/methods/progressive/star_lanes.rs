@@ -34,7 +34,12 @@
 use spherify_mesh::predicates::{det3_sign, Sign};
 use spherify_mesh::vec3::{det3, norm, sub};
 
-use crate::methods::progressive::distortion_energy::{Energy, Reference, COARSE_STRETCH_EXPANSION};
+use spherify_mesh::vec3::{add, scale};
+
+use crate::methods::progressive::chord_area::{chord_area, chord_area_gradients};
+use crate::methods::progressive::distortion_energy::{
+    face_energy, face_energy_gradients, Energy, Reference, COARSE_STRETCH_EXPANSION,
+};
 use crate::methods::progressive::flip_free::{star_energy, star_hessian};
 
 /// Faces per group.
@@ -128,6 +133,91 @@ pub fn energy(
         return unsafe { lanes::energy(density, k, chord, p, refs, corners) };
     }
     star_energy(energy, k, chord, p, refs, corners)
+}
+
+/// One face's energy plus `mu` times its chord area, that sum's gradients
+/// at its three corners, and the density's f_a (what
+/// [`crate::methods::progressive::lbfgs`] takes from each face).
+pub type FaceGradients = (f64, [[f64; 3]; 3], f64);
+
+/// [`face_gradients_one`] for each face `faces[f]` (corner indices into
+/// `points`) with reference `refs[f]`, in face order.
+pub fn face_gradients(
+    energy: Energy,
+    k: f64,
+    mu: f64,
+    points: &[[f64; 3]],
+    faces: &[[u32; 3]],
+    refs: &[Reference],
+) -> Vec<FaceGradients> {
+    #[cfg(target_arch = "x86_64")]
+    if let (Some(density), true) = (density(energy), available()) {
+        // SAFETY: the processor has AVX2 (asked just above).
+        return unsafe { lanes::face_gradients(density, k, mu, points, faces, refs) };
+    }
+    faces
+        .iter()
+        .zip(refs)
+        .map(|(&f, r)| face_gradients_one(energy, r, k, mu, f.map(|v| points[v as usize])))
+        .collect()
+}
+
+/// One face's [`FaceGradients`], one face at a time: `face_energy_gradients`
+/// with `mu` times `chord_area_gradients` added where the energy is finite.
+pub fn face_gradients_one(
+    energy: Energy,
+    r: &Reference,
+    k: f64,
+    mu: f64,
+    [pa, pb, pc]: [[f64; 3]; 3],
+) -> FaceGradients {
+    let (mut e, mut g, f_a) = face_energy_gradients(energy, r, k, pa, pb, pc);
+    if mu != 0.0 && e.is_finite() {
+        let (area, cg) = chord_area_gradients(pa, pb, pc);
+        e += mu * area;
+        for (gi, ci) in g.iter_mut().zip(cg) {
+            *gi = add(*gi, scale(ci, mu));
+        }
+    }
+    (e, g, f_a)
+}
+
+/// The sum in face order (from -0.0, as `Iterator::sum`) of each face's
+/// energy plus `mu` times its chord area: [`face_energy_one`] added up.
+pub fn faces_energy(
+    energy: Energy,
+    k: f64,
+    mu: f64,
+    points: &[[f64; 3]],
+    faces: &[[u32; 3]],
+    refs: &[Reference],
+) -> f64 {
+    #[cfg(target_arch = "x86_64")]
+    if let (Some(density), true) = (density(energy), available()) {
+        // SAFETY: the processor has AVX2 (asked just above).
+        return unsafe { lanes::faces_energy(density, k, mu, points, faces, refs) };
+    }
+    faces
+        .iter()
+        .zip(refs)
+        .map(|(&f, r)| face_energy_one(energy, r, k, mu, f.map(|v| points[v as usize])))
+        .sum()
+}
+
+/// One face's energy plus `mu` times its chord area, one face at a time.
+pub fn face_energy_one(
+    energy: Energy,
+    r: &Reference,
+    k: f64,
+    mu: f64,
+    [pa, pb, pc]: [[f64; 3]; 3],
+) -> f64 {
+    let e = face_energy(energy, r, k, pa, pb, pc);
+    if mu == 0.0 {
+        e
+    } else {
+        e + mu * chord_area(pa, pb, pc)
+    }
 }
 
 /// The largest `t` for which every face `(p + t step, a, b)` of the fan
@@ -233,6 +323,16 @@ mod lanes {
         #[inline(always)]
         fn and(self, keep: F4) -> F4 {
             F4(unsafe { _mm256_and_pd(self.0, keep.0) })
+        }
+        /// `self` where `mask` is set, `other` elsewhere.
+        #[inline(always)]
+        fn select(self, mask: F4, other: F4) -> F4 {
+            F4(unsafe { _mm256_blendv_pd(other.0, self.0, mask.0) })
+        }
+        /// All bits set where the lane is finite.
+        #[inline(always)]
+        fn finite_mask(self) -> F4 {
+            F4::splat(f64::INFINITY).gt(self.abs())
         }
         /// All bits set where `self > o` (ordered: false for a NaN).
         #[inline(always)]
@@ -443,7 +543,12 @@ mod lanes {
 
     #[inline(always)]
     fn terms(k: f64, p: [f64; 3], g: &Group) -> Terms {
-        let pv = [F4::splat(p[0]), F4::splat(p[1]), F4::splat(p[2])];
+        terms_at(k, splat3(p), g)
+    }
+
+    /// [`terms`] with the first corner by lane (faces of a face list).
+    #[inline(always)]
+    fn terms_at(k: f64, pv: [F4; 3], g: &Group) -> Terms {
         let q1 = [g.a[0] - pv[0], g.a[1] - pv[1], g.a[2] - pv[2]];
         let q2 = [g.b[0] - pv[0], g.b[1] - pv[1], g.b[2] - pv[2]];
         let k = F4::splat(k);
@@ -683,17 +788,18 @@ mod lanes {
                 }
             }
             let mut e = area_s * f;
-            // star_hessian's chord-area term: e + chord ca, g + cg chord,
-            // h + ch chord.
+            // star_hessian's chord-area term where the face's energy is
+            // finite: e + chord ca, g + cg chord, h + ch chord.
             if chord != 0.0 {
                 let (ca, cg, ch) = chord_terms(q1, q2, g.a, g.b);
-                e = e + c * ca;
+                let fin = e.finite_mask();
                 for i in 0..3 {
-                    grad[i] = grad[i] + cg[i] * c;
+                    grad[i] = (grad[i] + cg[i] * c).select(fin, grad[i]);
                     for j in 0..3 {
-                        hess[i][j] = hess[i][j] + ch[i][j] * c;
+                        hess[i][j] = (hess[i][j] + ch[i][j] * c).select(fin, hess[i][j]);
                     }
                 }
+                e = (e + c * ca).select(fin, e);
             }
             let e = e.lanes();
             let grad = [grad[0].lanes(), grad[1].lanes(), grad[2].lanes()];
@@ -748,6 +854,179 @@ mod lanes {
                 let admissible = d[l] > 0.0 && d[l].is_finite() && a[l].is_finite();
                 let e = area_s[l] * if admissible { f[l] } else { f64::INFINITY };
                 total += if chord == 0.0 { e } else { e + chord_term[l] };
+            }
+        }
+        total
+    }
+
+    /// Up to four faces of a face list by lane: the first corners, and the
+    /// other two with the references as a [`Group`] (a short last group
+    /// repeats its last face).
+    #[inline(always)]
+    fn list_group(
+        points: &[[f64; 3]],
+        faces: &[[u32; 3]],
+        refs: &[Reference],
+        first: usize,
+    ) -> ([F4; 3], Group) {
+        let len = (faces.len() - first).min(LANES);
+        let mut c = [[[0.0; LANES]; 3]; 3];
+        let mut gram = [[0.0; LANES]; 4];
+        for l in 0..LANES {
+            let f = first + l.min(len - 1);
+            for (corner, &v) in faces[f].iter().enumerate() {
+                let x = points[v as usize];
+                for i in 0..3 {
+                    c[corner][i][l] = x[i];
+                }
+            }
+            let r = &refs[f];
+            gram[0][l] = r.gram[0];
+            gram[1][l] = r.gram[1];
+            gram[2][l] = r.gram[2];
+            gram[3][l] = r.area;
+        }
+        let load = |x: &[Lane; 3]| [F4::load(&x[0]), F4::load(&x[1]), F4::load(&x[2])];
+        let group = Group {
+            a: load(&c[1]),
+            b: load(&c[2]),
+            g00: F4::load(&gram[0]),
+            g01: F4::load(&gram[1]),
+            g11: F4::load(&gram[2]),
+            area: F4::load(&gram[3]),
+            len,
+        };
+        (load(&c[0]), group)
+    }
+
+    #[target_feature(enable = "avx2")]
+    pub(super) unsafe fn face_gradients(
+        density: Density,
+        k: f64,
+        mu: f64,
+        points: &[[f64; 3]],
+        faces: &[[u32; 3]],
+        refs: &[Reference],
+    ) -> Vec<super::FaceGradients> {
+        with_density!(density, face_gradients_with(k, mu, points, faces, refs))
+    }
+
+    #[target_feature(enable = "avx2")]
+    pub(super) unsafe fn faces_energy(
+        density: Density,
+        k: f64,
+        mu: f64,
+        points: &[[f64; 3]],
+        faces: &[[u32; 3]],
+        refs: &[Reference],
+    ) -> f64 {
+        with_density!(density, faces_energy_with(k, mu, points, faces, refs))
+    }
+
+    /// `face_gradients_one` by lane: `face_energy_gradients` and
+    /// `chord_area_gradients` in the scalar code's order.
+    #[target_feature(enable = "avx2")]
+    unsafe fn face_gradients_with<D: LaneDensity>(
+        density: D,
+        k: f64,
+        mu: f64,
+        points: &[[f64; 3]],
+        faces: &[[u32; 3]],
+        refs: &[Reference],
+    ) -> Vec<super::FaceGradients> {
+        let mut out = Vec::with_capacity(faces.len());
+        let (two, half, m) = (F4::splat(2.0), F4::splat(0.5), F4::splat(mu));
+        for first in (0..faces.len()).step_by(LANES) {
+            let (p0, g) = list_group(points, faces, refs, first);
+            let Terms { q1, q2, kdet, a, area_s, d, ab } = terms_at(k, p0, &g);
+            let (f, f_a, f_d) = density.first(a, d);
+            let (p1, p2) = (g.a, g.b);
+            let mut da = [[F4::splat(0.0); 3]; 3];
+            for i in 0..3 {
+                da[1][i] = two * (q1[i] * g.g11 - q2[i] * g.g01) / kdet;
+                da[2][i] = two * (q2[i] * g.g00 - q1[i] * g.g01) / kdet;
+                da[0][i] = (da[1][i] + da[2][i]).neg();
+            }
+            let dd = [ab, cross(p2, p0), cross(p0, p1)];
+            let h = half / area_s;
+            let mut grads = [[F4::splat(0.0); 3]; 3];
+            for c in 0..3 {
+                for i in 0..3 {
+                    grads[c][i] = area_s * (f_a * da[c][i] + f_d * h * dd[c][i]);
+                }
+            }
+            let mut e = area_s * f;
+            if mu != 0.0 {
+                // chord_area_gradients: n = q1 x q2, u = n / |n|, the
+                // gradient at each corner (next - previous) x u / 2; zero
+                // for a degenerate chord triangle.
+                let n = cross(q1, q2);
+                let len = dot(n, n).sqrt();
+                let keep = len.gt(F4::splat(0.0)).and(F4::splat(f64::INFINITY).gt(len));
+                let inv = F4::splat(1.0) / len;
+                let u = [n[0] * inv, n[1] * inv, n[2] * inv];
+                let ends = [(p1, p2), (p2, p0), (p0, p1)];
+                // Only where the face's energy is finite, as the scalar code.
+                let fin = e.finite_mask();
+                for (c, (x, y)) in ends.into_iter().enumerate() {
+                    let cg = cross([x[0] - y[0], x[1] - y[1], x[2] - y[2]], u);
+                    for i in 0..3 {
+                        let with = grads[c][i] + (cg[i] * half).and(keep) * m;
+                        grads[c][i] = with.select(fin, grads[c][i]);
+                    }
+                }
+                e = (e + m * (half * len).and(keep)).select(fin, e);
+            }
+            let (e, f_a, lanes_a, lanes_d, lanes_f) =
+                (e.lanes(), f_a.lanes(), a.lanes(), d.lanes(), f.lanes());
+            let mut gl = [[[0.0; LANES]; 3]; 3];
+            for c in 0..3 {
+                for i in 0..3 {
+                    gl[c][i] = grads[c][i].lanes();
+                }
+            }
+            for l in 0..g.len {
+                let (a, d, f) = (lanes_a[l], lanes_d[l], lanes_f[l]);
+                // Energy::density's admissibility and face_energy_gradients'
+                // test of f.
+                if d > 0.0 && d.is_finite() && a.is_finite() && f.is_finite() {
+                    let grad = |c: usize| [gl[c][0][l], gl[c][1][l], gl[c][2][l]];
+                    out.push((e[l], [grad(0), grad(1), grad(2)], f_a[l]));
+                } else {
+                    out.push((f64::INFINITY, [[0.0; 3]; 3], 0.0));
+                }
+            }
+        }
+        out
+    }
+
+    /// `faces_energy` by lane, added in face order.
+    #[target_feature(enable = "avx2")]
+    unsafe fn faces_energy_with<D: LaneDensity>(
+        density: D,
+        k: f64,
+        mu: f64,
+        points: &[[f64; 3]],
+        faces: &[[u32; 3]],
+        refs: &[Reference],
+    ) -> f64 {
+        let (m, half) = (F4::splat(mu), F4::splat(0.5));
+        let mut total = -0.0;
+        for first in (0..faces.len()).step_by(LANES) {
+            let (p0, g) = list_group(points, faces, refs, first);
+            let t = terms_at(k, p0, &g);
+            let f = density.value(t.a, t.d).lanes();
+            let (a, d, area_s) = (t.a.lanes(), t.d.lanes(), t.area_s.lanes());
+            let chord_term = if mu != 0.0 {
+                let n = cross(t.q1, t.q2);
+                (m * (half * dot(n, n).sqrt())).lanes()
+            } else {
+                [0.0; LANES]
+            };
+            for l in 0..g.len {
+                let admissible = d[l] > 0.0 && d[l].is_finite() && a[l].is_finite();
+                let e = area_s[l] * if admissible { f[l] } else { f64::INFINITY };
+                total += if mu == 0.0 { e } else { e + chord_term[l] };
             }
         }
         total
@@ -854,6 +1133,52 @@ mod tests {
         assert!(finite > 50_000 && infinite > 5_000, "{finite} {infinite}");
         assert_eq!(handles(Energy::Balanced), available());
         assert!(!handles(Energy::Conformal) && !handles(Energy::Authalic));
+    }
+
+    #[test]
+    fn the_face_lists_in_lanes_give_the_bits_of_one_face_at_a_time() {
+        let (mut finite, mut infinite) = (0, 0);
+        for (p, refs, corners) in stars() {
+            // The star's faces as a face list, with the centre first, last
+            // or between (each corner of a face is someone's first).
+            let m = corners.len();
+            let mut points = vec![p];
+            points.extend(&corners);
+            let faces: Vec<[u32; 3]> = (0..m)
+                .map(|j| {
+                    let f = [0, 1 + j as u32, 1 + ((j + 1) % m) as u32];
+                    [f, [f[1], f[2], f[0]], [f[2], f[0], f[1]]][j % 3]
+                })
+                .collect();
+            for energy in ENERGIES {
+                for k in [0.7, 1.3e-3, 40.0] {
+                    for mu in [0.0, 0.37, 12.5] {
+                        let got = face_gradients(energy, k, mu, &points, &faces, &refs);
+                        assert_eq!(got.len(), m);
+                        let mut plain = Vec::new();
+                        for ((f, r), x) in faces.iter().zip(&refs).zip(&got) {
+                            let corners = f.map(|v| points[v as usize]);
+                            let want = face_gradients_one(energy, r, k, mu, corners);
+                            let b = |(e, g, f_a): &FaceGradients| {
+                                let mut v = vec![e.to_bits(), f_a.to_bits()];
+                                v.extend(g.iter().flat_map(|c| c.map(f64::to_bits)));
+                                v
+                            };
+                            assert_eq!(b(x), b(&want), "{energy:?} {mu}");
+                            match want.0.is_finite() {
+                                true => finite += 1,
+                                false => infinite += 1,
+                            }
+                            plain.push(face_energy_one(energy, r, k, mu, corners));
+                        }
+                        let sum: f64 = plain.iter().sum();
+                        let lanes = faces_energy(energy, k, mu, &points, &faces, &refs);
+                        assert_eq!(lanes.to_bits(), sum.to_bits(), "{energy:?} {mu}");
+                    }
+                }
+            }
+        }
+        assert!(finite > 100_000 && infinite > 5_000, "{finite} {infinite}");
     }
 
     #[test]
