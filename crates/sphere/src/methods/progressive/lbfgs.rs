@@ -213,12 +213,11 @@ impl Faces {
     fn evaluate(&self, energy: Energy, k: f64, mu: f64, points: &[[f64; 3]]) -> Evaluation {
         // Per face, four at a time where the energy has lanes
         // (`star_lanes::face_gradients`, the same bits as one at a time).
-        let per_face: Vec<FaceGradients> = self
-            .corners
-            .par_chunks(1024)
-            .zip(self.refs.par_chunks(1024))
-            .flat_map_iter(|(fs, rs)| star_lanes::face_gradients(energy, k, mu, points, fs, rs))
-            .collect();
+        let mut per_face: Vec<FaceGradients> = vec![(0.0, [[0.0; 3]; 3], 0.0); self.corners.len()];
+        per_face
+            .par_chunks_mut(1024)
+            .zip(self.corners.par_chunks(1024).zip(self.refs.par_chunks(1024)))
+            .for_each(|(out, faces)| star_lanes::face_gradients(energy, k, mu, points, faces, out));
         let per_chunk: Vec<f64> =
             per_face.par_chunks(CHUNK).map(|c| c.iter().map(|x| x.0).sum::<f64>()).collect();
         let energy: f64 = per_chunk.iter().sum();

@@ -141,25 +141,24 @@ pub fn energy(
 pub type FaceGradients = (f64, [[f64; 3]; 3], f64);
 
 /// [`face_gradients_one`] for each face `faces[f]` (corner indices into
-/// `points`) with reference `refs[f]`, in face order.
+/// `points`) with reference `refs[f]`, written to `out[f]` (as long as
+/// `faces`).
 pub fn face_gradients(
     energy: Energy,
     k: f64,
     mu: f64,
     points: &[[f64; 3]],
-    faces: &[[u32; 3]],
-    refs: &[Reference],
-) -> Vec<FaceGradients> {
+    (faces, refs): (&[[u32; 3]], &[Reference]),
+    out: &mut [FaceGradients],
+) {
     #[cfg(target_arch = "x86_64")]
     if let (Some(density), true) = (density(energy), available()) {
         // SAFETY: the processor has AVX2 (asked just above).
-        return unsafe { lanes::face_gradients(density, k, mu, points, faces, refs) };
+        return unsafe { lanes::face_gradients(density, k, mu, points, faces, refs, out) };
     }
-    faces
-        .iter()
-        .zip(refs)
-        .map(|(&f, r)| face_gradients_one(energy, r, k, mu, f.map(|v| points[v as usize])))
-        .collect()
+    for ((&f, r), x) in faces.iter().zip(refs).zip(out) {
+        *x = face_gradients_one(energy, r, k, mu, f.map(|v| points[v as usize]));
+    }
 }
 
 /// One face's [`FaceGradients`], one face at a time: `face_energy_gradients`
@@ -907,8 +906,9 @@ mod lanes {
         points: &[[f64; 3]],
         faces: &[[u32; 3]],
         refs: &[Reference],
-    ) -> Vec<super::FaceGradients> {
-        with_density!(density, face_gradients_with(k, mu, points, faces, refs))
+        out: &mut [super::FaceGradients],
+    ) {
+        with_density!(density, face_gradients_with(k, mu, points, faces, refs, out))
     }
 
     #[target_feature(enable = "avx2")]
@@ -933,8 +933,8 @@ mod lanes {
         points: &[[f64; 3]],
         faces: &[[u32; 3]],
         refs: &[Reference],
-    ) -> Vec<super::FaceGradients> {
-        let mut out = Vec::with_capacity(faces.len());
+        out: &mut [super::FaceGradients],
+    ) {
         let (two, half, m) = (F4::splat(2.0), F4::splat(0.5), F4::splat(mu));
         for first in (0..faces.len()).step_by(LANES) {
             let (p0, g) = list_group(points, faces, refs, first);
@@ -989,15 +989,14 @@ mod lanes {
                 let (a, d, f) = (lanes_a[l], lanes_d[l], lanes_f[l]);
                 // Energy::density's admissibility and face_energy_gradients'
                 // test of f.
-                if d > 0.0 && d.is_finite() && a.is_finite() && f.is_finite() {
+                out[first + l] = if d > 0.0 && d.is_finite() && a.is_finite() && f.is_finite() {
                     let grad = |c: usize| [gl[c][0][l], gl[c][1][l], gl[c][2][l]];
-                    out.push((e[l], [grad(0), grad(1), grad(2)], f_a[l]));
+                    (e[l], [grad(0), grad(1), grad(2)], f_a[l])
                 } else {
-                    out.push((f64::INFINITY, [[0.0; 3]; 3], 0.0));
-                }
+                    (f64::INFINITY, [[0.0; 3]; 3], 0.0)
+                };
             }
         }
-        out
     }
 
     /// `faces_energy` by lane, added in face order.
@@ -1153,8 +1152,8 @@ mod tests {
             for energy in ENERGIES {
                 for k in [0.7, 1.3e-3, 40.0] {
                     for mu in [0.0, 0.37, 12.5] {
-                        let got = face_gradients(energy, k, mu, &points, &faces, &refs);
-                        assert_eq!(got.len(), m);
+                        let mut got = vec![(0.0, [[0.0; 3]; 3], 0.0); m];
+                        face_gradients(energy, k, mu, &points, (&faces, &refs), &mut got);
                         let mut plain = Vec::new();
                         for ((f, r), x) in faces.iter().zip(&refs).zip(&got) {
                             let corners = f.map(|v| points[v as usize]);
