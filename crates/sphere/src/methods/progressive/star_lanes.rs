@@ -1063,13 +1063,21 @@ mod tests {
                 }
                 let p = unit([0.2 * rng.next_f64() - 0.1, 0.2 * rng.next_f64() - 0.1, 1.0]);
                 let s0 = [rng.next_f64(), rng.next_f64(), rng.next_f64()];
-                let refs = (0..m)
+                let refs: Vec<Reference> = (0..m)
                     .map(|_| {
                         let s1 = [rng.next_f64(), rng.next_f64(), rng.next_f64()];
                         let s2 = [rng.next_f64(), rng.next_f64(), rng.next_f64()];
                         Reference::new(s0, s1, s2, 0.02)
                     })
                     .collect();
+                // Some with a corner on the centre itself: a chord triangle
+                // of zero normal (the chord terms' zero case), whose
+                // det[p, p, b] rounds to either sign or to zero.
+                if rng.next_f64() < 0.1 {
+                    let mut corners = corners.clone();
+                    corners[m / 2] = p;
+                    out.push((p, refs.clone(), corners));
+                }
                 out.push((p, refs, corners));
             }
         }
@@ -1136,7 +1144,7 @@ mod tests {
 
     #[test]
     fn the_face_lists_in_lanes_give_the_bits_of_one_face_at_a_time() {
-        let (mut finite, mut infinite) = (0, 0);
+        let (mut finite, mut infinite, mut flat) = (0, 0, 0);
         for (p, refs, corners) in stars() {
             // The star's faces as a face list, with the centre first, last
             // or between (each corner of a face is someone's first).
@@ -1168,6 +1176,9 @@ mod tests {
                                 true => finite += 1,
                                 false => infinite += 1,
                             }
+                            let [pa, pb, pc] = corners;
+                            flat +=
+                                usize::from(want.0.is_finite() && chord_area(pa, pb, pc) == 0.0);
                             plain.push(face_energy_one(energy, r, k, mu, corners));
                         }
                         let sum: f64 = plain.iter().sum();
@@ -1178,6 +1189,8 @@ mod tests {
             }
         }
         assert!(finite > 100_000 && infinite > 5_000, "{finite} {infinite}");
+        // Finite energies of faces whose chord triangle has a zero normal.
+        assert!(flat > 100, "{flat}");
     }
 
     #[test]
