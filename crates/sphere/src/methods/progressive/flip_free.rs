@@ -308,12 +308,12 @@ impl Problem<'_> {
     ) -> Option<([f64; 3], f64)> {
         let p = points[i as usize];
         let star = Star::gather(refs, ring, points, corners);
-        // The default's isometric energy without the chord-area term: four
-        // faces at a time (the same bits; `None` where the scalar sum was
-        // infinite, which gave up the move below).
-        let lanes = chord == 0.0 && self.energy == Energy::Isometric && star_lanes::available();
+        // The isometric and the stretch family's energies, with the
+        // chord-area term: four faces at a time (the same bits; `None` where
+        // the scalar sum was infinite, which gave up the move below).
+        let lanes = star_lanes::handles(self.energy);
         let (mut e0, mut g, mut hess) = if lanes {
-            star_lanes::isometric_hessian(k, p, refs, star.corners)?
+            star_lanes::hessian(self.energy, k, chord, p, refs, star.corners)?
         } else {
             star.hessian(self.energy, k, chord, p)
         };
@@ -368,7 +368,7 @@ impl Problem<'_> {
         for _ in 0..MAX_HALVINGS {
             if let Some(q) = normalize(add(p, scale(step, t))) {
                 let mut e = if lanes {
-                    star_lanes::isometric_energy(k, q, refs, star.corners)
+                    star_lanes::energy(self.energy, k, chord, q, refs, star.corners)
                 } else {
                     star.energy(self.energy, k, chord, q)
                 };
