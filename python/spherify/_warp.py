@@ -45,12 +45,15 @@ import numpy as np
 
 from . import _landmarks, _nricp
 from ._align import kabsch
+from ._embed import improve
+from ._errors import MapError, MeshError
 from ._nearest import OnDemand
 from ._spheremap import SphereMap
 from ._workers import beside, run_all
+from .datasets._sampling import farthest_points
 
-__all__ = ["PULL_STAGES", "ROUNDS", "SAMPLE", "STEPS", "move_rounds", "pull", "sphere_targets",
-           "warp"]
+__all__ = ["PULL_STAGES", "ROUNDS", "SAMPLE", "SCAFFOLD", "STEPS", "lagging", "move_rounds",
+           "pull", "scaffold", "sphere_targets", "warp"]
 
 # Vertices of A the deformation is fitted on (all of a smaller mesh).
 SAMPLE = 3000
@@ -97,6 +100,22 @@ PULL_RINGS = 3
 # 4.39% and 1.47% / 3.76%; without the pull 1.17% / 5.34% and 1.69% / 5.93%.
 # On the busy machine (load 6-7) 300,000 added 1.5-2 s to the warp.
 PULL_WORK = 200_000
+# Step 4b, the scaffold: where the rounds leave the map more than
+# SCAFFOLD_LAG mean chord edges from its targets on average, whole parts of
+# the map (a scorpion's legs) are many edges from where they belong, and
+# local moves of at most an edge a round cannot carry them there. Then
+# SCAFFOLD of A's vertices are pinned at their targets first, by the
+# landmark machinery, which lays out the whole map around them (coarse), and
+# the rounds start from that map (fine). With landmarks it is always tried
+# (the pinning of the landmarks costs as much already); without, only where
+# the map lags, because it costs 5-15 s on a 50k mesh and the rounds of
+# horse and armadillo end 0.7 and 0.4 edges from their targets (sword 2.0,
+# scorpion 6.3: the gate is 3), where the speed bar is measured. Measured on scorpion's pair
+# (docs/correspondence.md, "The scaffold"): 32, 64, 128, 256 pinned vertices
+# gave 2.65% / 7.72%, 1.77% / 5.23%, 1.16% / 3.70%, 1.01% / 3.37% after
+# the pull, against 5.77% / 17.58% without, at 5, 5, 6 and 14 s of pinning.
+SCAFFOLD = 128
+SCAFFOLD_LAG = 3.0
 # The steps reported to a progress callback: one per ICP iteration, one per
 # round and one per stage of the pull.
 STEPS = sum(s for _, _, s in _nricp.SCHEDULE) + ROUNDS + len(PULL_STAGES)
@@ -150,6 +169,21 @@ def sphere_targets(map_a: SphereMap, m_b: SphereMap, *, fixed: Optional[np.ndarr
     their places), and the ICP's record. ``b_tree``, if given, is the
     closest-point tree of B's vertices centred and scaled to unit rms radius
     (made once for the registration)."""
+    targets, icp, _ = _sphere_targets(map_a, m_b, fixed=fixed, fixed_on_b=fixed_on_b,
+                                      schedule=schedule, should_stop=should_stop, b_tree=b_tree)
+    return targets, icp
+
+
+def _sphere_targets(map_a: SphereMap, m_b: SphereMap, *, fixed: Optional[np.ndarray] = None,
+                    fixed_on_b: Optional[np.ndarray] = None,
+                    schedule: Sequence[Tuple[float, float, int]] = _nricp.SCHEDULE,
+                    should_stop: Callable[[int, int], bool] = lambda done, total: False,
+                    b_tree: Optional[OnDemand] = None
+                    ) -> Tuple[np.ndarray, Dict[str, Any], Callable[[np.ndarray], np.ndarray]]:
+    """:func:`sphere_targets`, and the placement it used: a function of
+    points of A's surface (A's own frame, (k, 3)) giving their targets on
+    B's sphere (the closest point of B to the fitted deformation of each,
+    through B's map), for the vertices a scaffold's edge splits add."""
     a_mesh, b_mesh = map_a.mesh, m_b.mesh
     a_centre, a_scale = _frame(a_mesh.vertices)
     b_centre, b_scale = _frame(b_mesh.vertices)
@@ -198,7 +232,13 @@ def sphere_targets(map_a: SphereMap, m_b: SphereMap, *, fixed: Optional[np.ndarr
     if held:
         assert fixed is not None
         targets[fixed] = map_a.points[fixed]
-    return targets, icp
+
+    def place(points: np.ndarray) -> np.ndarray:
+        at, weights, _ = nearest(model(((points - a_centre) / a_scale) @ spin.T))
+        placed: np.ndarray = m_b.to_sphere(at, weights)
+        return placed
+
+    return targets, icp, place
 
 
 def warp(map_a: SphereMap, m_b: SphereMap, *, fixed: Optional[np.ndarray] = None,
@@ -224,13 +264,69 @@ def warp(map_a: SphereMap, m_b: SphereMap, *, fixed: Optional[np.ndarray] = None
         done += 1
         return should_stop(done, STEPS)
 
-    targets, icp = sphere_targets(map_a, m_b, fixed=fixed, fixed_on_b=fixed_on_b,
-                                  should_stop=step, b_tree=b_tree)
+    targets, icp, place = _sphere_targets(map_a, m_b, fixed=fixed, fixed_on_b=fixed_on_b,
+                                          should_stop=step, b_tree=b_tree)
     current, left, stopped = move_rounds(map_a, targets, fixed=fixed, should_stop=step)
     if stopped:
-        return current, {"icp": icp["distance"], "moved": left, "pulled": 0.0}
+        return current, {"icp": icp["distance"], "moved": left, "pulled": 0.0,
+                         "scaffold": False}
+    used = False
+    if (fixed is not None and len(fixed)) or lagging(current, targets):
+        # Step 4b (module doc): the scaffold, kept where its rounds end
+        # nearer the targets on A's own vertices than the plain rounds.
+        pinned = scaffold(map_a, targets, place, fixed=fixed)
+        if pinned is not None:
+            n = len(targets)
+            trial, trial_left, stopped = move_rounds(
+                pinned[0], pinned[1], fixed=fixed, should_stop=lambda _, __: should_stop(done, STEPS))
+            if stopped:
+                return trial, {"icp": icp["distance"], "moved": trial_left, "pulled": 0.0,
+                               "scaffold": True}
+            if (_angles(trial.points[:n], targets).mean()
+                    < _angles(current.points, targets).mean()):
+                current, left, targets, used = trial, trial_left, pinned[1], True
     current, pulled, after = pull(current, targets, fixed=fixed, should_stop=step)
-    return current, {"icp": icp["distance"], "moved": left + after, "pulled": pulled}
+    return current, {"icp": icp["distance"], "moved": left + after, "pulled": pulled,
+                     "scaffold": used}
+
+
+def lagging(current: SphereMap, targets: np.ndarray) -> bool:
+    """Whether the rounds left ``current`` so far from ``targets`` (mean
+    angle over the mean chord edge above :data:`SCAFFOLD_LAG`) that whole
+    parts of the map have still to travel: the scaffold's case."""
+    points, faces = current.points, current.mesh.faces
+    edge = float(np.linalg.norm(points[faces[:, 0]] - points[faces[:, 1]], axis=1).mean())
+    return bool(_angles(points, targets).mean() > SCAFFOLD_LAG * edge)
+
+
+def scaffold(map_a: SphereMap, targets: np.ndarray, place: Callable[[np.ndarray], np.ndarray],
+             *, fixed: Optional[np.ndarray] = None) -> Optional[Tuple[SphereMap, np.ndarray]]:
+    """Step 4b of the module doc: :data:`SCAFFOLD` of A's vertices
+    (farthest-point sampled in space) pinned exactly at their targets by the
+    landmark machinery (:func:`spherify.improve` with ``landmarks``: the
+    drag, or a layout on a refined mesh where the drag cannot place them),
+    the ``fixed`` vertices pinned where they are. Returns the certified
+    pinned map and a target for each of its vertices (``place`` for the
+    vertices an edge split added), or None where no map places them
+    (:class:`MapError`) or two share a target (:class:`MeshError`)."""
+    mesh = map_a.mesh
+    ids = farthest_points(mesh.vertices, min(SCAFFOLD, len(targets)))
+    points = targets[ids]
+    if fixed is not None and len(fixed):
+        keep = ~np.isin(ids, fixed)
+        ids = np.concatenate([np.asarray(fixed, dtype=np.int64), ids[keep]])
+        points = np.concatenate([map_a.points[fixed], points[keep]])
+    try:
+        pinned = improve(map_a, landmarks=(ids, points))
+    except (MapError, MeshError):
+        # No map places them (MapError), or two of them share a target
+        # where the targets fold (MeshError): the plain rounds stand.
+        return None
+    n = len(targets)
+    if pinned.mesh.n_vertices == n:
+        return pinned, targets
+    extended = np.concatenate([targets, place(pinned.mesh.vertices[n:])])
+    return pinned, extended
 
 
 def move_rounds(map_a: SphereMap, targets: np.ndarray, *, fixed: Optional[np.ndarray] = None,
