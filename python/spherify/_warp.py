@@ -24,6 +24,17 @@ warp finds better ones in space and then moves A's map to them:
    test), landmarks held. So A's map is certified after every round, and
    where the targets fold (two vertices of A wanting one point of B) the
    map stops short of the fold instead of flipping.
+   Where the rounds leave the map far behind its targets (a scorpion's
+   legs many edges from where they belong: each round moves a vertex at
+   most about an edge), **the scaffold** (:func:`scaffold`, step 4b) pins
+   :data:`SCAFFOLD` of A's vertices at their targets first with the
+   landmark machinery (:func:`spherify.improve` with ``landmarks``), which
+   carries whole parts of the map at once (coarse), and the rounds run
+   again from there (fine); kept where they end nearer the targets on A's
+   own vertices. Where the drag cannot pin them, the landmarks' layout
+   refines A's mesh by edge splits (A's vertices stay its first rows, as
+   for a landmark map); the new vertices get their targets from the same
+   deformation (:func:`_sphere_targets`' placement).
 5. Where it stopped short (a vertex more than :data:`PULL_SHORT` of a mean
    edge from its target), the region around (:data:`PULL_RINGS` rings) is
    pulled on by energy sweeps (:func:`spherify._landmarks.pull_towards`):
@@ -106,16 +117,20 @@ PULL_WORK = 200_000
 # local moves of at most an edge a round cannot carry them there. Then
 # SCAFFOLD of A's vertices are pinned at their targets first, by the
 # landmark machinery, which lays out the whole map around them (coarse), and
-# the rounds start from that map (fine). With landmarks it is always tried
-# (the pinning of the landmarks costs as much already); without, only where
-# the map lags, because it costs 5-15 s on a 50k mesh and the rounds of
-# horse and armadillo end 0.7 and 0.4 edges from their targets (sword 2.0,
-# scorpion 6.3: the gate is 3), where the speed bar is measured. Measured on scorpion's pair
+# the rounds start from that map (fine). It costs 5-15 s on a 50k mesh
+# (the pinning; more where the layout refines the mesh much), so it is tried
+# only where the rounds lag: mean angle left over the mean chord edge of
+# A's map above SCAFFOLD_LAG without landmarks (after the rounds: horse 0.70,
+# armadillo 0.43, human_man 0.37-1.0, sword 2.0, scorpion 6.3; the speed
+# bar is measured on horse and armadillo) and above SCAFFOLD_LAG_LANDMARKS
+# with them (horse 0.15, armadillo 0.17, octopus 0.10, human_man 0.37,
+# sword 0.91; scorpion more), where it gains most (docs/correspondence.md). Measured on scorpion's pair
 # (docs/correspondence.md, "The scaffold"): 32, 64, 128, 256 pinned vertices
 # gave 2.65% / 7.72%, 1.77% / 5.23%, 1.16% / 3.70%, 1.01% / 3.37% after
 # the pull, against 5.77% / 17.58% without, at 5, 5, 6 and 14 s of pinning.
 SCAFFOLD = 128
 SCAFFOLD_LAG = 3.0
+SCAFFOLD_LAG_LANDMARKS = 0.25
 # The steps reported to a progress callback: one per ICP iteration, one per
 # round and one per stage of the pull.
 STEPS = sum(s for _, _, s in _nricp.SCHEDULE) + ROUNDS + len(PULL_STAGES)
@@ -271,7 +286,8 @@ def warp(map_a: SphereMap, m_b: SphereMap, *, fixed: Optional[np.ndarray] = None
         return current, {"icp": icp["distance"], "moved": left, "pulled": 0.0,
                          "scaffold": False}
     used = False
-    if (fixed is not None and len(fixed)) or lagging(current, targets):
+    held = fixed is not None and len(fixed) > 0
+    if lagging(current, targets, SCAFFOLD_LAG_LANDMARKS if held else SCAFFOLD_LAG):
         # Step 4b (module doc): the scaffold, kept where its rounds end
         # nearer the targets on A's own vertices than the plain rounds.
         pinned = scaffold(map_a, targets, place, fixed=fixed)
@@ -290,13 +306,13 @@ def warp(map_a: SphereMap, m_b: SphereMap, *, fixed: Optional[np.ndarray] = None
                      "scaffold": used}
 
 
-def lagging(current: SphereMap, targets: np.ndarray) -> bool:
+def lagging(current: SphereMap, targets: np.ndarray, lag: float = SCAFFOLD_LAG) -> bool:
     """Whether the rounds left ``current`` so far from ``targets`` (mean
-    angle over the mean chord edge above :data:`SCAFFOLD_LAG`) that whole
-    parts of the map have still to travel: the scaffold's case."""
+    angle above ``lag`` mean chord edges) that whole parts of the map have
+    still to travel: the scaffold's case."""
     points, faces = current.points, current.mesh.faces
     edge = float(np.linalg.norm(points[faces[:, 0]] - points[faces[:, 1]], axis=1).mean())
-    return bool(_angles(points, targets).mean() > SCAFFOLD_LAG * edge)
+    return bool(_angles(points, targets).mean() > lag * edge)
 
 
 def scaffold(map_a: SphereMap, targets: np.ndarray, place: Callable[[np.ndarray], np.ndarray],
