@@ -130,3 +130,28 @@ def test_the_scaffold_gives_way_where_no_map_places_it(stopped_short: Tuple) -> 
     map_a, m_b, targets, _ = stopped_short
     _, _, place = _warp._sphere_targets(map_a, m_b)
     assert _warp.scaffold(map_a, targets, place) is None
+
+
+def test_a_registration_through_a_refined_scaffold_transfers_inverts_and_morphs(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    # Forced here (the gate off, 48 pinned vertices): the layout refines
+    # these tentacles (3041 -> 22,089 vertices, measured), so the map of A
+    # has more rows than A, its first rows A's own, as for a landmark map.
+    monkeypatch.setattr(_warp, "SCAFFOLD", 48)
+    monkeypatch.setattr(_warp, "SCAFFOLD_LAG", 0.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", sp.SpherifyWarning)
+        m_a = sp.embed(sp.datasets.tentacles(3000))
+        copy = sp.datasets.deformed_copy(m_a, level=3, seed=2)
+        m_b = sp.embed(copy.mesh)
+    morph = sp.morph(m_a, m_b, align="warp")
+    c = morph.correspondence
+    assert c is not None
+    n = m_a.mesh.n_vertices
+    assert c.details["warp_scaffold"] and c.map_a.valid
+    assert c.map_a.mesh.n_vertices > n and c.map_a.refinement is not None
+    np.testing.assert_array_equal(c.map_a.mesh.vertices[:n], m_a.mesh.vertices)
+    assert c.transfer(np.ones(m_b.mesh.n_vertices)).shape == (c.map_a.mesh.n_vertices,)
+    assert c.inverse().map_a.valid
+    np.testing.assert_array_equal(morph.faces, m_a.mesh.faces)
+    assert morph.at(1.0).vertices.shape == (n, 3)
