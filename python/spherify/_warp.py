@@ -270,7 +270,9 @@ def warp(map_a: SphereMap, m_b: SphereMap, *, fixed: Optional[np.ndarray] = None
     of the run (``icp``: the mean distance from the deformed sample to B at
     each iteration, ``moved``: the mean angle still to go after each round
     of moves and each stage of the pull, ``pulled``: the fraction of A's
-    vertices the pull worked on).
+    vertices the pull worked on, ``scaffold``: whether the map came through
+    the scaffold of step 4b, in which case it may be laid out on a refined
+    mesh whose first rows are A's vertices).
     """
     done = 0
 
