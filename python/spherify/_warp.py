@@ -57,7 +57,7 @@ import numpy as np
 from . import _landmarks, _nricp
 from ._align import kabsch
 from ._embed import improve
-from ._errors import MapError, MeshError
+from ._errors import MapError, MeshError, ResourceError
 from ._nearest import OnDemand
 from ._spheremap import SphereMap
 from ._workers import beside, run_all
@@ -326,7 +326,8 @@ def scaffold(map_a: SphereMap, targets: np.ndarray, place: Callable[[np.ndarray]
     the ``fixed`` vertices pinned where they are. Returns the certified
     pinned map and a target for each of its vertices (``place`` for the
     vertices an edge split added), or None where no map places them
-    (:class:`MapError`) or two share a target (:class:`MeshError`)."""
+    (:class:`MapError`), two share a target (:class:`MeshError`) or the
+    layout would not fit the memory budget (:class:`ResourceError`)."""
     mesh = map_a.mesh
     ids = farthest_points(mesh.vertices, min(SCAFFOLD, len(targets)))
     points = targets[ids]
@@ -336,9 +337,10 @@ def scaffold(map_a: SphereMap, targets: np.ndarray, place: Callable[[np.ndarray]
         points = np.concatenate([map_a.points[fixed], points[keep]])
     try:
         pinned = improve(map_a, landmarks=(ids, points))
-    except (MapError, MeshError):
-        # No map places them (MapError), or two of them share a target
-        # where the targets fold (MeshError): the plain rounds stand.
+    except (MapError, MeshError, ResourceError):
+        # No map places them (MapError), two of them share a target where
+        # the targets fold (MeshError), or the refined layout would not fit
+        # the memory budget (ResourceError): the plain rounds stand.
         return None
     n = len(targets)
     if pinned.mesh.n_vertices == n:
