@@ -80,3 +80,78 @@ def test_the_warp_pull_refuses_bad_input(stopped_short: Tuple) -> None:
         _landmarks.pull_towards(map_a, targets, ones, sweeps=-1)
     with pytest.raises(sp.MeshError):
         _landmarks.pull_towards(map_a, targets, ones, rest=np.zeros((3, 3)))
+
+
+def test_the_scaffold_pins_its_vertices_and_carries_the_map_to_the_targets(
+        stopped_short: Tuple, monkeypatch: pytest.MonkeyPatch) -> None:
+    # Step 4b of spherify._warp: some of A's vertices pinned at their
+    # targets by the landmark machinery, the rounds from there. On these
+    # tentacles 128 cannot all be pinned (the layout would refine the mesh
+    # past its budget: a MapError, and the plain rounds stand); 16 can.
+    map_a, m_b, targets, copy = stopped_short
+    same, _, place = _warp._sphere_targets(map_a, m_b)
+    np.testing.assert_array_equal(same, targets)
+    fixed = np.array([5, 400, 2000])
+    monkeypatch.setattr(_warp, "SCAFFOLD", 16)
+    runs = []
+    threads = sp.get_num_threads()
+    try:
+        for n in (1, 2):
+            sp.set_num_threads(n)
+            pinned = _warp.scaffold(map_a, targets, place, fixed=fixed)
+            assert pinned is not None
+            runs.append(pinned)
+    finally:
+        sp.set_num_threads(threads)
+    (m, t), (m2, t2) = runs
+    np.testing.assert_array_equal(m.points, m2.points)
+    np.testing.assert_array_equal(t, t2)
+    assert m.valid and len(t) == m.mesh.n_vertices
+    n = len(targets)
+    np.testing.assert_array_equal(t[:n], targets)
+    ids = sp.datasets.farthest_points(map_a.mesh.vertices, 16)
+    ids = ids[~np.isin(ids, fixed)]
+    assert _warp._angles(m.points[ids], targets[ids]).max() < 1e-14
+    assert _warp._angles(m.points[fixed], map_a.points[fixed]).max() < 1e-14
+    # The refined rows sit on A's surface and get their targets from the
+    # same deformation: the rounds reach them as they reach A's own.
+    plain, _, _ = _warp.move_rounds(map_a, targets, fixed=fixed)
+    carried, _, _ = _warp.move_rounds(m, t, fixed=fixed)
+    assert carried.valid
+    # Measured: mean 6.0% -> 3.1% of B's diagonal.
+    before = truth_error(m_b, plain.points, copy).mean()
+    now = truth_error(m_b, carried.points[:n], copy).mean()
+    assert now < 0.7 * before, (now, before)
+
+
+def test_the_scaffold_gives_way_where_no_map_places_it(stopped_short: Tuple) -> None:
+    # 128 vertices of these tentacles cannot be pinned on a mesh of bounded
+    # size: None, not an error (the warp then keeps its plain rounds).
+    map_a, m_b, targets, _ = stopped_short
+    _, _, place = _warp._sphere_targets(map_a, m_b)
+    assert _warp.scaffold(map_a, targets, place) is None
+
+
+def test_a_registration_through_a_refined_scaffold_transfers_inverts_and_morphs(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    # Forced here (the gate off, 48 pinned vertices): the layout refines
+    # these tentacles (3041 -> 22,089 vertices, measured), so the map of A
+    # has more rows than A, its first rows A's own, as for a landmark map.
+    monkeypatch.setattr(_warp, "SCAFFOLD", 48)
+    monkeypatch.setattr(_warp, "SCAFFOLD_LAG", 0.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", sp.SpherifyWarning)
+        m_a = sp.embed(sp.datasets.tentacles(3000))
+        copy = sp.datasets.deformed_copy(m_a, level=3, seed=2)
+        m_b = sp.embed(copy.mesh)
+    morph = sp.morph(m_a, m_b, align="warp")
+    c = morph.correspondence
+    assert c is not None
+    n = m_a.mesh.n_vertices
+    assert c.details["warp_scaffold"] and c.map_a.valid
+    assert c.map_a.mesh.n_vertices > n and c.map_a.refinement is not None
+    np.testing.assert_array_equal(c.map_a.mesh.vertices[:n], m_a.mesh.vertices)
+    assert c.transfer(np.ones(m_b.mesh.n_vertices)).shape == (c.map_a.mesh.n_vertices,)
+    assert c.inverse().map_a.valid
+    np.testing.assert_array_equal(morph.faces, m_a.mesh.faces)
+    assert morph.at(1.0).vertices.shape == (n, 3)

@@ -198,8 +198,11 @@ def morph(m_a: SphereMap, m_b: SphereMap, *, align: str = "rotation",
         rotation = np.array(correspondence.rotation)
         details = correspondence.details
         alignment.update(start=details["start"], iterations=details["rotation_steps"])
-        end = np.array(correspondence.a_on_b.positions)
-        points_a = correspondence.map_a.points
+        # A map laid out on a refined mesh (landmarks, or the warp's
+        # scaffold) keeps A's vertices as its first rows: the morph is A's.
+        n_a = m_a.mesh.n_vertices
+        end = np.array(correspondence.a_on_b.positions[:n_a])
+        points_a = correspondence.map_a.points[:n_a]
     if len(pairs):
         pa, pb = points_a[pairs[:, 0]], m_b.points[pairs[:, 1]]
         angles = np.arccos(np.clip((pa * pb).sum(axis=1), -1.0, 1.0))

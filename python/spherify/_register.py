@@ -454,5 +454,6 @@ def _after_rotation(m_a: SphereMap, m_b: SphereMap, rotation: np.ndarray, pairs:
         details["warp_icp_distance"] = run["icp"]
         details["warp_moved"] = run["moved"]
         details["warp_pulled"] = run["pulled"]
+        details["warp_scaffold"] = run["scaffold"]
         seconds["warp"] = time.perf_counter() - started
     return map_a, rotation, moebius, seconds, details

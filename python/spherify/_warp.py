@@ -24,6 +24,17 @@ warp finds better ones in space and then moves A's map to them:
    test), landmarks held. So A's map is certified after every round, and
    where the targets fold (two vertices of A wanting one point of B) the
    map stops short of the fold instead of flipping.
+   Where the rounds leave the map far behind its targets (a scorpion's
+   legs many edges from where they belong: each round moves a vertex at
+   most about an edge), **the scaffold** (:func:`scaffold`, step 4b) pins
+   :data:`SCAFFOLD` of A's vertices at their targets first with the
+   landmark machinery (:func:`spherify.improve` with ``landmarks``), which
+   carries whole parts of the map at once (coarse), and the rounds run
+   again from there (fine); kept where they end nearer the targets on A's
+   own vertices. Where the drag cannot pin them, the landmarks' layout
+   refines A's mesh by edge splits (A's vertices stay its first rows, as
+   for a landmark map); the new vertices get their targets from the same
+   deformation (:func:`_sphere_targets`' placement).
 5. Where it stopped short (a vertex more than :data:`PULL_SHORT` of a mean
    edge from its target), the region around (:data:`PULL_RINGS` rings) is
    pulled on by energy sweeps (:func:`spherify._landmarks.pull_towards`):
@@ -45,12 +56,15 @@ import numpy as np
 
 from . import _landmarks, _nricp
 from ._align import kabsch
+from ._embed import improve
+from ._errors import MapError, MeshError, ResourceError
 from ._nearest import OnDemand
 from ._spheremap import SphereMap
 from ._workers import beside, run_all
+from .datasets._sampling import farthest_points
 
-__all__ = ["PULL_STAGES", "ROUNDS", "SAMPLE", "STEPS", "move_rounds", "pull", "sphere_targets",
-           "warp"]
+__all__ = ["PULL_STAGES", "ROUNDS", "SAMPLE", "SCAFFOLD", "STEPS", "lagging", "move_rounds",
+           "pull", "scaffold", "sphere_targets", "warp"]
 
 # Vertices of A the deformation is fitted on (all of a smaller mesh).
 SAMPLE = 3000
@@ -97,6 +111,26 @@ PULL_RINGS = 3
 # 4.39% and 1.47% / 3.76%; without the pull 1.17% / 5.34% and 1.69% / 5.93%.
 # On the busy machine (load 6-7) 300,000 added 1.5-2 s to the warp.
 PULL_WORK = 200_000
+# Step 4b, the scaffold: where the rounds leave the map more than
+# SCAFFOLD_LAG mean chord edges from its targets on average, whole parts of
+# the map (a scorpion's legs) are many edges from where they belong, and
+# local moves of at most an edge a round cannot carry them there. Then
+# SCAFFOLD of A's vertices are pinned at their targets first, by the
+# landmark machinery, which lays out the whole map around them (coarse), and
+# the rounds start from that map (fine). It costs 5-15 s on a 50k mesh
+# (the pinning; more where the layout refines the mesh much), so it is tried
+# only where the rounds lag: mean angle left over the mean chord edge of
+# A's map above SCAFFOLD_LAG without landmarks (after the rounds: horse 0.70,
+# armadillo 0.43, human_man 0.37-1.0, sword 2.0, scorpion 6.3; the speed
+# bar is measured on horse and armadillo) and above SCAFFOLD_LAG_LANDMARKS
+# with them (horse 0.15, armadillo 0.17, octopus 0.10, human_man 0.37,
+# sword 0.91; scorpion more), where it gains most (docs/correspondence.md). Measured on scorpion's pair
+# (docs/correspondence.md, "The scaffold"): 32, 64, 128, 256 pinned vertices
+# gave 2.65% / 7.72%, 1.77% / 5.23%, 1.16% / 3.70%, 1.01% / 3.37% after
+# the pull, against 5.77% / 17.58% without, at 5, 5, 6 and 14 s of pinning.
+SCAFFOLD = 128
+SCAFFOLD_LAG = 3.0
+SCAFFOLD_LAG_LANDMARKS = 0.25
 # The steps reported to a progress callback: one per ICP iteration, one per
 # round and one per stage of the pull.
 STEPS = sum(s for _, _, s in _nricp.SCHEDULE) + ROUNDS + len(PULL_STAGES)
@@ -150,6 +184,21 @@ def sphere_targets(map_a: SphereMap, m_b: SphereMap, *, fixed: Optional[np.ndarr
     their places), and the ICP's record. ``b_tree``, if given, is the
     closest-point tree of B's vertices centred and scaled to unit rms radius
     (made once for the registration)."""
+    targets, icp, _ = _sphere_targets(map_a, m_b, fixed=fixed, fixed_on_b=fixed_on_b,
+                                      schedule=schedule, should_stop=should_stop, b_tree=b_tree)
+    return targets, icp
+
+
+def _sphere_targets(map_a: SphereMap, m_b: SphereMap, *, fixed: Optional[np.ndarray] = None,
+                    fixed_on_b: Optional[np.ndarray] = None,
+                    schedule: Sequence[Tuple[float, float, int]] = _nricp.SCHEDULE,
+                    should_stop: Callable[[int, int], bool] = lambda done, total: False,
+                    b_tree: Optional[OnDemand] = None
+                    ) -> Tuple[np.ndarray, Dict[str, Any], Callable[[np.ndarray], np.ndarray]]:
+    """:func:`sphere_targets`, and the placement it used: a function of
+    points of A's surface (A's own frame, (k, 3)) giving their targets on
+    B's sphere (the closest point of B to the fitted deformation of each,
+    through B's map), for the vertices a scaffold's edge splits add."""
     a_mesh, b_mesh = map_a.mesh, m_b.mesh
     a_centre, a_scale = _frame(a_mesh.vertices)
     b_centre, b_scale = _frame(b_mesh.vertices)
@@ -198,7 +247,13 @@ def sphere_targets(map_a: SphereMap, m_b: SphereMap, *, fixed: Optional[np.ndarr
     if held:
         assert fixed is not None
         targets[fixed] = map_a.points[fixed]
-    return targets, icp
+
+    def place(points: np.ndarray) -> np.ndarray:
+        at, weights, _ = nearest(model(((points - a_centre) / a_scale) @ spin.T))
+        placed: np.ndarray = m_b.to_sphere(at, weights)
+        return placed
+
+    return targets, icp, place
 
 
 def warp(map_a: SphereMap, m_b: SphereMap, *, fixed: Optional[np.ndarray] = None,
@@ -215,7 +270,9 @@ def warp(map_a: SphereMap, m_b: SphereMap, *, fixed: Optional[np.ndarray] = None
     of the run (``icp``: the mean distance from the deformed sample to B at
     each iteration, ``moved``: the mean angle still to go after each round
     of moves and each stage of the pull, ``pulled``: the fraction of A's
-    vertices the pull worked on).
+    vertices the pull worked on, ``scaffold``: whether the map came through
+    the scaffold of step 4b, in which case it may be laid out on a refined
+    mesh whose first rows are A's vertices).
     """
     done = 0
 
@@ -224,13 +281,72 @@ def warp(map_a: SphereMap, m_b: SphereMap, *, fixed: Optional[np.ndarray] = None
         done += 1
         return should_stop(done, STEPS)
 
-    targets, icp = sphere_targets(map_a, m_b, fixed=fixed, fixed_on_b=fixed_on_b,
-                                  should_stop=step, b_tree=b_tree)
+    targets, icp, place = _sphere_targets(map_a, m_b, fixed=fixed, fixed_on_b=fixed_on_b,
+                                          should_stop=step, b_tree=b_tree)
     current, left, stopped = move_rounds(map_a, targets, fixed=fixed, should_stop=step)
     if stopped:
-        return current, {"icp": icp["distance"], "moved": left, "pulled": 0.0}
+        return current, {"icp": icp["distance"], "moved": left, "pulled": 0.0,
+                         "scaffold": False}
+    used = False
+    held = fixed is not None and len(fixed) > 0
+    if lagging(current, targets, SCAFFOLD_LAG_LANDMARKS if held else SCAFFOLD_LAG):
+        # Step 4b (module doc): the scaffold, kept where its rounds end
+        # nearer the targets on A's own vertices than the plain rounds.
+        pinned = scaffold(map_a, targets, place, fixed=fixed)
+        if pinned is not None:
+            n = len(targets)
+            trial, trial_left, stopped = move_rounds(
+                pinned[0], pinned[1], fixed=fixed, should_stop=lambda _, __: should_stop(done, STEPS))
+            if stopped:
+                return trial, {"icp": icp["distance"], "moved": trial_left, "pulled": 0.0,
+                               "scaffold": True}
+            if (_angles(trial.points[:n], targets).mean()
+                    < _angles(current.points, targets).mean()):
+                current, left, targets, used = trial, trial_left, pinned[1], True
     current, pulled, after = pull(current, targets, fixed=fixed, should_stop=step)
-    return current, {"icp": icp["distance"], "moved": left + after, "pulled": pulled}
+    return current, {"icp": icp["distance"], "moved": left + after, "pulled": pulled,
+                     "scaffold": used}
+
+
+def lagging(current: SphereMap, targets: np.ndarray, lag: float = SCAFFOLD_LAG) -> bool:
+    """Whether the rounds left ``current`` so far from ``targets`` (mean
+    angle above ``lag`` mean chord edges) that whole parts of the map have
+    still to travel: the scaffold's case."""
+    points, faces = current.points, current.mesh.faces
+    edge = float(np.linalg.norm(points[faces[:, 0]] - points[faces[:, 1]], axis=1).mean())
+    return bool(_angles(points, targets).mean() > lag * edge)
+
+
+def scaffold(map_a: SphereMap, targets: np.ndarray, place: Callable[[np.ndarray], np.ndarray],
+             *, fixed: Optional[np.ndarray] = None) -> Optional[Tuple[SphereMap, np.ndarray]]:
+    """Step 4b of the module doc: :data:`SCAFFOLD` of A's vertices
+    (farthest-point sampled in space) pinned exactly at their targets by the
+    landmark machinery (:func:`spherify.improve` with ``landmarks``: the
+    drag, or a layout on a refined mesh where the drag cannot place them),
+    the ``fixed`` vertices pinned where they are. Returns the certified
+    pinned map and a target for each of its vertices (``place`` for the
+    vertices an edge split added), or None where no map places them
+    (:class:`MapError`), two share a target (:class:`MeshError`) or the
+    layout would not fit the memory budget (:class:`ResourceError`)."""
+    mesh = map_a.mesh
+    ids = farthest_points(mesh.vertices, min(SCAFFOLD, len(targets)))
+    points = targets[ids]
+    if fixed is not None and len(fixed):
+        keep = ~np.isin(ids, fixed)
+        ids = np.concatenate([np.asarray(fixed, dtype=np.int64), ids[keep]])
+        points = np.concatenate([map_a.points[fixed], points[keep]])
+    try:
+        pinned = improve(map_a, landmarks=(ids, points))
+    except (MapError, MeshError, ResourceError):
+        # No map places them (MapError), two of them share a target where
+        # the targets fold (MeshError), or the refined layout would not fit
+        # the memory budget (ResourceError): the plain rounds stand.
+        return None
+    n = len(targets)
+    if pinned.mesh.n_vertices == n:
+        return pinned, targets
+    extended = np.concatenate([targets, place(pinned.mesh.vertices[n:])])
+    return pinned, extended
 
 
 def move_rounds(map_a: SphereMap, targets: np.ndarray, *, fixed: Optional[np.ndarray] = None,
