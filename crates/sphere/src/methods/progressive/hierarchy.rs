@@ -261,11 +261,14 @@ fn unchanged_since_scored(locked: &[u32], round: u32, ring: &[u32], v: u32) -> b
 }
 
 /// Asks the processor to fetch what the collapse loop will read for the
-/// candidates a few places further down `taken`, in three stages so that
+/// candidates a few places further down `taken`, in four stages so that
 /// each stage's addresses come from memory the stage before fetched: their
-/// locks, rings' headers and quadrics; then, for those not yet locked, their
-/// rings; then their neighbours' rings' headers. Only a hint: it changes no
-/// result.
+/// locks, rings' headers and quadrics (both cache lines); then, for those
+/// not yet locked, their rings; then their neighbours' rings' headers and
+/// locks; then their neighbours' lists, which the collapse edits (measured
+/// on 1M-vertex `tentacles`, one thread, process CPU time of the loop: 0.54
+/// s with three stages and one line of each quadric, 0.41 s with this).
+/// Only a hint: it changes no result.
 fn prefetch_ahead(
     mesh: &RingMesh,
     quadrics: &[Quadric],
@@ -280,6 +283,9 @@ fn prefetch_ahead(
         prefetch(&mesh.rings[v as usize]);
         prefetch(&quadrics[u as usize]);
         prefetch(&quadrics[v as usize]);
+        // A quadric is 80 bytes: its second cache line.
+        prefetch(quadrics[u as usize].as_ptr().wrapping_add(8));
+        prefetch(quadrics[v as usize].as_ptr().wrapping_add(8));
     }
     if let Some(&(_, u, v)) = taken.get(index + AHEAD / 2) {
         if locked[u as usize] != round {
@@ -291,6 +297,15 @@ fn prefetch_ahead(
         if locked[u as usize] != round {
             for &r in &mesh.rings[u as usize] {
                 prefetch(&mesh.rings[r as usize]);
+                prefetch(&locked[r as usize]);
+            }
+        }
+    }
+    // The lists of the neighbours, which the collapse edits.
+    if let Some(&(_, u, _)) = taken.get(index + AHEAD / 8) {
+        if locked[u as usize] != round {
+            for &r in &mesh.rings[u as usize] {
+                prefetch(mesh.rings[r as usize].as_ptr());
             }
         }
     }
@@ -301,6 +316,11 @@ fn prefetch_ahead(
 fn cheaper(a: &(f64, u32), b: &(f64, u32)) -> std::cmp::Ordering {
     a.0.total_cmp(&b.0).then(a.1.cmp(&b.1))
 }
+
+/// How far ahead in the alive vertices the scoring asks for their lists
+/// (1M-vertex `tentacles`, one thread: the scoring's CPU time 1.12 s without,
+/// 0.97 s with).
+const SCORE_AHEAD: usize = 8;
 
 /// Every alive vertex's cheapest legal collapse, cheapest first.
 fn take_round(
@@ -313,8 +333,20 @@ fn take_round(
 ) -> Vec<(f64, u32, u32)> {
     let mut scored: Vec<(f64, u32, u32)> = alive
         .par_iter()
+        .enumerate()
         .with_min_len(256)
-        .map_init(Vec::new, |candidates: &mut Vec<(f64, u32)>, &u| {
+        .map_init(Vec::new, |candidates: &mut Vec<(f64, u32)>, (x, &u)| {
+            // Only hints: the list of the vertex a few places on (one block
+            // of memory each, anywhere), then its neighbours' lists, which
+            // the legality tests read.
+            if let Some(&w) = alive.get(x + SCORE_AHEAD) {
+                prefetch(mesh.rings[w as usize].as_ptr());
+            }
+            if let Some(&w) = alive.get(x + SCORE_AHEAD / 2) {
+                for &r in &mesh.rings[w as usize] {
+                    prefetch(mesh.rings[r as usize].as_ptr());
+                }
+            }
             // Cost every edge first, then test legality cheapest first: the
             // cheapest edge is nearly always legal, and the legality tests
             // cost far more than the quadric.
