@@ -221,8 +221,7 @@ pub fn decimate(
             let ring = &mesh.rings[u as usize];
             if locked[u as usize] == round
                 || (!unchanged_since_scored(&locked, round, ring, v)
-                    && ((careful
-                        && mesh.rings[v as usize].len() + ring.len() - 4 > MAX_DEGREE)
+                    && ((careful && mesh.rings[v as usize].len() + ring.len() - 4 > MAX_DEGREE)
                         || !mesh.can_collapse(u, v)))
             {
                 continue;
