@@ -12,7 +12,7 @@
 //! candidate is tested with the exact predicate after normalisation, on the
 //! doubles that will be stored.
 
-use spherify_mesh::vec3::{add, cross, dot, scale};
+use spherify_mesh::vec3::{add, cross, det3, dot, scale};
 
 use crate::embedding::normalize;
 use crate::methods::progressive::flip_free::{positive_star, tangent_basis};
@@ -164,10 +164,13 @@ fn chebyshev_centre(
                 let rows = [lines[i], lines[j], lines[l]];
                 let a = rows.map(|p| [p.beta[0], p.beta[1], -1.0]);
                 let b = rows.map(|p| -p.alpha);
-                let Some([y0, y1, s]) = solve3(a, b) else { continue };
+                // The radius first: most triples give no larger disc than
+                // the best so far, and their centres are not needed.
+                let Some(s) = solve3_radius(a, b) else { continue };
                 if s <= 0.0 || best.is_some_and(|(_, bs)| s <= bs) {
                     continue;
                 }
+                let Some([y0, y1]) = solve3_centre(a, b) else { continue };
                 let tolerance = 1e-12 * (1.0 + s);
                 if lines.iter().all(|p| p.at([y0, y1]) >= s - tolerance) {
                     best = Some(([y0, y1], s));
@@ -178,13 +181,34 @@ fn chebyshev_centre(
     best.map(|(y, _)| y)
 }
 
-fn solve3(a: [[f64; 3]; 3], b: [f64; 3]) -> Option<[f64; 3]> {
-    let det = spherify_mesh::vec3::det3(a[0], a[1], a[2]);
+/// The last unknown of `a x = b` (Cramer's rule, as
+/// [`spherify_mesh::vec3::solve3`] computes it, bit for bit), or `None` when
+/// `a` is nearly singular or it is not finite.
+fn solve3_radius(a: [[f64; 3]; 3], b: [f64; 3]) -> Option<f64> {
+    let det = det3(a[0], a[1], a[2]);
     if det.abs() < 1e-14 || !det.is_finite() {
         return None;
     }
-    let x = spherify_mesh::vec3::solve3(a, b);
-    x.iter().all(|v| v.is_finite()).then_some(x)
+    let s = cramer(a, b, 2, det);
+    s.is_finite().then_some(s)
+}
+
+/// The first two unknowns of the same system, once its last is known to
+/// be wanted (`a` already found regular), or `None` when one is not finite.
+/// Each unknown of Cramer's rule is computed on its own, so the three are
+/// those of `solve3`.
+fn solve3_centre(a: [[f64; 3]; 3], b: [f64; 3]) -> Option<[f64; 2]> {
+    let det = det3(a[0], a[1], a[2]);
+    let y = [cramer(a, b, 0, det), cramer(a, b, 1, det)];
+    y.iter().all(|v| v.is_finite()).then_some(y)
+}
+
+/// `x_k` of `a x = b` by Cramer's rule, `det` being `a`'s determinant: the
+/// expression of [`spherify_mesh::vec3::solve3`].
+fn cramer(a: [[f64; 3]; 3], b: [f64; 3], k: usize, det: f64) -> f64 {
+    let mut ak = a;
+    (0..3).for_each(|r| ak[r][k] = b[r]);
+    det3(ak[0], ak[1], ak[2]) / det
 }
 
 #[cfg(test)]
@@ -230,6 +254,64 @@ mod tests {
         assert!(positive_star(q, &ring, &points));
         // Deep inside: farther than 1/5 of the half-height from the notch lines.
         assert!(q[0] / q[2] > 0.9 * 0.05, "{q:?}");
+    }
+
+    /// The Chebyshev search as it was before the radius was solved first:
+    /// all three unknowns by `solve3`, then the tests.
+    fn chebyshev_all_unknowns(lines: &[HalfPlane]) -> Option<[f64; 2]> {
+        let m = lines.len();
+        let mut best: Option<([f64; 2], f64)> = None;
+        for i in 0..m {
+            for j in i + 1..m {
+                for l in j + 1..m {
+                    let rows = [lines[i], lines[j], lines[l]];
+                    let a = rows.map(|p| [p.beta[0], p.beta[1], -1.0]);
+                    let b = rows.map(|p| -p.alpha);
+                    let det = det3(a[0], a[1], a[2]);
+                    if det.abs() < 1e-14 || !det.is_finite() {
+                        continue;
+                    }
+                    let [y0, y1, s] = spherify_mesh::vec3::solve3(a, b);
+                    if ![y0, y1, s].iter().all(|v| v.is_finite()) {
+                        continue;
+                    }
+                    if s <= 0.0 || best.is_some_and(|(_, bs)| s <= bs) {
+                        continue;
+                    }
+                    let tolerance = 1e-12 * (1.0 + s);
+                    if lines.iter().all(|p| p.at([y0, y1]) >= s - tolerance) {
+                        best = Some(([y0, y1], s));
+                    }
+                }
+            }
+        }
+        best.map(|(y, _)| y)
+    }
+
+    #[test]
+    fn the_radius_first_gives_the_same_centre_bit_for_bit() {
+        let mut rng = spherify_mesh::lcg::Lcg::new(9);
+        let mut lines = Vec::new();
+        for case in 0..3000 {
+            let m = 3 + case % 10;
+            let planes: Vec<HalfPlane> = (0..m)
+                .map(|j| {
+                    // Nearly regular polygons, some lines repeated or
+                    // parallel (singular triples), some far apart.
+                    let angle = if case % 7 == 0 && j > 0 {
+                        std::f64::consts::TAU * (j / 2) as f64 / m as f64
+                    } else {
+                        std::f64::consts::TAU * (j as f64 + 0.5 * rng.next_f64()) / m as f64
+                    };
+                    let alpha = if case % 5 == 0 { 1.0 } else { 0.1 + rng.next_f64() };
+                    HalfPlane { alpha, beta: [-angle.cos(), -angle.sin()] }
+                })
+                .collect();
+            let polygon: Vec<([f64; 2], usize)> = (0..m).map(|i| ([0.0, 0.0], i)).collect();
+            let new = chebyshev_centre(&polygon, &planes, &mut lines);
+            let old = chebyshev_all_unknowns(&planes);
+            assert_eq!(new.map(|y| y.map(f64::to_bits)), old.map(|y| y.map(f64::to_bits)));
+        }
     }
 
     #[test]
