@@ -23,6 +23,7 @@ pub mod mesh;
 pub mod orient;
 pub mod predicates;
 pub mod solids;
+pub mod spatial_order;
 pub mod validate;
 pub mod vec3;
 mod volume;

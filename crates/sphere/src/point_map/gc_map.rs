@@ -170,8 +170,13 @@ impl GcMap {
             let score = fw.w[0].min(fw.w[1]).min(fw.w[2]);
             found.offer(f, fw.w, fw.bound * sizes[f as usize], fw.contains, fw.near, score);
         };
-        // The boxes are rounded outward by far less than this slack.
-        self.locator.for_each_containing(&p, 1e-10, |x| consider(x, &mut found));
+        // The boxes are rounded outward by far less than this slack. A face
+        // whose own box (so grown) misses p neither holds p nor any point
+        // within the rounding error of it: its offer would only be a
+        // fallback, which is not used when some face holds p (and when none
+        // does, every face is offered below). So only the faces whose box
+        // holds p are weighed, in the order of the tree's leaves as before.
+        self.locator.for_each_box_containing(&p, 1e-10, |x| consider(x, &mut found));
         if !found.found() {
             // The boxes cover the sphere, so this is a safety net only.
             for f in 0..self.faces.len() as u32 {

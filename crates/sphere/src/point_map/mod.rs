@@ -22,6 +22,7 @@ pub mod weight_bound;
 use std::sync::Arc;
 
 use rayon::prelude::*;
+use spherify_mesh::spatial_order::spatial_order;
 use spherify_mesh::Mesh;
 
 use crate::embed::{Details, Embedding};
@@ -304,24 +305,41 @@ impl PointMap {
         }
         let located: Vec<(u32, [f64; 3], f64)> = batched(points.len(), progress, |rows| {
             let start = rows.start;
-            points[rows]
+            let batch = &points[rows];
+            // Checked in row order first: the first row off the sphere is
+            // the one named.
+            for (k, &p) in batch.iter().enumerate() {
+                let norm = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
+                if (norm - 1.0).abs().is_nan() || (norm - 1.0).abs() > NORM_TOLERANCE {
+                    return Err(PointMapError::NotOnSphere { row: start + k, point: p, norm });
+                }
+            }
+            // Located in the Morton order of the points (spatial_order: one
+            // point's walk down the tree finds the nodes the one before read
+            // still in the cache) and written back to their rows; each
+            // point's answer is its own, so the order changes no bits.
+            let order = spatial_order(batch);
+            let answers: Vec<(u32, [f64; 3], f64)> = order
                 .par_iter()
-                .enumerate()
-                .map(|(k, &p)| {
-                    let row = start + k;
-                    let norm = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
-                    if (norm - 1.0).abs().is_nan() || (norm - 1.0).abs() > NORM_TOLERANCE {
-                        return Err(PointMapError::NotOnSphere { row, point: p, norm });
-                    }
-                    Ok(match &self.inner {
-                        Inner::ThetaPhi(m) => m.to_surface(p.map(|x| x / norm), &self.sizes),
+                .map(|&row| {
+                    let p = batch[row as usize];
+                    match &self.inner {
+                        Inner::ThetaPhi(m) => {
+                            let norm = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
+                            m.to_surface(p.map(|x| x / norm), &self.sizes)
+                        }
                         // Containment is a sign of det[p, b, c], which scaling
                         // p does not change: the point as given is located,
                         // not its rounded normalisation.
                         Inner::Gc(m) => m.to_surface(p, &self.sizes),
-                    })
+                    }
                 })
-                .collect::<Result<_, _>>()
+                .collect();
+            let mut out = vec![(0u32, [0.0; 3], 0.0); batch.len()];
+            for (&row, answer) in order.iter().zip(answers) {
+                out[row as usize] = answer;
+            }
+            Ok(out)
         })?;
         let mut xyz = memory_budget::reserved(located.len(), "the surface points")?;
         xyz.par_extend(located.par_iter().map(|&(f, w, _)| {
