@@ -75,6 +75,16 @@ struct CompactNode<const D: usize> {
 /// it: the outward rounding of a bound.
 fn single_outward(x: f64, down: bool) -> f32 {
     let s = x as f32;
+    if s.is_infinite() && x.is_finite() {
+        // Beyond the singles' range, rounded to an infinity: the outward
+        // bound is that infinity on its own side, the largest finite single
+        // on the other (a box of huge coordinates must not come out empty).
+        return match (x > 0.0, down) {
+            (true, true) => f32::MAX,
+            (false, false) => f32::MIN,
+            _ => s,
+        };
+    }
     let past = if down { (s as f64) > x } else { (s as f64) < x };
     if !past || !s.is_finite() {
         return s;
@@ -307,7 +317,7 @@ mod tests {
             assert!((lo as f64) <= x && x <= (hi as f64), "{x} {lo} {hi}");
             assert!(hi.to_bits().abs_diff(lo.to_bits()) <= 2 || lo < 0.0 && hi > 0.0);
         }
-        for x in [0.0, -0.0, 1.0, -1.0, f64::MIN_POSITIVE, 1e-300, -1e-300] {
+        for x in [0.0, -0.0, 1.0, -1.0, f64::MIN_POSITIVE, 1e-300, -1e-300, 1e39, -1e39, 1e300] {
             let (lo, hi) = (single_outward(x, true), single_outward(x, false));
             assert!((lo as f64) <= x && x <= (hi as f64), "{x} {lo} {hi}");
         }
