@@ -52,6 +52,33 @@ def test_fit_with_its_normal_matrix_given_is_the_same_fit() -> None:
     assert np.abs(kept(a) - formed(a)).max() > 1e-6
 
 
+def test_point_to_plane_fit() -> None:
+    # fit_plane (off by default: PLANE_TANGENT = 1) with no row weighted
+    # along its normal is fit; with every row's tangential part weighing
+    # nothing, targets slid along their planes give the same fit.
+    mesh, bent = bent_pair()
+    a = mesh.vertices
+    controls = a[sp.datasets.farthest_points(a, 150)]
+    v = 1.0 + 0.5 * np.sin(np.arange(len(a)))
+    model = _nricp.Deformation(np.eye(3), np.zeros(3), controls, np.zeros((0, 3)), 0.6)
+    design = np.hstack([a, np.ones((len(a), 1)), model.kernel(a)])
+    normal = design.T @ (design * v[:, None])
+    gram = model.kernel(controls)
+    rng = np.random.default_rng(3)
+    nb = rng.normal(size=a.shape)
+    nb /= np.linalg.norm(nb, axis=1)[:, None]
+    plain = _nricp.fit(a, bent, v, controls, 0.6, 1e-4)
+    none = _nricp.fit_plane(a, bent, v, np.zeros(len(a)), nb, controls, 0.6, 1e-4, design,
+                            normal, gram)
+    assert np.abs(none(a) - plain(a)).max() < 1e-9
+    slid = bent + 0.05 * np.cross(nb, rng.normal(size=a.shape))
+    ones = np.ones(len(a))
+    on_plane = _nricp.fit_plane(a, bent, v, ones, nb, controls, 0.6, 1e-4, design, normal, gram)
+    on_slid = _nricp.fit_plane(a, slid, v, ones, nb, controls, 0.6, 1e-4, design, normal, gram)
+    assert np.abs(on_plane(a) - on_slid(a)).max() < 1e-9
+    assert np.abs(on_plane(a) - plain(a)).max() > 1e-6
+
+
 def test_icp_finds_the_bend_from_slid_pairs() -> None:
     mesh, bent = bent_pair()
     a, faces = mesh.vertices, mesh.faces

@@ -112,6 +112,21 @@ CONTROLS = 300
 # 20,000 the deformation of horse's 48k vertices took 0.34-0.80 s, with 2000
 # (and the passes in place) 0.15-0.37 s, the same bits (issue 23, speed).
 ROWS = 2000
+# Point-to-plane pairs (Chen and Medioni 1992; in non-rigid ICP, e.g. Li,
+# Sumner and Pauly 2008), off: a pair's tangential part weighs PLANE_TANGENT
+# of its normal part (B's face normal at the target) in the stages whose
+# sigma lies in [PLANE_SIGMA_MIN, PLANE_SIGMA] (1: point-to-point, the pairs
+# of the module doc; landmark and reverse pairs stay point-to-point). The
+# closest-point pairs hold each point's tangential position where the last
+# fit put it, so the start's slide on a smooth surface stays (igea); the
+# plane pairs free it. Measured on issue 23's bench (docs/correspondence.md,
+# "Point-to-plane pairs"): igea's warp 1.21% / 2.84% -> 0.95% / 2.20%
+# (0.01, every stage), hand 1.00% / 2.27% -> 0.68% / 1.31%, but the 95th
+# percentile of spot, octopus and human_man worse in every setting tried,
+# and the coupled solve (3 (4 + K) unknowns) costs; so not used.
+PLANE_TANGENT = 1.0
+PLANE_SIGMA = 1.0
+PLANE_SIGMA_MIN = 0.0
 
 @dataclass
 class Deformation:
@@ -185,6 +200,41 @@ def fit(a: np.ndarray, y: np.ndarray, v: np.ndarray, controls: np.ndarray, sigma
     # ridge keeps the solve well posed without changing the fit.
     normal[4:, 4:] += 1e-10 * total * np.eye(k)
     theta = np.linalg.solve(normal, rhs)
+    return Deformation(theta[:3].T.copy(), theta[3].copy(), controls, theta[4:].copy(), sigma)
+
+
+def fit_plane(a: np.ndarray, y: np.ndarray, v: np.ndarray, c: np.ndarray, nb: np.ndarray,
+              controls: np.ndarray, sigma: float, stiffness: float, design: np.ndarray,
+              normal: np.ndarray, gram: np.ndarray) -> Deformation:
+    """As :func:`fit`, but row i's residual r = T(a_i) - y_i weighs
+    r^T ((1 - c_i) I + c_i n_i n_i^T) r (``nb`` the unit normals n_i): with
+    c_i = 1 - PLANE_TANGENT, its tangential part weighs PLANE_TANGENT of its
+    normal part. ``normal`` is D^T diag(v) D. The three coordinates couple:
+    one solve of 3 (4 + K) unknowns."""
+    k = len(controls)
+    p = 4 + k
+    vc = v * c
+    big = np.zeros((3 * p, 3 * p))
+    shrink = design.T @ (design * vc[:, None])
+    for i in range(3):
+        for j in range(i, 3):
+            block = design.T @ (design * (vc * nb[:, i] * nb[:, j])[:, None])
+            if i == j:
+                block = block + normal - shrink
+            big[i * p:(i + 1) * p, j * p:(j + 1) * p] = block
+            if i != j:
+                big[j * p:(j + 1) * p, i * p:(i + 1) * p] = block.T
+    my = y * (1.0 - c)[:, None] + nb * (c * (nb * y).sum(1))[:, None]
+    rhs = design.T @ (my * v[:, None])
+    total = float(v.sum())
+    reg = np.zeros((p, p))
+    reg[:3, :3] = AFFINE_STIFFNESS * total * np.eye(3)
+    reg[4:, 4:] = stiffness * total * gram + 1e-10 * total * np.eye(k)
+    r = np.zeros((p, 3))
+    r[:3, :3] = AFFINE_STIFFNESS * total * np.eye(3)
+    for i in range(3):
+        big[i * p:(i + 1) * p, i * p:(i + 1) * p] += reg
+    theta = np.linalg.solve(big, (rhs + r).T.ravel()).reshape(3, p).T
     return Deformation(theta[:3].T.copy(), theta[3].copy(), controls, theta[4:].copy(), sigma)
 
 
@@ -330,6 +380,9 @@ def nonrigid_icp(a: np.ndarray, a_normals: np.ndarray, area: np.ndarray,
     done = 0
     record: Dict[str, Any] = {"kept": [], "distance": []}
     model: Optional[Deformation] = None
+    # B's normals at the targets, for point-to-plane pairs (none for the
+    # first targets, which come through the sphere maps).
+    plane_n: Optional[np.ndarray] = None
     if len(ids):
         a = np.vstack([a, a[ids]])
     every = v0 if not len(ids) else np.concatenate([v0, np.full(len(ids), landmark_weight)])
@@ -366,7 +419,7 @@ def nonrigid_icp(a: np.ndarray, a_normals: np.ndarray, area: np.ndarray,
                  normal_every: np.ndarray = normal_every, sigma: float = sigma,
                  stiffness: float = stiffness, steps: int = steps) -> bool:
             """This width's fits; True where ``should_stop`` stopped them."""
-            nonlocal model, use, targets, done, back_w, back_s
+            nonlocal model, use, targets, done, back_w, back_s, plane_n
             for _ in range(steps):
                 v = v0 * use
                 y, weights = targets, v
@@ -391,7 +444,17 @@ def nonrigid_icp(a: np.ndarray, a_normals: np.ndarray, area: np.ndarray,
                     y[back] = (v[back, None] * targets[back] + back_s[back]) / both[:, None]
                     weights = weights.copy()
                     weights[back] = both
-                model = fit(a, y, weights, controls, sigma, stiffness, phi, normal, design, gram)
+                if PLANE_TANGENT < 1.0 and PLANE_SIGMA_MIN <= sigma <= PLANE_SIGMA and plane_n is not None:
+                    c = np.zeros(len(y))
+                    c[:n] = 1.0 - PLANE_TANGENT
+                    c[back] = 0.0
+                    nb = np.zeros((len(y), 3))
+                    nb[:n] = plane_n
+                    model = fit_plane(a, y, weights, c, nb, controls, sigma, stiffness, design,
+                                      normal, gram)
+                else:
+                    model = fit(a, y, weights, controls, sigma, stiffness, phi, normal, design,
+                                gram)
                 theta = np.vstack([model.linear.T, model.shift, model.weights])
                 moved = (design @ theta)[:n]
                 faces, _, on_b = nearest(moved)
@@ -400,6 +463,8 @@ def nonrigid_icp(a: np.ndarray, a_normals: np.ndarray, area: np.ndarray,
                 agree = (turned * b_face_normals[faces]).sum(1)
                 use = agree > NORMAL_COSINE
                 targets = on_b
+                if PLANE_TANGENT < 1.0:
+                    plane_n = b_face_normals[faces]
                 back_w = np.zeros(n)
                 if reverse is not None and sigma >= REVERSE_SIGMA:
                     back_w, back_s = reverse(moved, turned, on_b[use])
