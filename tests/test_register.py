@@ -341,3 +341,38 @@ def test_on_human_man_the_pose_in_space_picks_front_from_back() -> None:
     assert c.details["start"] == "rigid ICP in space"
     assert c.map_a.valid
     assert errors(c, copy.truth, copy.mesh).mean() < 0.12
+
+
+@pytest.mark.parametrize("threads", [1, 2])
+def test_a_switch_of_pose_stands_only_where_keep_switch_says_so(
+        pair: "tuple[sp.datasets.DeformedCopy, sp.SphereMap]", blob: sp.SphereMap,
+        monkeypatch: pytest.MonkeyPatch, threads: int) -> None:
+    # The check in space proposes another pose (forced here); the later
+    # stages run from both rotations, on one thread as on two, and
+    # keep_switch, which sees both results, decides which stands.
+    from spherify import _align
+    _, m_b = pair
+    turned = _align.rodrigues(np.array([0.0, 0.0, 2.0]))
+    monkeypatch.setattr(_align, "_pose_in_space", lambda *args: (turned, 7))
+    seen: "list[tuple[np.ndarray, np.ndarray]]" = []
+
+    def keep(new: np.ndarray, old: np.ndarray) -> bool:
+        seen.append((new, old))
+        return bool(verdict)
+
+    before = sp.get_num_threads()
+    sp.set_num_threads(threads)
+    try:
+        verdict = False
+        kept = _align.best_rotation_then(blob, m_b, None, lambda r: r.copy(), None, keep)
+        verdict = True
+        switched = _align.best_rotation_then(blob, m_b, None, lambda r: r.copy(), None, keep)
+    finally:
+        sp.set_num_threads(before)
+    rotation, name, _, result = kept
+    assert name != "rigid ICP in space" and np.array_equal(result, rotation)
+    assert not np.array_equal(rotation, turned)
+    assert len(seen) == 2 and np.array_equal(seen[0][0], turned)
+    assert np.array_equal(seen[0][1], rotation)
+    assert switched[1] == "rigid ICP in space" and switched[2] == 7
+    assert np.array_equal(switched[0], turned) and np.array_equal(switched[3], turned)

@@ -378,7 +378,8 @@ def best_rotation(m_a: SphereMap, m_b: SphereMap,
 def best_rotation_then(m_a: SphereMap, m_b: SphereMap,
                        landmark_rotation: Optional[np.ndarray] = None,
                        then: Optional[Callable[[np.ndarray], T]] = None,
-                       b_tree: Optional[_nearest.OnDemand] = None
+                       b_tree: Optional[_nearest.OnDemand] = None,
+                       keep_switch: Optional[Callable[[T, T], bool]] = None
                        ) -> Tuple[np.ndarray, str, int, Optional[T]]:
     """:func:`best_rotation` and ``then(rotation)`` (the rest of a
     registration: the Möbius fit and the warp): the rotation, its start's
@@ -393,7 +394,13 @@ def best_rotation_then(m_a: SphereMap, m_b: SphereMap,
     only on human_man, so its time is mostly hidden. Where the check
     switches, ``then`` runs again from the new rotation, so the results are
     those of the check first and ``then`` after it, to the bit. Where the
-    pieces cannot run side by side (one thread), the check goes first."""
+    pieces cannot run side by side (one thread), the check goes first.
+
+    ``keep_switch(switched, unswitched)``, if given, has the last word on a
+    switch: it sees ``then``'s results from both rotations (the one from
+    the map rotation is made after all on one thread, so the answer is the
+    same for every thread count) and the map rotation stands where it says
+    no."""
     def after(rotation: np.ndarray) -> Optional[T]:
         return None if then is None else then(rotation)
 
@@ -430,19 +437,24 @@ def best_rotation_then(m_a: SphereMap, m_b: SphereMap,
     def check() -> Optional[Tuple[np.ndarray, int]]:
         return _pose_in_space(m_a, m_b, rotation, cost, b_tree)
 
+    unswitched: Optional[T] = None
     if then is None or not parallel():
-        switched, result = check(), None
-        if switched is None:
-            result = after(rotation)
+        switched = check()
+        if switched is None or keep_switch is not None:
+            unswitched = after(rotation)
     else:
         # ``then`` on this thread, from the map rotation, while the check
-        # runs beside it; where the check switches, its result is dropped.
-        result, switched = beside(lambda: after(rotation), check)
-    if switched is not None:
-        rotation, iterations = switched
-        name = "rigid ICP in space"
-        result = after(rotation)
-    return rotation, name, iterations, result
+        # runs beside it; where the check switches, its result is kept only
+        # for ``keep_switch``.
+        unswitched, switched = beside(lambda: after(rotation), check)
+    if switched is None:
+        return rotation, name, iterations, unswitched
+    result = after(switched[0])
+    if keep_switch is not None and then is not None:
+        assert result is not None and unswitched is not None
+        if not keep_switch(result, unswitched):
+            return rotation, name, iterations, unswitched
+    return switched[0], "rigid ICP in space", switched[1], result
 
 
 def _pose_in_space(m_a: SphereMap, m_b: SphereMap, rotation: np.ndarray, cost: Cost,
