@@ -95,6 +95,42 @@ pub fn det3_sign(a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> Sign {
     Sign::of(robust::orient3d(p(a), p(b), p(c), p([0.0; 3])))
 }
 
+/// Shewchuk's first error bound for a sum of three terms `z (p - q)` with
+/// `p`, `q` products of inputs (orient3d's `o3derrboundA`, Shewchuk 1997,
+/// "Adaptive Precision Floating-Point Arithmetic and Fast Robust Geometric
+/// Predicates", section 4.3), with epsilon = 2^-53.
+const DET3_BOUND: f64 = (7.0 + 56.0 * f64::EPSILON / 2.0) * (f64::EPSILON / 2.0);
+
+/// Below this permanent the filter of [`det3_and_sign`] does not decide: its
+/// bound is then not above the error of products that underflow.
+const DET3_SMALLEST_PERMANENT: f64 = 1e-200;
+
+/// The rounded determinant `(a x b) . c`, bit for bit as
+/// `spherify_mesh::vec3::dot(cross(a, b), c)` computes it, and the exact sign
+/// of det[a; b; c] ([`det3_sign`]'s answer). The rounded value decides the
+/// sign when it lies beyond Shewchuk's error bound on its own permanent (the
+/// same sum of three terms `c_i (p_i - q_i)` as orient3d's first stage, whose
+/// bound holds for that form); otherwise [`det3_sign`] decides. For callers
+/// that need both (the certificate's smallest det and its orientation test):
+/// one determinant a face instead of two.
+#[inline]
+pub fn det3_and_sign(a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> (f64, Sign) {
+    let (m0, n0) = (a[1] * b[2], a[2] * b[1]);
+    let (m1, n1) = (a[2] * b[0], a[0] * b[2]);
+    let (m2, n2) = (a[0] * b[1], a[1] * b[0]);
+    let det = (m0 - n0) * c[0] + (m1 - n1) * c[1] + (m2 - n2) * c[2];
+    let permanent = (m0.abs() + n0.abs()) * c[0].abs()
+        + (m1.abs() + n1.abs()) * c[1].abs()
+        + (m2.abs() + n2.abs()) * c[2].abs();
+    // Not-finite inputs make `permanent` infinite or NaN: no comparison holds.
+    let bound = DET3_BOUND * permanent;
+    if permanent >= DET3_SMALLEST_PERMANENT && (det > bound || -det > bound) {
+        (det, Sign::of(det))
+    } else {
+        (det, det3_sign(a, b, c))
+    }
+}
+
 /// Whether `a, b, c` lie exactly on one line in space (including coincident
 /// points). The components of `(b - a) x (c - a)` are the signed areas of the
 /// projections onto the yz, zx and xy planes, so the points are collinear exactly
@@ -118,6 +154,39 @@ mod tests {
 
     fn naive_orient2d(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> Sign {
         Sign::of((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]))
+    }
+
+    #[test]
+    fn det3_and_sign_is_the_rounded_det_and_the_exact_sign() {
+        use crate::vec3::{cross, dot};
+        let mut rng = Lcg::new(7);
+        let mut undecided = 0;
+        for k in 0..20_000 {
+            let mut p = [[0.0; 3]; 3];
+            for q in &mut p {
+                *q = [rng.between(-1.0, 1.0), rng.between(-1.0, 1.0), rng.between(-1.0, 1.0)];
+            }
+            if k % 2 == 1 {
+                // Nearly coplanar with the origin: c a combination of a and b
+                // plus a rounding-size nudge, where the filter must pass on.
+                let (s, t) = (rng.between(-1.0, 1.0), rng.between(-1.0, 1.0));
+                let nudge = rng.between(-1e-16, 1e-16);
+                p[2] = [0, 1, 2].map(|i| s * p[0][i] + t * p[1][i] + nudge);
+            }
+            let (det, sign) = det3_and_sign(p[0], p[1], p[2]);
+            assert_eq!(det.to_bits(), dot(cross(p[0], p[1]), p[2]).to_bits());
+            assert_eq!(sign, det3_sign(p[0], p[1], p[2]));
+            undecided += usize::from(k % 2 == 1 && Sign::of(det) != sign);
+        }
+        // The near-coplanar half has rounded signs that are wrong.
+        assert!(undecided > 0);
+        for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+            assert_eq!(det3_and_sign([bad, 0.0, 0.0], E[1], E[2]).1, Sign::Zero);
+        }
+        assert_eq!(det3_and_sign(E[0], E[1], E[2]), (1.0, Sign::Positive));
+        assert_eq!(det3_and_sign(E[1], E[0], E[2]), (-1.0, Sign::Negative));
+        let tiny = [E[0].map(|x| x * 1e-120), E[1].map(|x| x * 1e-120), E[2]];
+        assert_eq!(det3_and_sign(tiny[0], tiny[1], tiny[2]).1, Sign::Positive);
     }
 
     fn naive_det3(a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> Sign {

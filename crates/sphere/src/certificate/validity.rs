@@ -12,7 +12,7 @@
 //! a GC-embedding. The sum only has to be accurate to within 2 pi to decide k.
 
 use rayon::prelude::*;
-use spherify_mesh::predicates::{det3_sign, Sign};
+use spherify_mesh::predicates::{det3_and_sign, Sign};
 use spherify_mesh::vec3::{cross, dot, norm, scale};
 
 /// What [`check_sphere`] finds.
@@ -53,18 +53,25 @@ pub fn check_sphere(faces: &[[u32; 3]], points: &[[f64; 3]]) -> SphereReport {
         .filter(|(_, p)| !p.iter().all(|x| x.is_finite()) || p == &&[0.0; 3])
         .map(|(v, _)| v as u32)
         .collect();
-    let max_norm_error = points
+    // One norm a point for its distance from the sphere and its direction.
+    let (unit, norm_errors): (Vec<[f64; 3]>, Vec<f64>) = points
         .par_iter()
-        .map(|p| (norm(*p) - 1.0).abs())
-        .reduce(|| 0.0, |a: f64, b: f64| if b.is_nan() || b > a { b } else { a });
-    let unit: Vec<[f64; 3]> = points.par_iter().map(|&p| scale(p, 1.0 / norm(p))).collect();
+        .map(|&p| {
+            let length = norm(p);
+            (scale(p, 1.0 / length), (length - 1.0).abs())
+        })
+        .unzip();
+    let max_norm_error =
+        norm_errors.iter().fold(0.0, |a: f64, &b: &f64| if b.is_nan() || b > a { b } else { a });
+    // The rounded det of the points (the smallest is reported) decides the
+    // exact sign too when it lies beyond its error bound (det3_and_sign).
     let (signs, (areas, dets)): (Vec<Sign>, (Vec<f64>, Vec<f64>)) = faces
         .par_iter()
         .map(|&[a, b, c]| {
             let (pa, pb, pc) = (points[a as usize], points[b as usize], points[c as usize]);
             let (ua, ub, uc) = (unit[a as usize], unit[b as usize], unit[c as usize]);
-            let sign = det3_sign(pa, pb, pc);
-            (sign, (area_with_sign(ua, ub, uc, sign), dot(cross(pa, pb), pc)))
+            let (det, sign) = det3_and_sign(pa, pb, pc);
+            (sign, (area_with_sign(ua, ub, uc, sign), det))
         })
         .unzip();
     let smallest = |values: &[f64]| values.iter().copied().fold(f64::INFINITY, f64::min);
