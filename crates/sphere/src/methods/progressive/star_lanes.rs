@@ -10,11 +10,13 @@
 //! time (issue 27: the move is about 46% of the default map's CPU time;
 //! issue 22: the balanced energy's moves dominate its sweeps).
 //!
-//! The densities with lanes: the isometric energy (the default), and the
-//! stretch family, stretch and balanced with their coarse-level and weighted
-//! forms (f = a / (2 d^2), plus w (d + 1/d) for the balanced area term,
-//! plus x a for the coarse levels' expansion cost). The conformal and
-//! authalic energies take the scalar path ([`handles`] is false for them).
+//! The densities with lanes: every energy. The isometric energy (the
+//! default); the stretch family, stretch and balanced with their
+//! coarse-level and weighted forms (f = a / (2 d^2), plus w (d + 1/d) for
+//! the balanced area term, plus x a for the coarse levels' expansion cost);
+//! the conformal energy (a / d, plus (F / d - 1)^2 below the area floor F,
+//! that branch taken by lane with a mask) and the authalic energy
+//! (d + 1/d + w a / d).
 //!
 //! **The same bits as one face at a time**: each lane performs exactly the
 //! operations, in the same order, of
@@ -73,9 +75,14 @@ enum Density {
     /// a / (2 d^2), plus `area` times (d + 1/d) (the balanced energies),
     /// plus `expansion` times a (the coarse levels' cost of growth).
     Stretch { area: Option<f64>, expansion: Option<f64> },
+    /// a / d, plus (F / d - 1)^2 where d < F = `CONFORMAL_AREA_FLOOR`.
+    Conformal,
+    /// d + 1/d + w a / d, w = `AUTHALIC_ANGLE_WEIGHT`.
+    Authalic,
 }
 
-/// The lanes' form of `energy`'s density, or `None` (conformal, authalic).
+/// The lanes' form of `energy`'s density (every energy has one; `None` is
+/// kept for a density without lanes).
 fn density(energy: Energy) -> Option<Density> {
     let stretch = |area, expansion| Some(Density::Stretch { area, expansion });
     match energy {
@@ -86,7 +93,8 @@ fn density(energy: Energy) -> Option<Density> {
         Energy::CoarseBalanced => {
             stretch(Some(energy.area_weight()), Some(COARSE_STRETCH_EXPANSION))
         }
-        Energy::Conformal | Energy::Authalic => None,
+        Energy::Conformal => Some(Density::Conformal),
+        Energy::Authalic => Some(Density::Authalic),
     }
 }
 
@@ -293,7 +301,9 @@ mod lanes {
     use spherify_mesh::predicates::{det3_sign, Sign};
 
     use super::{Density, Lane, Sums, LANES};
-    use crate::methods::progressive::distortion_energy::Reference;
+    use crate::methods::progressive::distortion_energy::{
+        Reference, AUTHALIC_ANGLE_WEIGHT, CONFORMAL_AREA_FLOOR,
+    };
 
     #[derive(Clone, Copy)]
     struct F4(__m256d);
@@ -660,11 +670,90 @@ mod lanes {
         }
     }
 
+    /// a / d, plus (F / d - 1)^2 where d < F (`Energy::Conformal`): the
+    /// floor's branch computed in every lane and kept where d < F (a lane
+    /// with d not below F, or NaN, keeps the plain value, as the scalar
+    /// `if`).
+    #[derive(Clone, Copy)]
+    struct Conformal;
+
+    impl Conformal {
+        /// F, and the lanes where d < F.
+        #[inline(always)]
+        fn below(d: F4) -> (F4, F4) {
+            let floor = F4::splat(CONFORMAL_AREA_FLOOR);
+            (floor, floor.gt(d))
+        }
+    }
+
+    impl LaneDensity for Conformal {
+        #[inline(always)]
+        fn first(self, a: F4, d: F4) -> (F4, F4, F4) {
+            let (f, f_a, f_d) = (a / d, F4::splat(1.0) / d, a.neg() / (d * d));
+            let (floor, below) = Conformal::below(d);
+            let excess = floor / d - F4::splat(1.0);
+            let f = (f + excess * excess).select(below, f);
+            let f_d = (f_d - F4::splat(2.0) * excess * floor / (d * d)).select(below, f_d);
+            (f, f_a, f_d)
+        }
+        #[inline(always)]
+        fn second(self, a: F4, d: F4) -> (F4, F4) {
+            let (d2, d3) = (d * d, d * d * d);
+            let f_dd = F4::splat(2.0) * a / d3;
+            let (floor, below) = Conformal::below(d);
+            let two_ff = F4::splat(2.0 * CONFORMAL_AREA_FLOOR * CONFORMAL_AREA_FLOOR);
+            let four_f = F4::splat(4.0 * CONFORMAL_AREA_FLOOR);
+            let extra = two_ff / (d3 * d) + four_f * (floor / d - F4::splat(1.0)) / d3;
+            (F4::splat(-1.0) / d2, (f_dd + extra).select(below, f_dd))
+        }
+        #[inline(always)]
+        fn value(self, a: F4, d: F4) -> F4 {
+            let f = a / d;
+            let (floor, below) = Conformal::below(d);
+            let excess = floor / d - F4::splat(1.0);
+            (f + excess * excess).select(below, f)
+        }
+    }
+
+    /// d + 1/d + w a / d (`Energy::Authalic`), `w` = the angle weight,
+    /// `two_w` = 2 w.
+    #[derive(Clone, Copy)]
+    struct Authalic {
+        w: F4,
+        minus_w: F4,
+        two_w: F4,
+    }
+
+    impl LaneDensity for Authalic {
+        #[inline(always)]
+        fn first(self, a: F4, d: F4) -> (F4, F4, F4) {
+            let one = F4::splat(1.0);
+            let f = d + one / d + self.w * a / d;
+            let f_d = one - one / (d * d) - self.w * a / (d * d);
+            (f, self.w / d, f_d)
+        }
+        #[inline(always)]
+        fn second(self, a: F4, d: F4) -> (F4, F4) {
+            let (d2, d3) = (d * d, d * d * d);
+            (self.minus_w / d2, F4::splat(2.0) / d3 + self.two_w * a / d3)
+        }
+        #[inline(always)]
+        fn value(self, a: F4, d: F4) -> F4 {
+            d + F4::splat(1.0) / d + self.w * a / d
+        }
+    }
+
     /// Calls `$run` with `$density` as its [`LaneDensity`] type.
     macro_rules! with_density {
         ($density:expr, $run:ident($($arg:expr),*)) => {
             match $density {
                 Density::Isometric => $run(Isometric, $($arg),*),
+                Density::Conformal => $run(Conformal, $($arg),*),
+                Density::Authalic => {
+                    let w = AUTHALIC_ANGLE_WEIGHT;
+                    let (minus_w, two_w) = (F4::splat(-w), F4::splat(2.0 * w));
+                    $run(Authalic { w: F4::splat(w), minus_w, two_w }, $($arg),*)
+                }
                 Density::Stretch { area, expansion } => {
                     let w = area.unwrap_or(0.0);
                     let x = expansion.unwrap_or(0.0);
@@ -1036,6 +1125,7 @@ mod lanes {
 mod tests {
     use super::energy as energy_of;
     use super::*;
+    use crate::methods::progressive::distortion_energy::CONFORMAL_AREA_FLOOR;
     use spherify_mesh::lcg::Lcg;
 
     fn unit(v: [f64; 3]) -> [f64; 3] {
@@ -1138,8 +1228,21 @@ mod tests {
             }
         }
         assert!(finite > 50_000 && infinite > 5_000, "{finite} {infinite}");
+        // The conformal energy's area-floor branch (0 < d < F) is taken.
+        let mut floored = 0;
+        for (p, refs, corners) in stars() {
+            let m = corners.len();
+            for k in [0.7, 1.3e-3, 40.0] {
+                for (j, r) in refs.iter().enumerate() {
+                    let d = 0.5 * det3(p, corners[j], corners[(j + 1) % m]) / (k * r.area);
+                    floored += usize::from(d > 0.0 && d < CONFORMAL_AREA_FLOOR);
+                }
+            }
+        }
+        assert!(floored > 100, "{floored}");
         assert_eq!(handles(Energy::Balanced), available());
-        assert!(!handles(Energy::Conformal) && !handles(Energy::Authalic));
+        assert_eq!(handles(Energy::Conformal), available());
+        assert_eq!(handles(Energy::Authalic), available());
     }
 
     #[test]
