@@ -476,15 +476,12 @@ fn insert_round(
                 }
             },
         );
-        // The rings handed over and the moves written in one pass over the
-        // round (serial, each collapse read once).
-        let mut moved = moved.map(Vec::into_iter);
         for &j in order {
             let c = &mut collapses[j as usize];
             rings.rings[c.u as usize] = std::mem::take(&mut c.ring);
-            if let Some(Some(q)) = moved.as_mut().and_then(Iterator::next) {
-                points[c.u as usize] = q;
-            }
+        }
+        if let Some(moved) = moved {
+            apply_moves(collapses, order, moved, points);
         }
         return Ok(());
     }

@@ -606,42 +606,14 @@ pub fn tangent_basis(p: [f64; 3]) -> ([f64; 3], [f64; 3]) {
 
 /// The rings laid end to end, as [`Problem::stars_of`] takes them: vertex
 /// `i`'s at `start[i]..start[i + 1]`.
-///
-/// The offsets come from one serial pass over the lists' lengths (their
-/// headers lie side by side); the lists themselves, one block of memory
-/// each anywhere on the heap, are copied by blocks of [`FLAT_BLOCK`]
-/// vertices in parallel (issue 27: a serial `concat` waited on memory for
-/// 0.024 s at 1M-vertex `tentacles`, with the other thread idle). The same
-/// array as `concat`.
 pub fn flat_rings(rings: &[Vec<u32>]) -> (Vec<usize>, Vec<u32>) {
     let mut start = Vec::with_capacity(rings.len() + 1);
     start.push(0);
     for ring in rings {
         start.push(start[start.len() - 1] + ring.len());
     }
-    // Zeroed pages from the system (no serial fill); the copies touch them.
-    let mut flat = vec![0u32; start[rings.len()]];
-    let mut blocks: Vec<(&[Vec<u32>], &mut [u32])> =
-        Vec::with_capacity(rings.len().div_ceil(FLAT_BLOCK));
-    let mut rest: &mut [u32] = &mut flat;
-    for (b, lists) in rings.chunks(FLAT_BLOCK).enumerate() {
-        let first = b * FLAT_BLOCK;
-        let (block, tail) = rest.split_at_mut(start[first + lists.len()] - start[first]);
-        blocks.push((lists, block));
-        rest = tail;
-    }
-    blocks.into_par_iter().for_each(|(lists, block)| {
-        let mut at = 0;
-        for ring in lists {
-            block[at..at + ring.len()].copy_from_slice(ring);
-            at += ring.len();
-        }
-    });
-    (start, flat)
+    (start, rings.concat())
 }
-
-/// Vertices per parallel task of [`flat_rings`].
-const FLAT_BLOCK: usize = 4096;
 
 /// Greedy colouring of the vertices with non-empty rings, in index order:
 /// each class holds vertices no two of which are neighbours (so no two share
