@@ -338,7 +338,14 @@ def register(m_a: SphereMap, m_b: SphereMap, *, landmarks: Any = None,
         closest-point search on B, one closest-point search for every vertex
         of A, 10 rounds of flip-free moves of all, then up to 3 stages of
         energy sweeps (at most 200,000 vertex moves each) where the moves
-        stopped short of their targets.
+        stopped short of their targets. Where the moves leave A's map far
+        behind its targets (thin limbs many edges away), 128 of A's
+        vertices are first pinned at their targets with the landmark
+        machinery (the warp's scaffold, 4-15 s on a 50k-vertex mesh; then
+        ``map_a`` may lie on a refined mesh whose first rows are A's
+        vertices, as with landmarks); where the check in space switches
+        the pose, the Möbius fit and the warp run from both poses and the
+        warp keeps the switch only if it ends clearly nearer B.
 
     Raises
     ------
