@@ -341,7 +341,9 @@ def register(m_a: SphereMap, m_b: SphereMap, *, landmarks: Any = None,
         stopped short of their targets. Where the moves leave A's map far
         behind its targets (thin limbs many edges away), 128 of A's
         vertices are first pinned at their targets with the landmark
-        machinery (the warp's scaffold, 4-15 s on a 50k-vertex mesh; then
+        machinery (the warp's scaffold, about 1.5 s for the 50k-vertex
+        scorpion on a lightly loaded 2-core machine, more where it must
+        refine; then
         ``map_a`` may lie on a refined mesh whose first rows are A's
         vertices, as with landmarks); where the check in space switches
         the pose, the Möbius fit and the warp run from both poses and the

@@ -117,8 +117,9 @@ PULL_WORK = 200_000
 # local moves of at most an edge a round cannot carry them there. Then
 # SCAFFOLD of A's vertices are pinned at their targets first, by the
 # landmark machinery, which lays out the whole map around them (coarse), and
-# the rounds start from that map (fine). It costs 5-15 s on a 50k mesh
-# (the pinning; more where the layout refines the mesh much), so it is tried
+# the rounds start from that map (fine). It costs 5-15 s of CPU on a 50k
+# mesh on a busy machine (1.5 s of wall for scorpion's pinning on a lightly
+# loaded one; more where the layout refines the mesh much), so it is tried
 # only where the rounds lag: mean angle left over the mean chord edge of
 # A's map above SCAFFOLD_LAG without landmarks (after the rounds: horse 0.70,
 # armadillo 0.43, human_man 0.37-1.0, sword 2.0, scorpion 6.3; the speed
