@@ -132,13 +132,43 @@ def test_the_scaffold_gives_way_where_no_map_places_it(stopped_short: Tuple) -> 
     assert _warp.scaffold(map_a, targets, place) is None
 
 
+def test_the_scaffold_gives_way_where_its_layout_grows_the_mesh_past_its_bound(
+        stopped_short: Tuple, monkeypatch: pytest.MonkeyPatch) -> None:
+    # 48 pinned vertices: the layout refines these tentacles several times
+    # over. Within the bound the scaffold stands on the refined mesh; with
+    # the bound below that growth, None (the plain rounds stand), however
+    # valid the layout.
+    map_a, m_b, targets, _ = stopped_short
+    _, _, place = _warp._sphere_targets(map_a, m_b)
+    monkeypatch.setattr(_warp, "SCAFFOLD", 48)
+    monkeypatch.setattr(_warp, "SCAFFOLD_GROWTH", 1e3)
+    grown = _warp.scaffold(map_a, targets, place)
+    assert grown is not None and grown[0].valid
+    n, rows = len(targets), grown[0].mesh.n_vertices
+    assert rows > 1.5 * n
+    monkeypatch.setattr(_warp, "SCAFFOLD_GROWTH", (rows + 0.5) / n)
+    again = _warp.scaffold(map_a, targets, place)
+    assert again is not None
+    np.testing.assert_array_equal(again[0].points, grown[0].points)
+    monkeypatch.setattr(_warp, "SCAFFOLD_GROWTH", (rows - 0.5) / n)
+    assert _warp.scaffold(map_a, targets, place) is None
+    # The bound is improve's own option: the layout stops there, a MapError.
+    ids = sp.datasets.farthest_points(map_a.mesh.vertices, 48)
+    with pytest.raises(sp.MapError, match="max_vertices"):
+        sp.improve(map_a, landmarks=(ids, targets[ids]), max_vertices=rows - 1)
+    with pytest.raises(sp.MeshError, match="max_vertices"):
+        sp.improve(map_a, max_vertices=3)
+
+
 def test_a_registration_through_a_refined_scaffold_transfers_inverts_and_morphs(
         monkeypatch: pytest.MonkeyPatch) -> None:
-    # Forced here (the gate off, 48 pinned vertices): the layout refines
-    # these tentacles (3041 -> 22,089 vertices, measured), so the map of A
-    # has more rows than A, its first rows A's own, as for a landmark map.
+    # Forced here (the gate off, 48 pinned vertices, no bound on the
+    # growth): the layout refines these tentacles (3041 -> 22,089 vertices,
+    # measured), so the map of A has more rows than A, its first rows A's
+    # own, as for a landmark map.
     monkeypatch.setattr(_warp, "SCAFFOLD", 48)
     monkeypatch.setattr(_warp, "SCAFFOLD_LAG", 0.0)
+    monkeypatch.setattr(_warp, "SCAFFOLD_GROWTH", 1e3)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", sp.SpherifyWarning)
         m_a = sp.embed(sp.datasets.tentacles(3000))
@@ -155,3 +185,33 @@ def test_a_registration_through_a_refined_scaffold_transfers_inverts_and_morphs(
     assert c.inverse().map_a.valid
     np.testing.assert_array_equal(morph.faces, m_a.mesh.faces)
     assert morph.at(1.0).vertices.shape == (n, 3)
+
+
+def test_a_refined_scaffold_that_the_memory_policy_refuses_leaves_the_plain_rounds(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    # The scaffold's refined mesh is asked of the memory policy again before
+    # the rounds work on it; refused (here by a policy that fits A and B as
+    # given and nothing larger), the registration goes on without it.
+    monkeypatch.setattr(_warp, "SCAFFOLD", 48)
+    monkeypatch.setattr(_warp, "SCAFFOLD_LAG", 0.0)
+    monkeypatch.setattr(_warp, "SCAFFOLD_GROWTH", 1e3)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", sp.SpherifyWarning)
+        m_a = sp.embed(sp.datasets.tentacles(3000))
+        copy = sp.datasets.deformed_copy(m_a, level=3, seed=2)
+        m_b = sp.embed(copy.mesh)
+    given = m_a.mesh.n_vertices + m_b.mesh.n_vertices
+    asked = []
+    check = _warp._core.check_application
+
+    def policy(name: str, n_vertices: int, n_faces: int, items: int) -> None:
+        asked.append((name, n_vertices))
+        if name == "register" and n_vertices > given:
+            raise sp.ResourceError(f"{name}: {n_vertices} vertices do not fit")
+        check(name, n_vertices, n_faces, items)
+
+    monkeypatch.setattr(_warp._core, "check_application", policy)
+    c = sp.register(m_a, m_b)
+    assert ("register", given) in asked and any(n > given for _, n in asked)
+    assert not c.details["warp_scaffold"] and c.map_a.valid
+    assert c.map_a.mesh.n_vertices == m_a.mesh.n_vertices

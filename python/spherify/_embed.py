@@ -313,9 +313,12 @@ def improve(sphere_map: SphereMap, *, progress: Any = None, landmarks: Any = Non
         are not held by a plain ``improve``): pass ``m.landmarks`` to keep them.
     **options
         ``energy`` ("isometric"; any of the progressive method's), ``max_iter``
-        (30 sweeps) and ``tol`` (stop when a sweep lowers the energy by less
-        than this fraction; 1e-3): ``sp.method_options("improve")`` gives the
-        core's table with the defaults it runs with.
+        (30 sweeps), ``tol`` (stop when a sweep lowers the energy by less
+        than this fraction; 1e-3) and, with ``landmarks``, ``max_vertices``
+        (the most vertices a layout may refine the mesh to, beyond which the
+        set is refused with a MapError; unset: 16 times the mesh's
+        vertices, or 200,000 more): ``sp.method_options("improve")`` gives
+        the core's table with the defaults it runs with.
 
     Raises
     ------
@@ -325,7 +328,8 @@ def improve(sphere_map: SphereMap, *, progress: Any = None, landmarks: Any = Non
         An unknown energy or a value out of range; bad landmarks (as for
         :func:`embed`).
     MapError
-        Also a set of landmarks no map realises.
+        Also a set of landmarks no map realises, or none within
+        ``max_vertices``.
     """
     pinned = None if landmarks is None else as_landmarks(landmarks)
     ids, targets = (None, None) if pinned is None else pinned

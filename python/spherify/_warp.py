@@ -54,7 +54,7 @@ from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
-from . import _landmarks, _nricp
+from . import _core, _landmarks, _nricp
 from ._align import kabsch
 from ._embed import improve
 from ._errors import MapError, MeshError, ResourceError
@@ -63,8 +63,8 @@ from ._spheremap import SphereMap
 from ._workers import beside, run_all
 from .datasets._sampling import farthest_points
 
-__all__ = ["PULL_STAGES", "ROUNDS", "SAMPLE", "SCAFFOLD", "STEPS", "lagging", "move_rounds",
-           "pull", "scaffold", "sphere_targets", "warp"]
+__all__ = ["PULL_STAGES", "ROUNDS", "SAMPLE", "SCAFFOLD", "SCAFFOLD_GROWTH", "STEPS", "lagging",
+           "move_rounds", "pull", "scaffold", "sphere_targets", "warp"]
 
 # Vertices of A the deformation is fitted on (all of a smaller mesh).
 SAMPLE = 3000
@@ -132,6 +132,15 @@ PULL_WORK = 200_000
 SCAFFOLD = 128
 SCAFFOLD_LAG = 3.0
 SCAFFOLD_LAG_LANDMARKS = 0.25
+# Most vertices of a scaffold's map, as a multiple of A's (a bound on its
+# cost, not a test of its gain): the rounds after it cost as much more as
+# the layout refined the mesh. Measured (docs/correspondence.md, "The
+# scaffold's size"): kept and better for it, scorpion 1.50-1.62x, sword
+# 1.94x and with 8 landmarks 2.73x; refused, helix_tube 100k 15.4x (40.7%
+# mean error against 40.0% without, 200 s against 15 s, 1.57M rows
+# returned for 102k vertices) and sword with 3 landmarks 5.0x (a loss on
+# the mean). The layout stops as soon as it passes the bound.
+SCAFFOLD_GROWTH = 4.0
 # The steps reported to a progress callback: one per ICP iteration, one per
 # round and one per stage of the pull.
 STEPS = sum(s for _, _, s in _nricp.SCHEDULE) + ROUNDS + len(PULL_STAGES)
@@ -294,6 +303,17 @@ def warp(map_a: SphereMap, m_b: SphereMap, *, fixed: Optional[np.ndarray] = None
         # Step 4b (module doc): the scaffold, kept where its rounds end
         # nearer the targets on A's own vertices than the plain rounds.
         pinned = scaffold(map_a, targets, place, fixed=fixed)
+        if pinned is not None and pinned[0].mesh.n_vertices > len(targets):
+            # The rounds and the pull now work on the refined mesh: the
+            # memory policy's check of the registration is asked again for
+            # its size (up to SCAFFOLD_GROWTH times A's), and where it does
+            # not fit, the plain rounds stand.
+            mesh_a, mesh_b = pinned[0].mesh, m_b.mesh
+            try:
+                _core.check_application("register", mesh_a.n_vertices + mesh_b.n_vertices,
+                                        mesh_a.n_faces + mesh_b.n_faces, 0)
+            except ResourceError:
+                pinned = None
         if pinned is not None:
             n = len(targets)
             trial, trial_left, stopped = move_rounds(
@@ -327,8 +347,10 @@ def scaffold(map_a: SphereMap, targets: np.ndarray, place: Callable[[np.ndarray]
     the ``fixed`` vertices pinned where they are. Returns the certified
     pinned map and a target for each of its vertices (``place`` for the
     vertices an edge split added), or None where no map places them
-    (:class:`MapError`), two share a target (:class:`MeshError`) or the
-    layout would not fit the memory budget (:class:`ResourceError`)."""
+    (:class:`MapError`), none within :data:`SCAFFOLD_GROWTH` times A's
+    vertices (the layout stops there: a :class:`MapError` too), two share a
+    target (:class:`MeshError`) or the layout would not fit the memory
+    budget (:class:`ResourceError`)."""
     mesh = map_a.mesh
     ids = farthest_points(mesh.vertices, min(SCAFFOLD, len(targets)))
     points = targets[ids]
@@ -336,14 +358,16 @@ def scaffold(map_a: SphereMap, targets: np.ndarray, place: Callable[[np.ndarray]
         keep = ~np.isin(ids, fixed)
         ids = np.concatenate([np.asarray(fixed, dtype=np.int64), ids[keep]])
         points = np.concatenate([map_a.points[fixed], points[keep]])
-    try:
-        pinned = improve(map_a, landmarks=(ids, points))
-    except (MapError, MeshError, ResourceError):
-        # No map places them (MapError), two of them share a target where
-        # the targets fold (MeshError), or the refined layout would not fit
-        # the memory budget (ResourceError): the plain rounds stand.
-        return None
     n = len(targets)
+    try:
+        pinned = improve(map_a, landmarks=(ids, points),
+                         max_vertices=max(4, int(SCAFFOLD_GROWTH * n)))
+    except (MapError, MeshError, ResourceError):
+        # No map places them within SCAFFOLD_GROWTH (MapError), two of them
+        # share a target where the targets fold (MeshError), or the refined
+        # layout would not fit the memory budget (ResourceError): the plain
+        # rounds stand.
+        return None
     if pinned.mesh.n_vertices == n:
         return pinned, targets
     extended = np.concatenate([targets, place(pinned.mesh.vertices[n:])])

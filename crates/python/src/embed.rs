@@ -214,6 +214,7 @@ pub fn improve(
 ) -> PyResult<CoreSphereMap> {
     let options = Options::new(py, MethodName::Improve, options)?;
     let params = crate::progressive::improve_params(&options)?;
+    let max_vertices = options.optional_count("max_vertices")?;
     options.finish()?;
     let given = crate::landmarks::given(landmark_ids, landmark_points)?;
     let shared = sphere_map.shared_mesh();
@@ -227,7 +228,7 @@ pub fn improve(
         let mut embedding = improve_embedding(&mesh, &start, &params, report)?;
         let mut refined = None;
         if let Some(landmarks) = landmarks {
-            let pin = crate::landmarks::pin_params_for(params.energy);
+            let pin = crate::landmarks::pin_params_for(params.energy, max_vertices);
             (embedding, refined) =
                 pin_or_refine_embedding(&mesh, &embedding, &landmarks, &pin, report)?;
         }

@@ -57,9 +57,9 @@ pub fn pin_params(method: &Method) -> PinParams {
     }
 }
 
-/// The same for `improve`'s energy.
-pub fn pin_params_for(energy: Energy) -> PinParams {
-    PinParams { energy, ..PinParams::default() }
+/// The same for `improve`'s energy, and its bound on a layout's vertices.
+pub fn pin_params_for(energy: Energy, max_vertices: Option<usize>) -> PinParams {
+    PinParams { energy, max_vertices, ..PinParams::default() }
 }
 
 /// move_towards(sphere_map, targets (n, 3) float64, weights (n,) float64,

@@ -137,16 +137,21 @@ impl<'py> Options<'py> {
     /// A whole number at least the table's minimum (a Python int, not a bool
     /// or a float); `default` when absent.
     pub fn count(&self, name: &'static str, default: usize) -> PyResult<usize> {
+        Ok(self.optional_count(name)?.unwrap_or(default))
+    }
+
+    /// [`Options::count`], or `None` when absent.
+    pub fn optional_count(&self, name: &'static str) -> PyResult<Option<usize>> {
         let OptionKind::Count { minimum } = self.spec(name)?.kind else {
             return Err(PyRuntimeError::new_err(format!("spherify bug: {name} is not a count")));
         };
-        let Some(value) = self.take(name)? else { return Ok(default) };
+        let Some(value) = self.take(name)? else { return Ok(None) };
         let expected = format!("an integer >= {minimum}");
         if !value.is_instance_of::<PyInt>() || value.is_instance_of::<PyBool>() {
             return Err(self.bad(name, &expected, &value));
         }
         match value.extract::<i128>().ok().and_then(|v| usize::try_from(v).ok()) {
-            Some(v) if v >= minimum => Ok(v),
+            Some(v) if v >= minimum => Ok(Some(v)),
             _ => Err(self.bad(name, &format!("{expected} (and at most {})", usize::MAX), &value)),
         }
     }

@@ -297,6 +297,15 @@ impl MethodName {
                     count("max_iter", 0, d.max_iter).help("most sweeps"),
                     number("tol", d.tolerance)
                         .help("stop when a sweep lowers the energy by less than this fraction"),
+                    MethodOption::new(
+                        "max_vertices",
+                        OptionKind::Count { minimum: 4 },
+                        OptionDefault::Unset,
+                    )
+                    .help(
+                        "with landmarks: most vertices a layout may refine the mesh to \
+                         (unset: 16 times the mesh's, or 200,000 more)",
+                    ),
                 ]
             }
             MethodName::Points => Vec::new(),

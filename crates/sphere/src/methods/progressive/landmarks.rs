@@ -146,6 +146,11 @@ pub struct PinParams {
     /// [`DRAG_FIRST_OUT_OF_ORDER`] landmarks are out of order at the start
     /// ([`path_layout::out_of_order_count`]).
     pub layout_when_scrambled: bool,
+    /// Most vertices the layout may refine the mesh to; `None`: the layout's
+    /// own bound ([`path_layout::path_layout`]). A caller that would rather
+    /// do without a map than work on one much finer than its mesh (the
+    /// warp's scaffold) asks for less.
+    pub max_vertices: Option<usize>,
 }
 
 impl Default for PinParams {
@@ -155,6 +160,7 @@ impl Default for PinParams {
             max_iter: 30,
             tolerance: 1e-3,
             layout_when_scrambled: true,
+            max_vertices: None,
         }
     }
 }
@@ -555,7 +561,8 @@ pub fn lay_out(
     let go_on = || progress(0, 0);
     let cancelled = |done| SphereError::Cancelled { stage: "landmark layout", done, total: 2 };
     let rings = rings_of(mesh)?;
-    let layout = path_layout(&rings, mesh.positions(), points, landmarks, &go_on)?;
+    let layout =
+        path_layout(&rings, mesh.positions(), points, landmarks, params.max_vertices, &go_on)?;
     progress(1, 2);
     let positions = layout.positions(mesh.positions());
     let refined_mesh =

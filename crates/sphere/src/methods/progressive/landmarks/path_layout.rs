@@ -545,15 +545,19 @@ pub fn out_of_order_count(start: &[[f64; 3]], landmarks: &Landmarks) -> usize {
 /// that cannot fail in exact arithmetic failed; [`SphereError::Resource`]
 /// when the refined mesh grows past what the memory policy can map (checked
 /// each time it doubles: heavily scrambled sets refine far more than the
-/// input, 22k vertices to 7.5M on `sword` with 64 landmarks).
+/// input, 22k vertices to 7.5M on `sword` with 64 landmarks);
+/// [`SphereError::LandmarkConflict`] when it grows past `max_vertices`
+/// (`None`: [`MAX_GROWTH`] times the input's vertices or [`MAX_ADDED`] more).
 pub fn path_layout(
     rings: &[Vec<u32>],
     positions: &[[f64; 3]],
     start: &[[f64; 3]],
     landmarks: &Landmarks,
+    max_vertices: Option<usize>,
     go_on: &(dyn Fn() -> bool + Sync),
 ) -> Result<PathLayout, SphereError> {
     let n = rings.len();
+    let limit = max_vertices.unwrap_or((MAX_GROWTH * n).max(n + MAX_ADDED));
     let cancelled = || SphereError::Cancelled { stage: "landmark layout", done: 0, total: 1 };
     let (ids, targets, tris, _) = with_auxiliary(start, landmarks)?;
     let k = ids.len();
@@ -639,13 +643,14 @@ pub fn path_layout(
         }
         split_chords(&mut rot, &mut traced, &path);
         paths.push((a, b, path));
-        if rot.rings.len() > (MAX_GROWTH * n).max(n + MAX_ADDED) {
+        if rot.rings.len() > limit {
+            let asked = if max_vertices.is_some() { " (max_vertices)" } else { "" };
             return Err(SphereError::LandmarkConflict {
                 ids: out_of_order(start, &ids, &tris, landmarks.len()),
                 reason: format!(
                     "their order on the sphere is too far from the targets' order: laying \
-                     them out would refine the {n}-vertex mesh past {} vertices; move them \
-                     less, or in steps",
+                     them out would refine the {n}-vertex mesh to {} vertices, past its \
+                     limit of {limit}{asked}; move them less, or in steps",
                     rot.rings.len()
                 ),
             });

@@ -307,6 +307,19 @@ fn a_scrambled_set_the_drag_cannot_pin_is_laid_out_exactly() {
     let refined = assert_laid_out(&mesh, &points, &ids, &targets);
     assert!(refined.mesh.n_vertices() > mesh.n_vertices(), "paths split edges");
     assert_eq!(refined.layout.patches, 2 * 32 - 4);
+    // A caller's bound on the refined mesh: met exactly, it lays out the
+    // same; one vertex short, the set is refused and the bound named.
+    let rows = refined.mesh.n_vertices();
+    let bounded = |max| PinParams { max_vertices: Some(max), ..PinParams::default() };
+    let (e, again) = lay_out(&mesh, &points, &landmarks, &bounded(rows), &|_, _| true).unwrap();
+    assert_eq!(again.mesh.n_vertices(), rows);
+    assert!(check_sphere(again.mesh.faces(), &e.points).valid);
+    match lay_out(&mesh, &points, &landmarks, &bounded(rows - 1), &|_, _| true) {
+        Err(SphereError::LandmarkConflict { reason, .. }) => {
+            assert!(reason.contains("max_vertices"), "{reason}")
+        }
+        other => panic!("expected a conflict, got {other:?}"),
+    }
 }
 
 #[test]
