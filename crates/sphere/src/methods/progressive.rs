@@ -690,8 +690,10 @@ fn optimise_level(
     let stars =
         local_problem.stars_of(std::mem::take(&mut sub.start), std::mem::take(&mut sub.ring));
     let sweeps = (LEVEL_MOVES / rings.n_alive).clamp(LEVEL_SWEEPS, MAX_LEVEL_SWEEPS);
-    let end = local_problem
-        .optimise_stars(&stars, &mut sub.points, sweeps, params.tolerance, None, &|_| !go_on())
+    // Only the level's area scale is read of the sweeps' end (by the moves
+    // of the next new vertices).
+    let scale = local_problem
+        .optimise_stars_for_scale(&stars, &mut sub.points, sweeps, params.tolerance, &|_| !go_on())
         .map_err(|_| cancelled())?;
     drop(stars);
     if let Some(level_rings) = &level_rings {
@@ -700,7 +702,7 @@ fn optimise_level(
     }
     sub.scatter(alive, points);
     drop(sub);
-    let level = Level { area_floor, represented, scale: end.scale };
+    let level = Level { area_floor, represented, scale };
     if params.energy == Energy::Authalic && rings.n_alive >= AUTHALIC_LEVEL_MIN {
         authalic_newton_rings(
             &rings.rings,
