@@ -23,6 +23,7 @@ use crate::methods::progressive::chord_area::{self, chord_area, chord_area_hessi
 use crate::methods::progressive::distortion_energy::{
     face_energy, face_energy_hessian, Energy, Reference,
 };
+use crate::methods::progressive::level_mesh::write_ascending;
 use crate::methods::progressive::ring_mesh::prefetch;
 use crate::methods::progressive::star_lanes;
 use crate::methods::progressive::target_pull::TargetPull;
@@ -430,7 +431,9 @@ impl Problem<'_> {
                     Some((q, norm(sub(q, shared[i as usize])) > wake * shortest))
                 })
                 .collect_into_vec(&mut found);
-            write_back(points, class, &found);
+            // A class of colour_stars is ascending: written back in
+            // parallel blocks of the points.
+            write_ascending(points, class, |x| found[x].map(|(q, _)| q));
             moved.par_extend(
                 class
                     .par_iter()
@@ -440,36 +443,6 @@ impl Problem<'_> {
         }
         Ok(moved)
     }
-}
-
-/// Points per block of [`write_back`].
-const WRITE_BLOCK: usize = 1 << 14;
-
-/// `points[class[x]] = q` for every `found[x] = Some((q, _))`, in order of
-/// `x`. A class of [`colour_stars`] is ascending: then blocks of the points
-/// take their part of the class in parallel (a serial loop of scattered
-/// writes after each class's parallel moves, 0.07 s of one thread over a
-/// 1M map's levels, issue 27); otherwise one loop, as before.
-fn write_back(points: &mut [[f64; 3]], class: &[u32], found: &[Option<([f64; 3], bool)>]) {
-    let write = |points: &mut [[f64; 3]], base: usize, range: std::ops::Range<usize>| {
-        for x in range {
-            if let Some((q, _)) = found[x] {
-                points[class[x] as usize - base] = q;
-            }
-        }
-    };
-    if !class.is_sorted() {
-        write(points, 0, 0..class.len());
-        return;
-    }
-    points.par_chunks_mut(WRITE_BLOCK).enumerate().for_each(|(b, block)| {
-        let base = b * WRITE_BLOCK;
-        let first = class.partition_point(|&i| (i as usize) < base);
-        let end = class.partition_point(|&i| (i as usize) < base + block.len());
-        if first < end {
-            write(block, base, first..end);
-        }
-    });
 }
 
 /// Moves ahead in a class whose memory [`Problem::sweep`] asks for early:
@@ -649,6 +622,12 @@ pub fn flat_rings(rings: &[Vec<u32>]) -> (Vec<usize>, Vec<u32>) {
 /// a face). Deterministic.
 pub fn colour_classes(rings: &[Vec<u32>]) -> Vec<Vec<u32>> {
     greedy_colouring(rings.len(), |i| &rings[i])
+}
+
+/// [`colour_classes`] of the rings laid end to end (vertex `i`'s at
+/// `ring[start[i]..start[i + 1]]`, as [`flat_rings`] gives them).
+pub fn colour_flat(start: &[usize], ring: &[u32]) -> Vec<Vec<u32>> {
+    greedy_colouring(start.len() - 1, |i| &ring[start[i]..start[i + 1]])
 }
 
 /// [`colour_classes`] of the rings of `stars`.
@@ -886,7 +865,26 @@ impl Problem<'_> {
         wake: f64,
         stop: &(dyn Fn(usize) -> bool + Sync),
     ) -> Result<Optimised, Stopped> {
-        self.sweeps_until(stars, points, (max_sweeps, tolerance), held, wake, true, stop)
+        self.sweeps_until(stars, None, points, (max_sweeps, tolerance), held, wake, true, stop)
+    }
+
+    /// [`Problem::optimise_waking`] with the colour classes of `stars`
+    /// already made ([`colour_flat`] of the rings that `stars` took over):
+    /// the same sweeps. The colouring is serial; made before the stars, it
+    /// can run beside other serial work.
+    #[allow(clippy::too_many_arguments)]
+    pub fn optimise_coloured(
+        &self,
+        stars: &Stars,
+        classes: Vec<Vec<u32>>,
+        points: &mut [[f64; 3]],
+        (max_sweeps, tolerance): (usize, f64),
+        held: Option<&[bool]>,
+        wake: f64,
+        stop: &(dyn Fn(usize) -> bool + Sync),
+    ) -> Result<Optimised, Stopped> {
+        let classes = Some(classes);
+        self.sweeps_until(stars, classes, points, (max_sweeps, tolerance), held, wake, true, stop)
     }
 
     /// [`Problem::optimise_stars`] (nothing held) for a caller that reads
@@ -903,6 +901,7 @@ impl Problem<'_> {
     ) -> Result<f64, Stopped> {
         let end = self.sweeps_until(
             stars,
+            None,
             points,
             (max_sweeps, tolerance),
             None,
@@ -929,6 +928,7 @@ impl Problem<'_> {
     fn sweeps_until(
         &self,
         stars: &Stars,
+        classes: Option<Vec<Vec<u32>>>,
         points: &mut [[f64; 3]],
         (max_sweeps, tolerance): (usize, f64),
         held: Option<&[bool]>,
@@ -942,13 +942,14 @@ impl Problem<'_> {
         // scale, chord-area sum and energy, which are parallel and need no
         // colours.
         let shared: &[[f64; 3]] = points;
-        let (classes, (mut k, mut chord, mut energy)) = rayon::join(
-            || colour_stars(stars),
-            || {
-                let (k, chord) = sums.geometry(stars, shared, weighs_chord, None);
-                (k, chord, sums.energies(self, k, None, stars, shared).0)
-            },
-        );
+        let mut first_sums = || {
+            let (k, chord) = sums.geometry(stars, shared, weighs_chord, None);
+            (k, chord, sums.energies(self, k, None, stars, shared).0)
+        };
+        let (classes, (mut k, mut chord, mut energy)) = match classes {
+            Some(classes) => (classes, first_sums()),
+            None => rayon::join(|| colour_stars(stars), first_sums),
+        };
         let free = |v: u32| held.is_none_or(|h| !h[v as usize]);
         let mut active: Vec<bool> = (0..stars.len() as u32).map(free).collect();
         let mut was_moved = vec![false; stars.len()];
