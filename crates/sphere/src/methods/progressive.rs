@@ -66,7 +66,7 @@ use crate::methods::progressive::authalic_newton::{
 };
 use crate::methods::progressive::distortion_energy::{balanced_area_weight, Energy};
 use crate::methods::progressive::flip_free::{
-    check_tolerance, flat_rings, positive_star, Optimised, Problem,
+    check_tolerance, colour_flat, flat_rings, positive_star, Optimised, Problem,
 };
 use crate::methods::progressive::lbfgs::{lbfgs, LbfgsParams, LbfgsRun};
 use conformal::NotUsed;
@@ -280,18 +280,36 @@ pub fn progressive(
     let stop = |sweep: usize| !(go_on() && progress(2 * n + n * sweep / max_iter, total));
     let global_params = global_steps(params.energy, n, stretch_density);
     let (start, flat) = flat_rings(&rings.rings);
-    // Only the global steps read the rings again; without them they are
-    // let go before the references, the method's largest buffer, are made.
-    let rings = global_params.map(|_| rings);
-    // The freed rings and hierarchy (a million small blocks at 1M vertices)
-    // stay resident in the allocator's arenas unless handed back: measured on
-    // the 1M helix tube, about 110 bytes per vertex of the peak that the
-    // references below set.
-    spherify_sparse::release_free_memory();
+    // The final sweeps' colouring (serial) reads only the flat rings: it
+    // runs beside the rings' release and the trim (serial too; issue 27,
+    // 0.08 s at 1M vertices), where it ran beside the first energy sums.
+    let (classes, rings) = rayon::join(
+        || colour_flat(&start, &flat),
+        || {
+            // Only the global steps read the rings again; without them they
+            // are let go before the references, the method's largest
+            // buffer, are made.
+            let rings = global_params.map(|_| rings);
+            // The freed rings and hierarchy (a million small blocks at 1M
+            // vertices) stay resident in the allocator's arenas unless handed
+            // back: measured on the 1M helix tube, about 110 bytes per vertex
+            // of the peak that the references below set.
+            spherify_sparse::release_free_memory();
+            rings
+        },
+    );
     let stars = problem.stars_of(start, flat);
     let (wake, sweeps) = final_sweeps(params, n, stretch_density);
     let end = problem
-        .optimise_waking(&stars, &mut points, (sweeps, params.tolerance), None, wake, &stop)
+        .optimise_coloured(
+            &stars,
+            classes,
+            &mut points,
+            (sweeps, params.tolerance),
+            None,
+            wake,
+            &stop,
+        )
         .map_err(|_| cancelled("optimisation", 2 * n))?;
     drop(stars);
     seconds.push(("optimisation", started.elapsed().as_secs_f64()));
@@ -690,8 +708,10 @@ fn optimise_level(
     let stars =
         local_problem.stars_of(std::mem::take(&mut sub.start), std::mem::take(&mut sub.ring));
     let sweeps = (LEVEL_MOVES / rings.n_alive).clamp(LEVEL_SWEEPS, MAX_LEVEL_SWEEPS);
-    let end = local_problem
-        .optimise_stars(&stars, &mut sub.points, sweeps, params.tolerance, None, &|_| !go_on())
+    // Only the level's area scale is read of the sweeps' end (by the moves
+    // of the next new vertices).
+    let scale = local_problem
+        .optimise_stars_for_scale(&stars, &mut sub.points, sweeps, params.tolerance, &|_| !go_on())
         .map_err(|_| cancelled())?;
     drop(stars);
     if let Some(level_rings) = &level_rings {
@@ -700,7 +720,7 @@ fn optimise_level(
     }
     sub.scatter(alive, points);
     drop(sub);
-    let level = Level { area_floor, represented, scale: end.scale };
+    let level = Level { area_floor, represented, scale };
     if params.energy == Energy::Authalic && rings.n_alive >= AUTHALIC_LEVEL_MIN {
         authalic_newton_rings(
             &rings.rings,

@@ -23,6 +23,7 @@ use crate::methods::progressive::chord_area::{self, chord_area, chord_area_hessi
 use crate::methods::progressive::distortion_energy::{
     face_energy, face_energy_hessian, Energy, Reference,
 };
+use crate::methods::progressive::level_mesh::write_ascending;
 use crate::methods::progressive::ring_mesh::prefetch;
 use crate::methods::progressive::star_lanes;
 use crate::methods::progressive::target_pull::TargetPull;
@@ -191,12 +192,7 @@ impl Problem<'_> {
             .collect();
         // A fixed order of summation: the same scale on every thread count.
         let chord = per_vertex.iter().fold(0.0, |s, x| s + x);
-        let surface = stars.surface_total;
-        if surface > 0.0 && chord > 0.0 {
-            chord / surface
-        } else {
-            1.0
-        }
+        scale_of(chord, stars.surface_total)
     }
 
     /// Total energy of the current faces, each face seen from its smallest corner.
@@ -230,12 +226,14 @@ impl Problem<'_> {
 
     /// The surface area of the faces of `stars` (their references' areas).
     fn surface_area(&self, stars: &Stars) -> f64 {
-        // Per vertex, then in a fixed order: the same on every thread count.
-        let per_vertex: Vec<f64> = (0..stars.len() as u32)
-            .into_par_iter()
-            .map(|i| stars.refs(i).iter().map(|r| r.area).sum())
-            .collect();
-        per_vertex.iter().sum::<f64>() / 3.0
+        // The references' areas per vertex in ring order, then over the
+        // vertices in order: the sum that `stars_of` kept. (This was a pass
+        // over every reference, 192 bytes per vertex, at the end of every
+        // optimisation. Its sums started from -0.0 where the kept one starts
+        // from 0.0; the areas are non-negative (`Reference::new`), so the two
+        // differ at most in the sign of a zero total, which the callers,
+        // `(k * area).max(f64::MIN_POSITIVE)`, do not see.)
+        stars.surface_total / 3.0
     }
 
     /// Sum of the current faces' chord areas (see
@@ -399,7 +397,7 @@ impl Problem<'_> {
     /// more than `wake` (usually [`NOTICEABLE`]) of their shortest edge;
     /// `stop()` is asked between classes.
     #[allow(clippy::too_many_arguments)]
-    pub fn sweep(
+    fn sweep(
         &self,
         k: f64,
         chord: f64,
@@ -411,12 +409,15 @@ impl Problem<'_> {
         stop: &(dyn Fn() -> bool + Sync),
     ) -> Result<Vec<u32>, Stopped> {
         let mut moved = Vec::new();
+        // One buffer for the moves of every class (a fresh one per class
+        // took its pages' first-touch faults again).
+        let mut found: Vec<Option<([f64; 3], bool)>> = Vec::new();
         for class in classes {
             if stop() {
                 return Err(Stopped);
             }
             let shared: &[[f64; 3]] = points;
-            let moves: Vec<Option<([f64; 3], bool)>> = class
+            class
                 .par_iter()
                 .enumerate()
                 .with_min_len(64)
@@ -429,15 +430,16 @@ impl Problem<'_> {
                     let (q, shortest) = self.step(k, chord, i, ring, refs, shared, corners)?;
                     Some((q, norm(sub(q, shared[i as usize])) > wake * shortest))
                 })
-                .collect();
-            for (&i, q) in class.iter().zip(moves) {
-                if let Some((q, noticeable)) = q {
-                    points[i as usize] = q;
-                    if noticeable {
-                        moved.push(i);
-                    }
-                }
-            }
+                .collect_into_vec(&mut found);
+            // A class of colour_stars is ascending: written back in
+            // parallel blocks of the points.
+            write_ascending(points, class, |x| found[x].map(|(q, _)| q));
+            moved.par_extend(
+                class
+                    .par_iter()
+                    .zip(found.par_iter())
+                    .filter_map(|(&i, q)| matches!(q, Some((_, true))).then_some(i)),
+            );
         }
         Ok(moved)
     }
@@ -622,6 +624,12 @@ pub fn colour_classes(rings: &[Vec<u32>]) -> Vec<Vec<u32>> {
     greedy_colouring(rings.len(), |i| &rings[i])
 }
 
+/// [`colour_classes`] of the rings laid end to end (vertex `i`'s at
+/// `ring[start[i]..start[i + 1]]`, as [`flat_rings`] gives them).
+pub fn colour_flat(start: &[usize], ring: &[u32]) -> Vec<Vec<u32>> {
+    greedy_colouring(start.len() - 1, |i| &ring[start[i]..start[i + 1]])
+}
+
 /// [`colour_classes`] of the rings of `stars`.
 pub fn colour_stars(stars: &Stars) -> Vec<Vec<u32>> {
     greedy_colouring(stars.len(), |i| stars.ring(i as u32))
@@ -668,6 +676,133 @@ pub struct Optimised {
     pub scale: f64,
     /// Vertices active over all sweeps (each tried once in its sweep).
     pub moves: usize,
+}
+
+/// The per-vertex sums of [`Problem::optimise_waking`]'s passes between
+/// sweeps, in two buffers kept for all its sweeps (a fresh vector a pass
+/// took its pages' first-touch faults again each time).
+#[derive(Default)]
+struct Passes {
+    first: Vec<f64>,
+    second: Vec<f64>,
+}
+
+/// What a pass of [`Passes::geometry`] also sets: each vertex's activity
+/// flag for the next sweep, from the vertices moved and the free ones.
+type WakeFlags<'a> = (&'a mut [bool], &'a [bool], &'a (dyn Fn(u32) -> bool + Sync));
+
+impl Passes {
+    /// One pass over the rings and points: the area scale `k` of `points`
+    /// ([`Problem::area_scale`]), the chord-area sum ([`Problem::chord_total`])
+    /// when `chord`, and, with `flags`, each vertex's activity (moved, or
+    /// free and next to a moved one). The same sums in the same order as
+    /// those functions.
+    fn geometry(
+        &mut self,
+        stars: &Stars,
+        points: &[[f64; 3]],
+        chord: bool,
+        flags: Option<WakeFlags<'_>>,
+    ) -> (f64, Option<f64>) {
+        let sums = |i: u32| -> (f64, f64) {
+            let ring = stars.ring(i);
+            let m = ring.len();
+            // As `Problem::area_scale`.
+            let mut sum = 0.0;
+            for j in 0..m {
+                let [p, pa, pb] = [i, ring[j], ring[(j + 1) % m]].map(|v| points[v as usize]);
+                sum += 0.5 * det3(p, pa, pb);
+            }
+            // As `Problem::chord_total`.
+            let c = if chord {
+                let p = points[i as usize];
+                (0..m)
+                    .filter(|&j| i < ring[j] && i < ring[(j + 1) % m])
+                    .map(|j| {
+                        chord_area(p, points[ring[j] as usize], points[ring[(j + 1) % m] as usize])
+                    })
+                    .sum::<f64>()
+            } else {
+                0.0
+            };
+            (sum, c)
+        };
+        let (first, second) = (&mut self.first, &mut self.second);
+        match flags {
+            Some((active, moved, free)) => {
+                let each = active.par_iter_mut().enumerate().with_min_len(1024).map(|(x, a)| {
+                    *a = moved[x]
+                        || (free(x as u32)
+                            && stars.ring(x as u32).iter().any(|&r| moved[r as usize]));
+                    sums(x as u32)
+                });
+                fill(each, chord, first, second);
+            }
+            None => {
+                let each = (0..stars.len() as u32).into_par_iter().with_min_len(1024).map(sums);
+                fill(each, chord, first, second);
+            }
+        }
+        // Fixed orders of summation: the same on every thread count.
+        let area = first.iter().fold(0.0, |s, x| s + x);
+        (scale_of(area, stars.surface_total), chord.then(|| second.iter().sum::<f64>()))
+    }
+
+    /// One pass over the stars: [`Problem::total_energy`] at `k`, and at
+    /// `also` when given, the same sums in the same order.
+    fn energies(
+        &mut self,
+        problem: &Problem<'_>,
+        k: f64,
+        also: Option<f64>,
+        stars: &Stars,
+        points: &[[f64; 3]],
+    ) -> (f64, Option<f64>) {
+        let at = |i: u32, ring: &[u32], refs: &[Reference], p: [f64; 3], k: f64| -> f64 {
+            let m = ring.len();
+            (0..m)
+                .filter(|&j| i < ring[j] && i < ring[(j + 1) % m])
+                .map(|j| {
+                    let (a, b) = (points[ring[j] as usize], points[ring[(j + 1) % m] as usize]);
+                    face_energy(problem.energy, &refs[j], k, p, a, b)
+                })
+                .sum::<f64>()
+                + problem.pull.map_or(0.0, |pull| pull.energy(i, p))
+        };
+        let each = (0..stars.len() as u32).into_par_iter().with_min_len(1024).map(|i| {
+            let (ring, refs) = (stars.ring(i), stars.refs(i));
+            let p = points[i as usize];
+            (at(i, ring, refs, p, k), also.map_or(0.0, |other| at(i, ring, refs, p, other)))
+        });
+        let (first, second) = (&mut self.first, &mut self.second);
+        fill(each, also.is_some(), first, second);
+        // Fixed orders of summation: the same totals on every thread count.
+        (first.iter().sum::<f64>(), also.map(|_| second.iter().sum::<f64>()))
+    }
+}
+
+/// The per-vertex pairs of `each` into `first` and, when `both`, `second`.
+fn fill(
+    each: impl IndexedParallelIterator<Item = (f64, f64)>,
+    both: bool,
+    first: &mut Vec<f64>,
+    second: &mut Vec<f64>,
+) {
+    if both {
+        each.unzip_into_vecs(first, second);
+    } else {
+        each.map(|(x, _)| x).collect_into_vec(first);
+    }
+}
+
+/// The area scale from the image's area sum and the surface's (see
+/// [`Problem::area_scale`]).
+fn scale_of(chord: f64, surface: f64) -> f64 {
+    if surface > 0.0 && chord > 0.0 {
+        chord / surface
+    } else {
+        1.0
+    }
 }
 
 impl Problem<'_> {
@@ -730,16 +865,91 @@ impl Problem<'_> {
         wake: f64,
         stop: &(dyn Fn(usize) -> bool + Sync),
     ) -> Result<Optimised, Stopped> {
+        self.sweeps_until(stars, None, points, (max_sweeps, tolerance), held, wake, true, stop)
+    }
+
+    /// [`Problem::optimise_waking`] with the colour classes of `stars`
+    /// already made ([`colour_flat`] of the rings that `stars` took over):
+    /// the same sweeps. The colouring is serial; made before the stars, it
+    /// can run beside other serial work.
+    #[allow(clippy::too_many_arguments)]
+    pub fn optimise_coloured(
+        &self,
+        stars: &Stars,
+        classes: Vec<Vec<u32>>,
+        points: &mut [[f64; 3]],
+        (max_sweeps, tolerance): (usize, f64),
+        held: Option<&[bool]>,
+        wake: f64,
+        stop: &(dyn Fn(usize) -> bool + Sync),
+    ) -> Result<Optimised, Stopped> {
+        let classes = Some(classes);
+        self.sweeps_until(stars, classes, points, (max_sweeps, tolerance), held, wake, true, stop)
+    }
+
+    /// [`Problem::optimise_stars`] (nothing held) for a caller that reads
+    /// only the area scale at the end (a coarse level of the progressive
+    /// method): the same moves, points and scale, without the energy after
+    /// the last sweep allowed, which would decide nothing.
+    pub fn optimise_stars_for_scale(
+        &self,
+        stars: &Stars,
+        points: &mut [[f64; 3]],
+        max_sweeps: usize,
+        tolerance: f64,
+        stop: &(dyn Fn(usize) -> bool + Sync),
+    ) -> Result<f64, Stopped> {
+        let end = self.sweeps_until(
+            stars,
+            None,
+            points,
+            (max_sweeps, tolerance),
+            None,
+            NOTICEABLE,
+            false,
+            stop,
+        )?;
+        Ok(end.scale)
+    }
+
+    /// The sweeps of [`Problem::optimise_waking`]; with `report` false the
+    /// energy after the last sweep allowed is not measured (the result's
+    /// `energy` and `last_change` are then NaN; its `scale` is measured).
+    ///
+    /// Between two sweeps the mesh is read in two passes (issue 27): one
+    /// over the rings and points (the area scale, the chord-area sum where
+    /// it is weighed, and the next sweep's activity flags) and one over the
+    /// references too (the energy at the new area scale, and at the old one
+    /// where the chord term needs it); each value is the sum of the passes
+    /// it replaces (`area_scale`, `chord_total`, `total_energy`), the same
+    /// operations in the same order, so the same bits. The per-vertex sums
+    /// go to two buffers kept for all the sweeps.
+    #[allow(clippy::too_many_arguments)]
+    fn sweeps_until(
+        &self,
+        stars: &Stars,
+        classes: Option<Vec<Vec<u32>>>,
+        points: &mut [[f64; 3]],
+        (max_sweeps, tolerance): (usize, f64),
+        held: Option<&[bool]>,
+        wake: f64,
+        report: bool,
+        stop: &(dyn Fn(usize) -> bool + Sync),
+    ) -> Result<Optimised, Stopped> {
+        let weighs_chord = chord_area::applies(self.energy);
+        let mut sums = Passes::default();
         // The greedy colouring is serial: it runs beside the first area
-        // scale and energy, which are parallel and need no colours.
+        // scale, chord-area sum and energy, which are parallel and need no
+        // colours.
         let shared: &[[f64; 3]] = points;
-        let (classes, (mut k, mut energy)) = rayon::join(
-            || colour_stars(stars),
-            || {
-                let k = self.area_scale(stars, shared);
-                (k, self.total_energy(k, stars, shared))
-            },
-        );
+        let mut first_sums = || {
+            let (k, chord) = sums.geometry(stars, shared, weighs_chord, None);
+            (k, chord, sums.energies(self, k, None, stars, shared).0)
+        };
+        let (classes, (mut k, mut chord, mut energy)) = match classes {
+            Some(classes) => (classes, first_sums()),
+            None => rayon::join(|| colour_stars(stars), first_sums),
+        };
         let free = |v: u32| held.is_none_or(|h| !h[v as usize]);
         let mut active: Vec<bool> = (0..stars.len() as u32).map(free).collect();
         let mut was_moved = vec![false; stars.len()];
@@ -751,11 +961,9 @@ impl Problem<'_> {
             scale: k,
             moves: 0,
         };
-        // The chord-area sum C of the current points, once known: the sum
-        // after a sweep is the next sweep's before it and its weight's (each
-        // was computed apart, three passes over the mesh per sweep where one
-        // gives the same bits).
-        let mut chord: Option<f64> = None;
+        // `chord`: the chord-area sum C of the current points, once known:
+        // the sum after a sweep is the next sweep's before it and its
+        // weight's.
         while result.sweeps < max_sweeps {
             let sweeps = result.sweeps;
             // The sweep lowers E + mu C (see chord_area); its change is
@@ -763,7 +971,7 @@ impl Problem<'_> {
             // for the full chord weight: with 0.3 of it every sweep seemed
             // to lower the sum by a third, and the sweeps never stopped
             // before their most.)
-            let mu = if chord_area::applies(self.energy) {
+            let mu = if weighs_chord {
                 let c = *chord.get_or_insert_with(|| self.chord_total(stars, points));
                 chord_area::weight(true, energy, c)
             } else {
@@ -777,29 +985,46 @@ impl Problem<'_> {
             let moved =
                 self.sweep(k, mu, &classes, stars, points, Some(&active), wake, &|| stop(sweeps))?;
             result.sweeps += 1;
+            let more = result.sweeps < max_sweeps;
+            if !report && !more {
+                // The caller reads only the scale: the energy after the last
+                // sweep allowed decides nothing.
+                k = sums.geometry(stars, points, false, None).0;
+                result.energy = f64::NAN;
+                result.last_change = f64::NAN;
+                result.scale = k;
+                return Ok(result);
+            }
             // Only what moved, and its neighbours, can still go down much: a
             // vertex is active when it moved or, free, is next to one that
             // did (every ring lists its neighbours, and they list it). Per
-            // vertex, in parallel, instead of a serial pass that wrote the
-            // rings of the moved vertices: the same flags.
-            was_moved.iter_mut().for_each(|m| *m = false);
-            for &v in &moved {
-                was_moved[v as usize] = true;
-            }
-            let moved_flags = &was_moved;
-            active.par_iter_mut().enumerate().with_min_len(1024).for_each(|(x, a)| {
-                *a = moved_flags[x]
-                    || (free(x as u32)
-                        && stars.ring(x as u32).iter().any(|&r| moved_flags[r as usize]));
-            });
-            // The points have moved: C is known again only if measured here.
-            chord = (mu != 0.0).then(|| self.chord_total(stars, points));
-            let after = match chord {
-                Some(c) => self.total_energy(k, stars, points) + mu * c,
-                None => 0.0,
+            // vertex, in parallel, in the pass of the area scale; not after
+            // the last sweep allowed (nothing reads them).
+            let flags = if more {
+                was_moved.iter_mut().for_each(|m| *m = false);
+                for &v in &moved {
+                    was_moved[v as usize] = true;
+                }
+                Some((
+                    active.as_mut_slice(),
+                    was_moved.as_slice(),
+                    &free as &(dyn Fn(u32) -> bool + Sync),
+                ))
+            } else {
+                None
             };
-            k = self.area_scale(stars, points);
-            let next = self.total_energy(k, stars, points);
+            // The points have moved: C is known again only if measured here.
+            let (next_k, next_chord) = sums.geometry(stars, points, mu != 0.0, flags);
+            chord = next_chord;
+            // The energy at the new scale, and the sum E + mu C at the old
+            // one where C is weighed.
+            let (next, at_old) =
+                sums.energies(self, next_k, chord.is_some().then_some(k), stars, points);
+            let after = match (chord, at_old) {
+                (Some(c), Some(e)) => e + mu * c,
+                _ => 0.0,
+            };
+            k = next_k;
             result.last_change = if mu == 0.0 {
                 (energy - next).abs() / energy.abs().max(f64::MIN_POSITIVE)
             } else {

@@ -50,9 +50,7 @@ impl LevelMesh {
     ) -> Result<LevelMesh, ResourceError> {
         debug_assert!(vertices.windows(2).all(|w| w[0] < w[1]));
         let m = vertices.len();
-        for (j, &v) in vertices.iter().enumerate() {
-            local[v as usize] = j as u32;
-        }
+        write_ascending(local, vertices, |j| Some(j as u32));
         let mut start = reserved(m + 1, "a progressive level's ring offsets")?;
         start.push(0);
         for &v in vertices {
@@ -105,10 +103,43 @@ impl LevelMesh {
 
     /// Writes the level's points back to the whole mesh's `points`.
     pub fn scatter(&self, vertices: &[u32], points: &mut [[f64; 3]]) {
-        for (&q, &v) in self.points.iter().zip(vertices) {
-            points[v as usize] = q;
-        }
+        write_ascending(points, &vertices[..self.points.len()], |j| Some(self.points[j]));
     }
+}
+
+/// Slots per block of [`write_ascending`].
+const WRITE_BLOCK: usize = 1 << 14;
+
+/// `out[index[x]] = value(x)` for every `x` where `value` gives a value, in
+/// order of `x`. Where `index` is ascending (a level's vertices, a colour
+/// class), blocks of `out` take their part of `index` in parallel: the same
+/// writes in the same order within each slot. These were serial loops of
+/// scattered writes beside parallel work (issue 27: a level's numbering
+/// and write-back, the sweeps' moves); elsewhere one loop, as before.
+pub fn write_ascending<T: Send>(
+    out: &mut [T],
+    index: &[u32],
+    value: impl Fn(usize) -> Option<T> + Sync,
+) {
+    let write = |out: &mut [T], base: usize, range: std::ops::Range<usize>| {
+        for x in range {
+            if let Some(v) = value(x) {
+                out[index[x] as usize - base] = v;
+            }
+        }
+    };
+    if index.len() < WRITE_BLOCK || !index.is_sorted() {
+        write(out, 0, 0..index.len());
+        return;
+    }
+    out.par_chunks_mut(WRITE_BLOCK).enumerate().for_each(|(b, block)| {
+        let base = b * WRITE_BLOCK;
+        let first = index.partition_point(|&i| (i as usize) < base);
+        let end = index.partition_point(|&i| (i as usize) < base + block.len());
+        if first < end {
+            write(block, base, first..end);
+        }
+    });
 }
 
 /// `values[v]` for each of `vertices`, in order.
@@ -120,4 +151,38 @@ fn picked<T: Copy + Send + Sync>(
     let mut out = reserved(vertices.len(), what)?;
     out.par_extend(vertices.par_iter().map(|&v| values[v as usize]));
     Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn writes_in_parallel_blocks_are_the_serial_loops() {
+        let n = 5 * WRITE_BLOCK + 77;
+        // Ascending indices with gaps, some values left out; and the same
+        // indices out of order (one loop).
+        let index: Vec<u32> = (0..n as u32).filter(|i| i % 3 != 1).collect();
+        let value = |x: usize| (x % 7 != 3).then_some(x as u64 * 11);
+        let mut serial = vec![1u64; n];
+        for (x, &i) in index.iter().enumerate() {
+            if let Some(v) = value(x) {
+                serial[i as usize] = v;
+            }
+        }
+        let mut blocks = vec![1u64; n];
+        write_ascending(&mut blocks, &index, value);
+        assert_eq!(blocks, serial);
+        let mut reversed = index.clone();
+        reversed.reverse();
+        let mut expected = vec![1u64; n];
+        for (x, &i) in reversed.iter().enumerate() {
+            if let Some(v) = value(x) {
+                expected[i as usize] = v;
+            }
+        }
+        let mut got = vec![1u64; n];
+        write_ascending(&mut got, &reversed, value);
+        assert_eq!(got, expected);
+    }
 }

@@ -198,3 +198,48 @@ fn neighbourhoods_are_made_once_and_match_the_rings() {
     }
     assert!(seen.iter().all(|&k| k == 1));
 }
+
+#[test]
+fn the_scale_only_and_precoloured_sweeps_are_the_full_sweeps() {
+    // optimise_stars_for_scale leaves out the energy after the last sweep
+    // allowed, optimise_coloured takes the colouring made from the flat
+    // rings: the same points and scale, bit for bit, as optimise_stars /
+    // optimise_waking, for energies with and without the chord term.
+    let mesh = GenusZeroMesh::new(helix(8, 120, 0.15, 2.0, 0.8)).unwrap();
+    let start = progressive(&mesh, &ProgressiveParams::default(), &|_, _| true).unwrap().points;
+    let rings = rings_of(&mesh).unwrap();
+    for energy in
+        [Energy::Isometric, Energy::CoarseBalanced, Energy::BalancedWeighted(1300), Energy::Stretch]
+    {
+        let problem = Problem { energy, ..whole_mesh_problem(Energy::Balanced, &mesh) };
+        let stars = problem.stars(&rings);
+        for sweeps in [1, 2, 5] {
+            let mut full = start.clone();
+            let end = problem.optimise_stars(&stars, &mut full, sweeps, 1e-4, None, &|_| false);
+            let end = end.unwrap();
+            let mut scaled = start.clone();
+            let scale = problem
+                .optimise_stars_for_scale(&stars, &mut scaled, sweeps, 1e-4, &|_| false)
+                .unwrap();
+            assert_eq!(full, scaled, "{energy:?} {sweeps}");
+            assert_eq!(end.scale.to_bits(), scale.to_bits(), "{energy:?} {sweeps}");
+            let (start_of, flat) = flip_free::flat_rings(&rings);
+            let classes = flip_free::colour_flat(&start_of, &flat);
+            let mut coloured = start.clone();
+            let wake = flip_free::NOTICEABLE;
+            let again = problem
+                .optimise_coloured(
+                    &stars,
+                    classes,
+                    &mut coloured,
+                    (sweeps, 1e-4),
+                    None,
+                    wake,
+                    &|_| false,
+                )
+                .unwrap();
+            assert_eq!(full, coloured, "{energy:?} {sweeps}");
+            assert_eq!(end, again, "{energy:?} {sweeps}");
+        }
+    }
+}
