@@ -200,6 +200,22 @@ def _sphere_targets(map_a: SphereMap, m_b: SphereMap, *, fixed: Optional[np.ndar
     points of A's surface (A's own frame, (k, 3)) giving their targets on
     B's sphere (the closest point of B to the fitted deformation of each,
     through B's map), for the vertices a scaffold's edge splits add."""
+    targets, icp, place, _ = _targets_and_areas(map_a, m_b, fixed=fixed, fixed_on_b=fixed_on_b,
+                                                schedule=schedule, should_stop=should_stop,
+                                                b_tree=b_tree)
+    return targets, icp, place
+
+
+def _targets_and_areas(map_a: SphereMap, m_b: SphereMap, *,
+                       fixed: Optional[np.ndarray] = None,
+                       fixed_on_b: Optional[np.ndarray] = None,
+                       schedule: Sequence[Tuple[float, float, int]] = _nricp.SCHEDULE,
+                       should_stop: Callable[[int, int], bool] = lambda done, total: False,
+                       b_tree: Optional[OnDemand] = None
+                       ) -> Tuple[np.ndarray, Dict[str, Any], Callable[[np.ndarray], np.ndarray],
+                                  np.ndarray]:
+    """:func:`_sphere_targets`, and A's vertex areas (:func:`_vertex_areas`,
+    made beside the first targets; the pull weighs by them too)."""
     a_mesh, b_mesh = map_a.mesh, m_b.mesh
     a_centre, a_scale = _frame(a_mesh.vertices)
     b_centre, b_scale = _frame(b_mesh.vertices)
@@ -254,7 +270,7 @@ def _sphere_targets(map_a: SphereMap, m_b: SphereMap, *, fixed: Optional[np.ndar
         placed: np.ndarray = m_b.to_sphere(at, weights)
         return placed
 
-    return targets, icp, place
+    return targets, icp, place, areas
 
 
 def warp(map_a: SphereMap, m_b: SphereMap, *, fixed: Optional[np.ndarray] = None,
@@ -282,15 +298,20 @@ def warp(map_a: SphereMap, m_b: SphereMap, *, fixed: Optional[np.ndarray] = None
         done += 1
         return should_stop(done, STEPS)
 
-    targets, icp, place = _sphere_targets(map_a, m_b, fixed=fixed, fixed_on_b=fixed_on_b,
-                                          should_stop=step, b_tree=b_tree)
-    current, left, stopped = move_rounds(map_a, targets, fixed=fixed, should_stop=step)
+    targets, icp, place, areas = _targets_and_areas(map_a, m_b, fixed=fixed,
+                                                    fixed_on_b=fixed_on_b, should_stop=step,
+                                                    b_tree=b_tree)
+    current, left, stopped, angles = _move_rounds(map_a, targets, fixed=fixed, should_stop=step)
     if stopped:
         return current, {"icp": icp["distance"], "moved": left, "pulled": 0.0,
                          "scaffold": False}
     used = False
     held = fixed is not None and len(fixed) > 0
-    if lagging(current, targets, SCAFFOLD_LAG_LANDMARKS if held else SCAFFOLD_LAG):
+    # The angles left after the rounds, A's mean chord edge and A's vertex
+    # areas are made once for the scaffold's test and the pull (each was
+    # made two or three times: the same values).
+    edge = _mean_edge(current)
+    if _lagging(angles, edge, SCAFFOLD_LAG_LANDMARKS if held else SCAFFOLD_LAG):
         # Step 4b (module doc): the scaffold, kept where its rounds end
         # nearer the targets on A's own vertices than the plain rounds.
         pinned = scaffold(map_a, targets, place, fixed=fixed)
@@ -301,10 +322,14 @@ def warp(map_a: SphereMap, m_b: SphereMap, *, fixed: Optional[np.ndarray] = None
             if stopped:
                 return trial, {"icp": icp["distance"], "moved": trial_left, "pulled": 0.0,
                                "scaffold": True}
-            if (_angles(trial.points[:n], targets).mean()
-                    < _angles(current.points, targets).mean()):
+            if _angles(trial.points[:n], targets).mean() < angles.mean():
                 current, left, targets, used = trial, trial_left, pinned[1], True
-    current, pulled, after = pull(current, targets, fixed=fixed, should_stop=step)
+    if used:
+        # The pull on the scaffold's map (a refined mesh, maybe): its own.
+        current, pulled, after = pull(current, targets, fixed=fixed, should_stop=step)
+    else:
+        current, pulled, after = _pull(current, targets, fixed=fixed, should_stop=step,
+                                       left=angles, edge=edge, areas=areas)
     return current, {"icp": icp["distance"], "moved": left + after, "pulled": pulled,
                      "scaffold": used}
 
@@ -313,9 +338,18 @@ def lagging(current: SphereMap, targets: np.ndarray, lag: float = SCAFFOLD_LAG) 
     """Whether the rounds left ``current`` so far from ``targets`` (mean
     angle above ``lag`` mean chord edges) that whole parts of the map have
     still to travel: the scaffold's case."""
+    return _lagging(_angles(current.points, targets), _mean_edge(current), lag)
+
+
+def _lagging(angles: np.ndarray, edge: float, lag: float) -> bool:
+    """:func:`lagging` from the angles left and the mean chord edge."""
+    return bool(angles.mean() > lag * edge)
+
+
+def _mean_edge(current: SphereMap) -> float:
+    """The mean chord length of the edges (a, b) of ``current``'s faces."""
     points, faces = current.points, current.mesh.faces
-    edge = float(np.linalg.norm(points[faces[:, 0]] - points[faces[:, 1]], axis=1).mean())
-    return bool(_angles(points, targets).mean() > lag * edge)
+    return float(np.linalg.norm(points[faces[:, 0]] - points[faces[:, 1]], axis=1).mean())
 
 
 def scaffold(map_a: SphereMap, targets: np.ndarray, place: Callable[[np.ndarray], np.ndarray],
@@ -357,10 +391,21 @@ def move_rounds(map_a: SphereMap, targets: np.ndarray, *, fixed: Optional[np.nda
     ``targets``. Returns the certified map, the mean angle left to the
     targets at the start and after each round, and whether ``should_stop``
     (asked after every round) stopped it."""
+    current, left, stopped, _ = _move_rounds(map_a, targets, fixed=fixed, should_stop=should_stop)
+    return current, left, stopped
+
+
+def _move_rounds(map_a: SphereMap, targets: np.ndarray, *, fixed: Optional[np.ndarray] = None,
+                 should_stop: Callable[[int, int], bool] = lambda done, total: False
+                 ) -> Tuple[SphereMap, List[float], bool, np.ndarray]:
+    """:func:`move_rounds`, and the angle each vertex has left to its
+    target at the end (n,)."""
     current = map_a
     start = map_a.points
-    left = [float(_angles(current.points, targets).mean())]
+    # The angles from the start to the targets serve the record's first
+    # entry and the great circles' arcs (one computation, the same values).
     along = _Slerp(start, targets)
+    left = [float(along.angles.mean())]
     # The first rounds aim part of the way (along each great circle), so
     # that a region moves together instead of its first vertices running
     # ahead and blocking the rest: on horse, 8 rounds to 1/8, 2/8, ...
@@ -395,11 +440,12 @@ def move_rounds(map_a: SphereMap, targets: np.ndarray, *, fixed: Optional[np.nda
             left.append(before_left)
         last = current.points
         if should_stop(0, 0):
-            left.append(float(_angles(last, targets).mean()))
-            return current, left, True
-    if last is not None:
-        left.append(float(_angles(last, targets).mean()))
-    return current, left, False
+            angles = _angles(last, targets)
+            left.append(float(angles.mean()))
+            return current, left, True, angles
+    angles = _angles(current.points, targets)
+    left.append(float(angles.mean()))
+    return current, left, False, angles
 
 
 def pull(current: SphereMap, targets: np.ndarray, *, fixed: Optional[np.ndarray] = None,
@@ -410,10 +456,22 @@ def pull(current: SphereMap, targets: np.ndarray, *, fixed: Optional[np.ndarray]
     certified map, the fraction of vertices worked on and the mean angle
     left to the targets after each stage. ``should_stop`` is asked after
     every stage (and once per stage even when there is nothing to do)."""
+    return _pull(current, targets, fixed=fixed, should_stop=should_stop)
+
+
+def _pull(current: SphereMap, targets: np.ndarray, *, fixed: Optional[np.ndarray] = None,
+          should_stop: Callable[[int, int], bool] = lambda done, total: False,
+          left: Optional[np.ndarray] = None, edge: Optional[float] = None,
+          areas: Optional[np.ndarray] = None) -> Tuple[SphereMap, float, List[float]]:
+    """:func:`pull`, given (where already made) the angles ``left`` from
+    ``current`` to the targets, its mean chord ``edge`` and its mesh's
+    vertex ``areas`` (:func:`_vertex_areas`)."""
     points, faces = current.points, current.mesh.faces
     n = len(points)
-    left = _angles(points, targets)
-    edge = float(np.linalg.norm(points[faces[:, 0]] - points[faces[:, 1]], axis=1).mean())
+    if left is None:
+        left = _angles(points, targets)
+    if edge is None:
+        edge = _mean_edge(current)
     region = left > PULL_SHORT * edge
     if fixed is not None:
         region[fixed] = False
@@ -427,14 +485,19 @@ def pull(current: SphereMap, targets: np.ndarray, *, fixed: Optional[np.ndarray]
         for _ in range(PULL_RINGS):
             region[faces[region[faces].any(axis=1)]] = True
 
-    # The region grows beside A's vertex areas (spherify._workers).
-    _, areas = beside(grow, lambda: _vertex_areas(current.mesh.vertices, faces))
+    # The region grows beside A's vertex areas (spherify._workers), where
+    # they are not given.
+    if areas is None:
+        _, weights = beside(grow, lambda: _vertex_areas(current.mesh.vertices, faces))
+    else:
+        grow()
+        weights = areas
     held = ~region
     if fixed is not None:
         held[fixed] = True
     # The pull per unit of the sphere's area: each vertex stands for m_i of
     # the mean vertex's share, 4 pi / n.
-    share = areas * (4.0 * np.pi / n)
+    share = weights * (4.0 * np.pi / n)
     # The work of a stage is capped at PULL_WORK moves, so the pull on a
     # large region takes fewer sweeps.
     sweeps = max(1, min(PULL_SWEEPS, PULL_WORK // int(region.sum())))
@@ -467,7 +530,8 @@ class _Slerp:
 
     def __init__(self, p: np.ndarray, q: np.ndarray) -> None:
         self.p, self.q = p, q
-        self.angle = _angles(p, q)[:, None]
+        self.angles = _angles(p, q)
+        self.angle = self.angles[:, None]
         sine = np.sin(self.angle)
         self.safe = np.where(sine > 1e-12, sine, 1.0)
 
