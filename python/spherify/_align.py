@@ -379,7 +379,8 @@ def best_rotation_then(m_a: SphereMap, m_b: SphereMap,
                        landmark_rotation: Optional[np.ndarray] = None,
                        then: Optional[Callable[[np.ndarray], T]] = None,
                        b_tree: Optional[_nearest.OnDemand] = None,
-                       keep_switch: Optional[Callable[[T, T], bool]] = None
+                       keep_switch: Optional[Callable[[T, T], bool]] = None,
+                       prepare: Optional[Callable[[], None]] = None
                        ) -> Tuple[np.ndarray, str, int, Optional[T]]:
     """:func:`best_rotation` and ``then(rotation)`` (the rest of a
     registration: the Möbius fit and the warp): the rotation, its start's
@@ -400,7 +401,11 @@ def best_rotation_then(m_a: SphereMap, m_b: SphereMap,
     switch: it sees ``then``'s results from both rotations (the one from
     the map rotation is made after all on one thread, so the answer is the
     same for every thread count) and the map rotation stands where it says
-    no."""
+    no.
+
+    ``prepare``, if given, is called on the pool thread that makes the
+    check's rough runs beside the search for the rotation (work of ``then``
+    that does not depend on the rotation)."""
     def after(rotation: np.ndarray) -> Optional[T]:
         return None if then is None else then(rotation)
 
@@ -413,10 +418,15 @@ def best_rotation_then(m_a: SphereMap, m_b: SphereMap,
     # on the rotation: they are made on a pool thread beside the search for
     # it (spherify._workers), whose numpy work between its located batches
     # left the other core idle (issue 23, speed); the same poses.
-    (rotation, name, iterations, cost), search = beside(
-        lambda: _search_rotation(m_a, m_b),
-        lambda: _rigid_icp.Search(normalised(m_a.mesh.vertices), m_a.mesh.faces,
-                                  normalised(m_b.mesh.vertices), m_b.mesh.faces, b_tree))
+    def aside() -> _rigid_icp.Search:
+        made = _rigid_icp.Search(normalised(m_a.mesh.vertices), m_a.mesh.faces,
+                                 normalised(m_b.mesh.vertices), m_b.mesh.faces, b_tree)
+        if prepare is not None:
+            prepare()
+        return made
+
+    (rotation, name, iterations, cost), search = beside(lambda: _search_rotation(m_a, m_b),
+                                                        aside)
 
     def check() -> Optional[Tuple[np.ndarray, int]]:
         return _pose_in_space(m_a, m_b, rotation, cost, b_tree, search)

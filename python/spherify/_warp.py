@@ -50,6 +50,7 @@ warp finds better ones in space and then moves A's map to them:
 
 from __future__ import annotations
 
+import threading
 from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
@@ -63,7 +64,7 @@ from ._spheremap import SphereMap
 from ._workers import beside, run_all
 from .datasets._sampling import farthest_points
 
-__all__ = ["PULL_STAGES", "ROUNDS", "SAMPLE", "SCAFFOLD", "STEPS", "lagging", "move_rounds",
+__all__ = ["BSide", "PULL_STAGES", "ROUNDS", "SAMPLE", "SCAFFOLD", "STEPS", "lagging", "move_rounds",
            "pull", "scaffold", "sphere_targets", "warp"]
 
 # Vertices of A the deformation is fitted on (all of a smaller mesh).
@@ -148,6 +149,57 @@ def _vertex_areas(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
     return out
 
 
+class BSide:
+    """B's side of the warp, which depends on B alone (not on A's pose):
+    B centred and scaled to unit rms radius (:func:`_frame`), its outward
+    face normals and the reverse pairs' sample of B (:data:`REVERSE_SAMPLE`
+    of its vertices with their normals and vertex areas). Each part is made
+    once, by whichever caller asks first (a lock: registration makes them on
+    a pool thread beside its search for the rotation, :meth:`make`, where
+    the other core had little to do, instead of on the warp's path)."""
+
+    def __init__(self, m_b: SphereMap) -> None:
+        self._mesh = m_b.mesh
+        self._lock = threading.Lock()
+        self._frame: Optional[Tuple[np.ndarray, float, np.ndarray]] = None
+        self._normals: Optional[np.ndarray] = None
+        self._sample: Optional[Tuple[np.ndarray, np.ndarray, np.ndarray]] = None
+
+    def frame(self) -> Tuple[np.ndarray, float, np.ndarray]:
+        """B's centre, rms radius and vertices centred and scaled by them."""
+        with self._lock:
+            if self._frame is None:
+                centre, scale = _frame(self._mesh.vertices)
+                self._frame = (centre, scale, (self._mesh.vertices - centre) / scale)
+            return self._frame
+
+    def face_normals(self) -> np.ndarray:
+        """B's outward unit face normals (of the scaled B)."""
+        b_all = self.frame()[2]
+        with self._lock:
+            if self._normals is None:
+                self._normals = _nricp.face_normals(b_all, self._mesh.faces)
+            return self._normals
+
+    def reverse_sample(self) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The reverse pairs' sample of B: points, unit normals, vertex areas."""
+        b_all = self.frame()[2]
+        with self._lock:
+            if self._sample is None:
+                faces = self._mesh.faces
+                n_b = len(b_all)
+                rows = np.unique(np.linspace(0, n_b - 1, min(n_b, REVERSE_SAMPLE)
+                                             ).astype(np.int64))
+                self._sample = (b_all[rows], _nricp.vertex_normals(b_all, faces)[rows],
+                                _vertex_areas(b_all, faces)[rows])
+            return self._sample
+
+    def make(self) -> None:
+        """Every part, now."""
+        self.face_normals()
+        self.reverse_sample()
+
+
 def _frame(x: np.ndarray) -> Tuple[np.ndarray, float]:
     centre = x.mean(axis=0)
     c = x - centre
@@ -211,16 +263,19 @@ def _targets_and_areas(map_a: SphereMap, m_b: SphereMap, *,
                        fixed_on_b: Optional[np.ndarray] = None,
                        schedule: Sequence[Tuple[float, float, int]] = _nricp.SCHEDULE,
                        should_stop: Callable[[int, int], bool] = lambda done, total: False,
-                       b_tree: Optional[OnDemand] = None
+                       b_tree: Optional[OnDemand] = None, b_side: Optional["BSide"] = None
                        ) -> Tuple[np.ndarray, Dict[str, Any], Callable[[np.ndarray], np.ndarray],
                                   np.ndarray]:
     """:func:`_sphere_targets`, and A's vertex areas (:func:`_vertex_areas`,
-    made beside the first targets; the pull weighs by them too)."""
+    made beside the first targets; the pull weighs by them too).
+    ``b_side``, if given, is :class:`BSide` of ``m_b`` (made once for the
+    registration)."""
     a_mesh, b_mesh = map_a.mesh, m_b.mesh
     a_centre, a_scale = _frame(a_mesh.vertices)
-    b_centre, b_scale = _frame(b_mesh.vertices)
     a_all = (a_mesh.vertices - a_centre) / a_scale
-    b_all = (b_mesh.vertices - b_centre) / b_scale
+    if b_side is None:
+        b_side = BSide(m_b)
+    b_centre, b_scale, b_all = b_side.frame()
     if b_tree is None:
         b_tree = OnDemand(lambda: b_all, b_mesh.faces)
     n = len(a_all)
@@ -232,10 +287,10 @@ def _targets_and_areas(map_a: SphereMap, m_b: SphereMap, *,
     # B's closest-point tree, B's face normals and A's vertex areas do not
     # depend on the first targets: they are made beside them
     # (spherify._workers; each its own bits).
+    tree = b_tree
     (_, _, through_sphere), (nearest, b_normals, areas) = beside(
         lambda: m_b.to_surface(map_a.points[sample]),
-        lambda: (b_tree(), _nricp.face_normals(b_all, b_mesh.faces),
-                 _vertex_areas(a_mesh.vertices, a_mesh.faces)))
+        lambda: (tree(), b_side.face_normals(), _vertex_areas(a_mesh.vertices, a_mesh.faces)))
     first = (through_sphere - b_centre) / b_scale
     spin = kabsch(a_all[sample], first)
     a_all = a_all @ spin.T
@@ -247,12 +302,7 @@ def _targets_and_areas(map_a: SphereMap, m_b: SphereMap, *,
     normals, controls = beside(lambda: _nricp.vertex_normals(a_all, a_mesh.faces),
                                lambda: _nricp.control_points(a_all[sample]))
     # B's sample for the reverse pairs, which are used without landmarks only.
-    b_sample = None
-    if not held:
-        n_b = len(b_all)
-        b_rows = np.unique(np.linspace(0, n_b - 1, min(n_b, REVERSE_SAMPLE)).astype(np.int64))
-        b_sample = (b_all[b_rows], _nricp.vertex_normals(b_all, b_mesh.faces)[b_rows],
-                    _vertex_areas(b_all, b_mesh.faces)[b_rows])
+    b_sample = None if held else b_side.reverse_sample()
     model, icp = _nricp.nonrigid_icp(
         a_all[sample], normals[sample], areas[sample],
         first, nearest, b_normals, landmarks=landmarks, b_sample=b_sample,
@@ -276,13 +326,15 @@ def _targets_and_areas(map_a: SphereMap, m_b: SphereMap, *,
 def warp(map_a: SphereMap, m_b: SphereMap, *, fixed: Optional[np.ndarray] = None,
          fixed_on_b: Optional[np.ndarray] = None,
          should_stop: Callable[[int, int], bool] = lambda done, total: False,
-         b_tree: Optional[OnDemand] = None) -> Tuple[SphereMap, Dict[str, Any]]:
+         b_tree: Optional[OnDemand] = None, b_side: Optional[BSide] = None
+         ) -> Tuple[SphereMap, Dict[str, Any]]:
     """Warp ``map_a`` (A's certified map, already in B's frame) onto B's map.
 
     ``fixed`` are A's vertices that do not move (landmarks already at their
     targets) and ``fixed_on_b`` B's vertices they pair with. ``should_stop(done,
     total)`` is asked after every ICP iteration, every round of moves and
-    every stage of the pull. ``b_tree`` is as in :func:`sphere_targets`.
+    every stage of the pull. ``b_tree`` is as in :func:`sphere_targets`,
+    ``b_side`` :class:`BSide` of ``m_b`` if already made.
     Returns the warped, certified map and a record
     of the run (``icp``: the mean distance from the deformed sample to B at
     each iteration, ``moved``: the mean angle still to go after each round
@@ -300,7 +352,7 @@ def warp(map_a: SphereMap, m_b: SphereMap, *, fixed: Optional[np.ndarray] = None
 
     targets, icp, place, areas = _targets_and_areas(map_a, m_b, fixed=fixed,
                                                     fixed_on_b=fixed_on_b, should_stop=step,
-                                                    b_tree=b_tree)
+                                                    b_tree=b_tree, b_side=b_side)
     current, left, stopped, angles = _move_rounds(map_a, targets, fixed=fixed, should_stop=step)
     if stopped:
         return current, {"icp": icp["distance"], "moved": left, "pulled": 0.0,
