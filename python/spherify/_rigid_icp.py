@@ -109,12 +109,17 @@ class _Pair:
             iterations: int) -> Pose:
         a_s, b_s = self.sample(self.a, sample), self.sample(self.b, sample)
         residual = np.inf
+        # Each query's face at the iteration before starts its search from a
+        # bound (spherify._nearest: the same answers, fewer boxes opened;
+        # the pose moves little from one iteration to the next).
+        hint_b: Optional[np.ndarray] = None
+        hint_a: Optional[np.ndarray] = None
         for _ in range(iterations + 1):
             moved = a_s @ rotation.T + shift
-            on_b = self.on_b(moved)[2]
+            hint_b, _bary, on_b = self.on_b(moved, hint_b)
             # B's sample carried back into A's frame, its closest points on A
             # carried forward again.
-            on_a = self.on_a((b_s - shift) @ rotation)[2]
+            hint_a, _bary, on_a = self.on_a((b_s - shift) @ rotation, hint_a)
             src = np.vstack([a_s, on_a])
             dst = np.vstack([on_b, b_s])
             d = np.vstack([on_b - moved, b_s - (on_a @ rotation.T + shift)])
