@@ -379,7 +379,8 @@ def best_rotation_then(m_a: SphereMap, m_b: SphereMap,
                        landmark_rotation: Optional[np.ndarray] = None,
                        then: Optional[Callable[[np.ndarray], T]] = None,
                        b_tree: Optional[_nearest.OnDemand] = None,
-                       keep_switch: Optional[Callable[[T, T], bool]] = None
+                       keep_switch: Optional[Callable[[T, T], bool]] = None,
+                       prepare: Optional[Callable[[], None]] = None
                        ) -> Tuple[np.ndarray, str, int, Optional[T]]:
     """:func:`best_rotation` and ``then(rotation)`` (the rest of a
     registration: the Möbius fit and the warp): the rotation, its start's
@@ -400,7 +401,11 @@ def best_rotation_then(m_a: SphereMap, m_b: SphereMap,
     switch: it sees ``then``'s results from both rotations (the one from
     the map rotation is made after all on one thread, so the answer is the
     same for every thread count) and the map rotation stands where it says
-    no."""
+    no.
+
+    ``prepare``, if given, is called on the pool thread that makes the
+    check's rough runs beside the search for the rotation (work of ``then``
+    that does not depend on the rotation)."""
     def after(rotation: np.ndarray) -> Optional[T]:
         return None if then is None else then(rotation)
 
@@ -409,6 +414,47 @@ def best_rotation_then(m_a: SphereMap, m_b: SphereMap,
         # meant: only their rotation is refined.
         rotation, iterations = refine_rotation(subsample_cost(m_a, m_b), landmark_rotation)
         return rotation, "landmarks", iterations, after(rotation)
+    # The check in space's closest-point trees and rough runs do not depend
+    # on the rotation: they are made on a pool thread beside the search for
+    # it (spherify._workers), whose numpy work between its located batches
+    # left the other core idle (issue 23, speed); the same poses.
+    def aside() -> _rigid_icp.Search:
+        made = _rigid_icp.Search(normalised(m_a.mesh.vertices), m_a.mesh.faces,
+                                 normalised(m_b.mesh.vertices), m_b.mesh.faces, b_tree)
+        if prepare is not None:
+            prepare()
+        return made
+
+    (rotation, name, iterations, cost), search = beside(lambda: _search_rotation(m_a, m_b),
+                                                        aside)
+
+    def check() -> Optional[Tuple[np.ndarray, int]]:
+        return _pose_in_space(m_a, m_b, rotation, cost, b_tree, search)
+
+    unswitched: Optional[T] = None
+    if then is None or not parallel():
+        switched = check()
+        if switched is None or keep_switch is not None:
+            unswitched = after(rotation)
+    else:
+        # ``then`` on this thread, from the map rotation, while the check
+        # runs beside it; where the check switches, its result is kept only
+        # for ``keep_switch``.
+        unswitched, switched = beside(lambda: after(rotation), check)
+    if switched is None:
+        return rotation, name, iterations, unswitched
+    result = after(switched[0])
+    if keep_switch is not None and then is not None:
+        assert result is not None and unswitched is not None
+        if not keep_switch(result, unswitched):
+            return rotation, name, iterations, unswitched
+    return switched[0], "rigid ICP in space", switched[1], result
+
+
+def _search_rotation(m_a: SphereMap, m_b: SphereMap) -> Tuple[np.ndarray, str, int, Cost]:
+    """:func:`best_rotation`'s search on the sphere, before the check in
+    space: the rotation, its start's name, its steps and the cost on
+    :data:`SUBSAMPLE` vertices it was refined on."""
     starts: List[Tuple[str, np.ndarray]] = [("identity", np.eye(3))]
     frames = frame_candidates(m_a, m_b)
     starts += [(f"harmonic frame {k}", r) for k, r in enumerate(frames)]
@@ -432,33 +478,12 @@ def best_rotation_then(m_a: SphereMap, m_b: SphereMap,
         if best is None or value < best[0]:
             best = (value, rotation, name, iterations)
     assert best is not None
-    rotation, name, iterations = best[1], best[2], best[3]
-
-    def check() -> Optional[Tuple[np.ndarray, int]]:
-        return _pose_in_space(m_a, m_b, rotation, cost, b_tree)
-
-    unswitched: Optional[T] = None
-    if then is None or not parallel():
-        switched = check()
-        if switched is None or keep_switch is not None:
-            unswitched = after(rotation)
-    else:
-        # ``then`` on this thread, from the map rotation, while the check
-        # runs beside it; where the check switches, its result is kept only
-        # for ``keep_switch``.
-        unswitched, switched = beside(lambda: after(rotation), check)
-    if switched is None:
-        return rotation, name, iterations, unswitched
-    result = after(switched[0])
-    if keep_switch is not None and then is not None:
-        assert result is not None and unswitched is not None
-        if not keep_switch(result, unswitched):
-            return rotation, name, iterations, unswitched
-    return switched[0], "rigid ICP in space", switched[1], result
+    return best[1], best[2], best[3], cost
 
 
 def _pose_in_space(m_a: SphereMap, m_b: SphereMap, rotation: np.ndarray, cost: Cost,
-                   b_tree: Optional[_nearest.OnDemand] = None
+                   b_tree: Optional[_nearest.OnDemand] = None,
+                   search: Optional[_rigid_icp.Search] = None
                    ) -> Optional[Tuple[np.ndarray, int]]:
     """The sphere rotation of a better pose in space (:mod:`spherify._rigid_icp`),
     or None where the map rotation's own pose is as good.
@@ -468,15 +493,21 @@ def _pose_in_space(m_a: SphereMap, m_b: SphereMap, rotation: np.ndarray, cost: C
     and the other's symmetric closest-point residual to be below
     :data:`SWITCH_RATIO` of the map pose's. The new sphere rotation sends A's
     sphere points onto the sphere points (in B's map) of their closest points
-    on B in that pose, and is refined by the map cost's Gauss-Newton."""
+    on B in that pose, and is refined by the map cost's Gauss-Newton.
+    ``search``, if given, is the :class:`spherify._rigid_icp.Search` of the
+    normalised shapes (with ``b_tree``) already made."""
     a, b = m_a.mesh, m_b.mesh
-    a_n, b_n = normalised(a.vertices), normalised(b.vertices)
     if b_tree is None:
+        b_n = normalised(b.vertices)
         b_tree = _nearest.OnDemand(lambda: b_n, b.faces)
+    if search is None:
+        search = _rigid_icp.Search(normalised(a.vertices), a.faces, normalised(b.vertices),
+                                   b.faces, b_tree)
+    a_n = search.pair.a
     _, _, xyz = m_b.to_surface(cost.p @ rotation.T)
     # The spatial pose the map rotation implies: A's subsample onto its images.
     map_pose = kabsch(cost.a, normalised(xyz))
-    best, from_map = _rigid_icp.best_pose(a_n, a.faces, b_n, b.faces, map_pose, b_tree)
+    best, from_map = search.best(map_pose)
     if (_rigid_icp.pose_angle(best.rotation, from_map.rotation) <= SWITCH_ANGLE
             or best.residual >= SWITCH_RATIO * from_map.residual):
         return None

@@ -38,10 +38,17 @@ class NearestOnSurface:
         self.faces = np.ascontiguousarray(faces, dtype=np.int64)
         self._tree = _core.CoreClosestPoints(self.vertices, self.faces)
 
-    def __call__(self, queries: np.ndarray) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def __call__(self, queries: np.ndarray, hints: Optional[np.ndarray] = None
+                 ) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Closest surface points: (face ids (q,), barycentric weights (q, 3),
-        points (q, 3))."""
-        return self._tree.closest(np.ascontiguousarray(queries, dtype=np.float64))
+        points (q, 3)). ``hints`` (q,) int64, if given, are faces an earlier
+        call answered for nearby queries (an ICP's previous iteration): the
+        search starts from a bound just above their distances, which only
+        makes it faster (the same answers, ``closest_point.rs``)."""
+        points = np.ascontiguousarray(queries, dtype=np.float64)
+        if hints is None:
+            return self._tree.closest(points)
+        return self._tree.closest(points, np.ascontiguousarray(hints, dtype=np.int64))
 
 
 class OnDemand:

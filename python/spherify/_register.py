@@ -393,13 +393,16 @@ def _registered(m_a: SphereMap, m_b: SphereMap, pairs: np.ndarray, transform: st
     # B's closest-point tree (B centred and scaled to unit rms radius) is
     # made once, for the rotation's check in space and the warp.
     b_tree = _nearest.OnDemand(lambda: _align.normalised(m_b.mesh.vertices), m_b.mesh.faces)
+    # B's side of the warp likewise (made beside the search for the rotation).
+    b_side = _warp.BSide(m_b)
     # The stages after the rotation run from the map rotation beside the
     # rotation's check in space (spherify._align.best_rotation_then), and
     # again from the check's rotation where it switches.
     rotation, start, steps, rest = _align.best_rotation_then(
         m_a, m_b, landmark_rotation,
-        lambda r: _after_rotation(m_a, m_b, r, pairs, transform, b_tree, report, total), b_tree,
-        _warp_keeps_switch if transform == "warp" else None)
+        lambda r: _after_rotation(m_a, m_b, r, pairs, transform, b_tree, b_side, report, total),
+        b_tree, _warp_keeps_switch if transform == "warp" else None,
+        b_side.make if transform == "warp" else None)
     assert rest is not None
     map_a, rotation, moebius, seconds, details = rest
     seconds = {"rotation": seconds.pop("began") - started, **seconds}
@@ -425,7 +428,7 @@ def _warp_keeps_switch(switched: Optional[_Stages], unswitched: Optional[_Stages
 
 
 def _after_rotation(m_a: SphereMap, m_b: SphereMap, rotation: np.ndarray, pairs: np.ndarray,
-                    transform: str, b_tree: _nearest.OnDemand,
+                    transform: str, b_tree: _nearest.OnDemand, b_side: _warp.BSide,
                     report: Callable[[int, int], None], total: int) -> _Stages:
     """The stages of :func:`register` after the sphere rotation: A's map
     turned, the Möbius fit and the warp. Returns A's map, the rotation, the
@@ -483,7 +486,7 @@ def _after_rotation(m_a: SphereMap, m_b: SphereMap, rotation: np.ndarray, pairs:
 
         map_a, run = _warp.warp(map_a, m_b, fixed=fixed,
                                 fixed_on_b=None if fixed is None else pairs[:, 1],
-                                should_stop=heard, b_tree=b_tree)
+                                should_stop=heard, b_tree=b_tree, b_side=b_side)
         details["warp_icp_distance"] = run["icp"]
         details["warp_moved"] = run["moved"]
         details["warp_pulled"] = run["pulled"]

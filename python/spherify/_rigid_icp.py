@@ -46,7 +46,7 @@ import numpy as np
 from ._nearest import NearestOnSurface, OnDemand
 from ._workers import run_all
 
-__all__ = ["Pose", "best_pose", "pose_angle"]
+__all__ = ["Pose", "Search", "best_pose", "pose_angle"]
 
 # Sample sizes and iterations of the ranking and of the polish.
 RANKING_SAMPLE = 300
@@ -109,12 +109,17 @@ class _Pair:
             iterations: int) -> Pose:
         a_s, b_s = self.sample(self.a, sample), self.sample(self.b, sample)
         residual = np.inf
+        # Each query's face at the iteration before starts its search from a
+        # bound (spherify._nearest: the same answers, fewer boxes opened;
+        # the pose moves little from one iteration to the next).
+        hint_b: Optional[np.ndarray] = None
+        hint_a: Optional[np.ndarray] = None
         for _ in range(iterations + 1):
             moved = a_s @ rotation.T + shift
-            on_b = self.on_b(moved)[2]
+            hint_b, _bary, on_b = self.on_b(moved, hint_b)
             # B's sample carried back into A's frame, its closest points on A
             # carried forward again.
-            on_a = self.on_a((b_s - shift) @ rotation)[2]
+            hint_a, _bary, on_a = self.on_a((b_s - shift) @ rotation, hint_a)
             src = np.vstack([a_s, on_a])
             dst = np.vstack([on_b, b_s])
             d = np.vstack([on_b - moved, b_s - (on_a @ rotation.T + shift)])
@@ -139,29 +144,48 @@ def best_pose(a: np.ndarray, a_faces: np.ndarray, b: np.ndarray, b_faces: np.nda
     sphere maps' alignment implies). ``a`` and ``b`` are normalised (centred,
     unit rms radius); ``b_tree``, if given, is the closest-point tree of
     ``b`` (shared with the warp)."""
-    pair = _Pair(a, a_faces, b, b_faces, b_tree)
-    va, vb = _principal_frame(a), _principal_frame(b)
-    if np.linalg.det(va) < 0:
-        va[:, 0] *= -1.0
-    if np.linalg.det(vb) < 0:
-        vb[:, 0] *= -1.0
-    zero = np.zeros(3)
-    signs = [np.diag(d) for d in ((1.0, 1.0, 1.0), (1.0, -1.0, -1.0), (-1.0, 1.0, -1.0),
-                                  (-1.0, -1.0, 1.0))]
-    # The starts are independent: the map pose's polish and the four rough
-    # runs go side by side on two threads (spherify._workers; each run's bits
-    # are its own), the long polish first so that the rough runs fill the
-    # other thread.
-    runs = [(map_rotation, zero, SAMPLE, ITERATIONS)]
-    runs += [(vb @ g @ va.T, zero, RANKING_SAMPLE, RANKING_ITERATIONS) for g in signs]
-    from_map, *rough = run_all(lambda run: pair.icp(*run), runs)
-    order = np.argsort([p.residual for p in rough], kind="stable")[:REFINED_STARTS]
-    # A start that has already come to the map pose is not polished again: it
-    # would only polish the same pose (on most shapes the best start does);
-    # nor one too far behind the map pose to overtake it (HOPELESS).
-    polished = run_all(lambda i: pair.icp(rough[i].rotation, rough[i].shift, SAMPLE, ITERATIONS),
-                       [i for i in order
-                        if pose_angle(rough[i].rotation, from_map.rotation) > SAME_POSE
-                        and rough[i].residual < HOPELESS * from_map.residual])
-    best = min(polished + [from_map], key=lambda p: p.residual)
-    return best, from_map
+    return Search(a, a_faces, b, b_faces, b_tree).best(map_rotation)
+
+
+class Search:
+    """:func:`best_pose` in two parts: made, the closest-point trees and
+    the rough runs from the principal frames, which do not depend on the
+    map rotation (registration makes them beside its search for the
+    rotation on the sphere, :func:`spherify._align.best_rotation_then`);
+    then :meth:`best`, the polish from the map rotation and of the best
+    rough starts. Each run's bits are its own, so the poses are those of
+    :func:`best_pose` in one go."""
+
+    def __init__(self, a: np.ndarray, a_faces: np.ndarray, b: np.ndarray, b_faces: np.ndarray,
+                 b_tree: Optional[OnDemand] = None) -> None:
+        self.pair = _Pair(a, a_faces, b, b_faces, b_tree)
+        va, vb = _principal_frame(a), _principal_frame(b)
+        if np.linalg.det(va) < 0:
+            va[:, 0] *= -1.0
+        if np.linalg.det(vb) < 0:
+            vb[:, 0] *= -1.0
+        zero = np.zeros(3)
+        signs = [np.diag(d) for d in ((1.0, 1.0, 1.0), (1.0, -1.0, -1.0), (-1.0, 1.0, -1.0),
+                                      (-1.0, -1.0, 1.0))]
+        # The rough runs are independent: side by side on two threads
+        # (spherify._workers; each run's bits are its own).
+        runs = [(vb @ g @ va.T, zero, RANKING_SAMPLE, RANKING_ITERATIONS) for g in signs]
+        pair = self.pair
+        self.rough: List[Pose] = run_all(lambda run: pair.icp(*run), runs)
+
+    def best(self, map_rotation: np.ndarray) -> Tuple[Pose, Pose]:
+        """:func:`best_pose`'s answer: the best polished pose and the pose
+        polished from ``map_rotation``."""
+        pair, rough = self.pair, self.rough
+        from_map = pair.icp(map_rotation, np.zeros(3), SAMPLE, ITERATIONS)
+        order = np.argsort([p.residual for p in rough], kind="stable")[:REFINED_STARTS]
+        # A start that has already come to the map pose is not polished again:
+        # it would only polish the same pose (on most shapes the best start
+        # does); nor one too far behind the map pose to overtake it (HOPELESS).
+        polished = run_all(
+            lambda i: pair.icp(rough[i].rotation, rough[i].shift, SAMPLE, ITERATIONS),
+            [i for i in order
+             if pose_angle(rough[i].rotation, from_map.rotation) > SAME_POSE
+             and rough[i].residual < HOPELESS * from_map.residual])
+        best = min(polished + [from_map], key=lambda p: p.residual)
+        return best, from_map

@@ -50,6 +50,7 @@ warp finds better ones in space and then moves A's map to them:
 
 from __future__ import annotations
 
+import threading
 from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
@@ -63,8 +64,8 @@ from ._spheremap import SphereMap
 from ._workers import beside, run_all
 from .datasets._sampling import farthest_points
 
-__all__ = ["PULL_STAGES", "ROUNDS", "SAMPLE", "SCAFFOLD", "SCAFFOLD_GROWTH", "STEPS", "lagging",
-           "move_rounds", "pull", "scaffold", "sphere_targets", "warp"]
+__all__ = ["BSide", "PULL_STAGES", "ROUNDS", "SAMPLE", "SCAFFOLD", "SCAFFOLD_GROWTH", "STEPS",
+           "lagging", "move_rounds", "pull", "scaffold", "sphere_targets", "warp"]
 
 # Vertices of A the deformation is fitted on (all of a smaller mesh).
 SAMPLE = 3000
@@ -157,6 +158,57 @@ def _vertex_areas(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
     return out
 
 
+class BSide:
+    """B's side of the warp, which depends on B alone (not on A's pose):
+    B centred and scaled to unit rms radius (:func:`_frame`), its outward
+    face normals and the reverse pairs' sample of B (:data:`REVERSE_SAMPLE`
+    of its vertices with their normals and vertex areas). Each part is made
+    once, by whichever caller asks first (a lock: registration makes them on
+    a pool thread beside its search for the rotation, :meth:`make`, where
+    the other core had little to do, instead of on the warp's path)."""
+
+    def __init__(self, m_b: SphereMap) -> None:
+        self._mesh = m_b.mesh
+        self._lock = threading.Lock()
+        self._frame: Optional[Tuple[np.ndarray, float, np.ndarray]] = None
+        self._normals: Optional[np.ndarray] = None
+        self._sample: Optional[Tuple[np.ndarray, np.ndarray, np.ndarray]] = None
+
+    def frame(self) -> Tuple[np.ndarray, float, np.ndarray]:
+        """B's centre, rms radius and vertices centred and scaled by them."""
+        with self._lock:
+            if self._frame is None:
+                centre, scale = _frame(self._mesh.vertices)
+                self._frame = (centre, scale, (self._mesh.vertices - centre) / scale)
+            return self._frame
+
+    def face_normals(self) -> np.ndarray:
+        """B's outward unit face normals (of the scaled B)."""
+        b_all = self.frame()[2]
+        with self._lock:
+            if self._normals is None:
+                self._normals = _nricp.face_normals(b_all, self._mesh.faces)
+            return self._normals
+
+    def reverse_sample(self) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The reverse pairs' sample of B: points, unit normals, vertex areas."""
+        b_all = self.frame()[2]
+        with self._lock:
+            if self._sample is None:
+                faces = self._mesh.faces
+                n_b = len(b_all)
+                rows = np.unique(np.linspace(0, n_b - 1, min(n_b, REVERSE_SAMPLE)
+                                             ).astype(np.int64))
+                self._sample = (b_all[rows], _nricp.vertex_normals(b_all, faces)[rows],
+                                _vertex_areas(b_all, faces)[rows])
+            return self._sample
+
+    def make(self) -> None:
+        """Every part, now."""
+        self.face_normals()
+        self.reverse_sample()
+
+
 def _frame(x: np.ndarray) -> Tuple[np.ndarray, float]:
     centre = x.mean(axis=0)
     c = x - centre
@@ -209,11 +261,30 @@ def _sphere_targets(map_a: SphereMap, m_b: SphereMap, *, fixed: Optional[np.ndar
     points of A's surface (A's own frame, (k, 3)) giving their targets on
     B's sphere (the closest point of B to the fitted deformation of each,
     through B's map), for the vertices a scaffold's edge splits add."""
+    targets, icp, place, _ = _targets_and_areas(map_a, m_b, fixed=fixed, fixed_on_b=fixed_on_b,
+                                                schedule=schedule, should_stop=should_stop,
+                                                b_tree=b_tree)
+    return targets, icp, place
+
+
+def _targets_and_areas(map_a: SphereMap, m_b: SphereMap, *,
+                       fixed: Optional[np.ndarray] = None,
+                       fixed_on_b: Optional[np.ndarray] = None,
+                       schedule: Sequence[Tuple[float, float, int]] = _nricp.SCHEDULE,
+                       should_stop: Callable[[int, int], bool] = lambda done, total: False,
+                       b_tree: Optional[OnDemand] = None, b_side: Optional["BSide"] = None
+                       ) -> Tuple[np.ndarray, Dict[str, Any], Callable[[np.ndarray], np.ndarray],
+                                  np.ndarray]:
+    """:func:`_sphere_targets`, and A's vertex areas (:func:`_vertex_areas`,
+    made beside the first targets; the pull weighs by them too).
+    ``b_side``, if given, is :class:`BSide` of ``m_b`` (made once for the
+    registration)."""
     a_mesh, b_mesh = map_a.mesh, m_b.mesh
     a_centre, a_scale = _frame(a_mesh.vertices)
-    b_centre, b_scale = _frame(b_mesh.vertices)
     a_all = (a_mesh.vertices - a_centre) / a_scale
-    b_all = (b_mesh.vertices - b_centre) / b_scale
+    if b_side is None:
+        b_side = BSide(m_b)
+    b_centre, b_scale, b_all = b_side.frame()
     if b_tree is None:
         b_tree = OnDemand(lambda: b_all, b_mesh.faces)
     n = len(a_all)
@@ -225,10 +296,10 @@ def _sphere_targets(map_a: SphereMap, m_b: SphereMap, *, fixed: Optional[np.ndar
     # B's closest-point tree, B's face normals and A's vertex areas do not
     # depend on the first targets: they are made beside them
     # (spherify._workers; each its own bits).
+    tree = b_tree
     (_, _, through_sphere), (nearest, b_normals, areas) = beside(
         lambda: m_b.to_surface(map_a.points[sample]),
-        lambda: (b_tree(), _nricp.face_normals(b_all, b_mesh.faces),
-                 _vertex_areas(a_mesh.vertices, a_mesh.faces)))
+        lambda: (tree(), b_side.face_normals(), _vertex_areas(a_mesh.vertices, a_mesh.faces)))
     first = (through_sphere - b_centre) / b_scale
     spin = kabsch(a_all[sample], first)
     a_all = a_all @ spin.T
@@ -240,12 +311,7 @@ def _sphere_targets(map_a: SphereMap, m_b: SphereMap, *, fixed: Optional[np.ndar
     normals, controls = beside(lambda: _nricp.vertex_normals(a_all, a_mesh.faces),
                                lambda: _nricp.control_points(a_all[sample]))
     # B's sample for the reverse pairs, which are used without landmarks only.
-    b_sample = None
-    if not held:
-        n_b = len(b_all)
-        b_rows = np.unique(np.linspace(0, n_b - 1, min(n_b, REVERSE_SAMPLE)).astype(np.int64))
-        b_sample = (b_all[b_rows], _nricp.vertex_normals(b_all, b_mesh.faces)[b_rows],
-                    _vertex_areas(b_all, b_mesh.faces)[b_rows])
+    b_sample = None if held else b_side.reverse_sample()
     model, icp = _nricp.nonrigid_icp(
         a_all[sample], normals[sample], areas[sample],
         first, nearest, b_normals, landmarks=landmarks, b_sample=b_sample,
@@ -263,19 +329,21 @@ def _sphere_targets(map_a: SphereMap, m_b: SphereMap, *, fixed: Optional[np.ndar
         placed: np.ndarray = m_b.to_sphere(at, weights)
         return placed
 
-    return targets, icp, place
+    return targets, icp, place, areas
 
 
 def warp(map_a: SphereMap, m_b: SphereMap, *, fixed: Optional[np.ndarray] = None,
          fixed_on_b: Optional[np.ndarray] = None,
          should_stop: Callable[[int, int], bool] = lambda done, total: False,
-         b_tree: Optional[OnDemand] = None) -> Tuple[SphereMap, Dict[str, Any]]:
+         b_tree: Optional[OnDemand] = None, b_side: Optional[BSide] = None
+         ) -> Tuple[SphereMap, Dict[str, Any]]:
     """Warp ``map_a`` (A's certified map, already in B's frame) onto B's map.
 
     ``fixed`` are A's vertices that do not move (landmarks already at their
     targets) and ``fixed_on_b`` B's vertices they pair with. ``should_stop(done,
     total)`` is asked after every ICP iteration, every round of moves and
-    every stage of the pull. ``b_tree`` is as in :func:`sphere_targets`.
+    every stage of the pull. ``b_tree`` is as in :func:`sphere_targets`,
+    ``b_side`` :class:`BSide` of ``m_b`` if already made.
     Returns the warped, certified map and a record
     of the run (``icp``: the mean distance from the deformed sample to B at
     each iteration, ``moved``: the mean angle still to go after each round
@@ -291,15 +359,20 @@ def warp(map_a: SphereMap, m_b: SphereMap, *, fixed: Optional[np.ndarray] = None
         done += 1
         return should_stop(done, STEPS)
 
-    targets, icp, place = _sphere_targets(map_a, m_b, fixed=fixed, fixed_on_b=fixed_on_b,
-                                          should_stop=step, b_tree=b_tree)
-    current, left, stopped = move_rounds(map_a, targets, fixed=fixed, should_stop=step)
+    targets, icp, place, areas = _targets_and_areas(map_a, m_b, fixed=fixed,
+                                                    fixed_on_b=fixed_on_b, should_stop=step,
+                                                    b_tree=b_tree, b_side=b_side)
+    current, left, stopped, angles = _move_rounds(map_a, targets, fixed=fixed, should_stop=step)
     if stopped:
         return current, {"icp": icp["distance"], "moved": left, "pulled": 0.0,
                          "scaffold": False}
     used = False
     held = fixed is not None and len(fixed) > 0
-    if lagging(current, targets, SCAFFOLD_LAG_LANDMARKS if held else SCAFFOLD_LAG):
+    # The angles left after the rounds, A's mean chord edge and A's vertex
+    # areas are made once for the scaffold's test and the pull (each was
+    # made two or three times: the same values).
+    edge = _mean_edge(current)
+    if _lagging(angles, edge, SCAFFOLD_LAG_LANDMARKS if held else SCAFFOLD_LAG):
         # Step 4b (module doc): the scaffold, kept where its rounds end
         # nearer the targets on A's own vertices than the plain rounds.
         pinned = scaffold(map_a, targets, place, fixed=fixed)
@@ -321,10 +394,14 @@ def warp(map_a: SphereMap, m_b: SphereMap, *, fixed: Optional[np.ndarray] = None
             if stopped:
                 return trial, {"icp": icp["distance"], "moved": trial_left, "pulled": 0.0,
                                "scaffold": True}
-            if (_angles(trial.points[:n], targets).mean()
-                    < _angles(current.points, targets).mean()):
+            if _angles(trial.points[:n], targets).mean() < angles.mean():
                 current, left, targets, used = trial, trial_left, pinned[1], True
-    current, pulled, after = pull(current, targets, fixed=fixed, should_stop=step)
+    if used:
+        # The pull on the scaffold's map (a refined mesh, maybe): its own.
+        current, pulled, after = pull(current, targets, fixed=fixed, should_stop=step)
+    else:
+        current, pulled, after = _pull(current, targets, fixed=fixed, should_stop=step,
+                                       left=angles, edge=edge, areas=areas)
     return current, {"icp": icp["distance"], "moved": left + after, "pulled": pulled,
                      "scaffold": used}
 
@@ -333,9 +410,18 @@ def lagging(current: SphereMap, targets: np.ndarray, lag: float = SCAFFOLD_LAG) 
     """Whether the rounds left ``current`` so far from ``targets`` (mean
     angle above ``lag`` mean chord edges) that whole parts of the map have
     still to travel: the scaffold's case."""
+    return _lagging(_angles(current.points, targets), _mean_edge(current), lag)
+
+
+def _lagging(angles: np.ndarray, edge: float, lag: float) -> bool:
+    """:func:`lagging` from the angles left and the mean chord edge."""
+    return bool(angles.mean() > lag * edge)
+
+
+def _mean_edge(current: SphereMap) -> float:
+    """The mean chord length of the edges (a, b) of ``current``'s faces."""
     points, faces = current.points, current.mesh.faces
-    edge = float(np.linalg.norm(points[faces[:, 0]] - points[faces[:, 1]], axis=1).mean())
-    return bool(_angles(points, targets).mean() > lag * edge)
+    return float(np.linalg.norm(points[faces[:, 0]] - points[faces[:, 1]], axis=1).mean())
 
 
 def scaffold(map_a: SphereMap, targets: np.ndarray, place: Callable[[np.ndarray], np.ndarray],
@@ -381,10 +467,21 @@ def move_rounds(map_a: SphereMap, targets: np.ndarray, *, fixed: Optional[np.nda
     ``targets``. Returns the certified map, the mean angle left to the
     targets at the start and after each round, and whether ``should_stop``
     (asked after every round) stopped it."""
+    current, left, stopped, _ = _move_rounds(map_a, targets, fixed=fixed, should_stop=should_stop)
+    return current, left, stopped
+
+
+def _move_rounds(map_a: SphereMap, targets: np.ndarray, *, fixed: Optional[np.ndarray] = None,
+                 should_stop: Callable[[int, int], bool] = lambda done, total: False
+                 ) -> Tuple[SphereMap, List[float], bool, np.ndarray]:
+    """:func:`move_rounds`, and the angle each vertex has left to its
+    target at the end (n,)."""
     current = map_a
     start = map_a.points
-    left = [float(_angles(current.points, targets).mean())]
+    # The angles from the start to the targets serve the record's first
+    # entry and the great circles' arcs (one computation, the same values).
     along = _Slerp(start, targets)
+    left = [float(along.angles.mean())]
     # The first rounds aim part of the way (along each great circle), so
     # that a region moves together instead of its first vertices running
     # ahead and blocking the rest: on horse, 8 rounds to 1/8, 2/8, ...
@@ -419,11 +516,12 @@ def move_rounds(map_a: SphereMap, targets: np.ndarray, *, fixed: Optional[np.nda
             left.append(before_left)
         last = current.points
         if should_stop(0, 0):
-            left.append(float(_angles(last, targets).mean()))
-            return current, left, True
-    if last is not None:
-        left.append(float(_angles(last, targets).mean()))
-    return current, left, False
+            angles = _angles(last, targets)
+            left.append(float(angles.mean()))
+            return current, left, True, angles
+    angles = _angles(current.points, targets)
+    left.append(float(angles.mean()))
+    return current, left, False, angles
 
 
 def pull(current: SphereMap, targets: np.ndarray, *, fixed: Optional[np.ndarray] = None,
@@ -434,10 +532,22 @@ def pull(current: SphereMap, targets: np.ndarray, *, fixed: Optional[np.ndarray]
     certified map, the fraction of vertices worked on and the mean angle
     left to the targets after each stage. ``should_stop`` is asked after
     every stage (and once per stage even when there is nothing to do)."""
+    return _pull(current, targets, fixed=fixed, should_stop=should_stop)
+
+
+def _pull(current: SphereMap, targets: np.ndarray, *, fixed: Optional[np.ndarray] = None,
+          should_stop: Callable[[int, int], bool] = lambda done, total: False,
+          left: Optional[np.ndarray] = None, edge: Optional[float] = None,
+          areas: Optional[np.ndarray] = None) -> Tuple[SphereMap, float, List[float]]:
+    """:func:`pull`, given (where already made) the angles ``left`` from
+    ``current`` to the targets, its mean chord ``edge`` and its mesh's
+    vertex ``areas`` (:func:`_vertex_areas`)."""
     points, faces = current.points, current.mesh.faces
     n = len(points)
-    left = _angles(points, targets)
-    edge = float(np.linalg.norm(points[faces[:, 0]] - points[faces[:, 1]], axis=1).mean())
+    if left is None:
+        left = _angles(points, targets)
+    if edge is None:
+        edge = _mean_edge(current)
     region = left > PULL_SHORT * edge
     if fixed is not None:
         region[fixed] = False
@@ -451,14 +561,19 @@ def pull(current: SphereMap, targets: np.ndarray, *, fixed: Optional[np.ndarray]
         for _ in range(PULL_RINGS):
             region[faces[region[faces].any(axis=1)]] = True
 
-    # The region grows beside A's vertex areas (spherify._workers).
-    _, areas = beside(grow, lambda: _vertex_areas(current.mesh.vertices, faces))
+    # The region grows beside A's vertex areas (spherify._workers), where
+    # they are not given.
+    if areas is None:
+        _, weights = beside(grow, lambda: _vertex_areas(current.mesh.vertices, faces))
+    else:
+        grow()
+        weights = areas
     held = ~region
     if fixed is not None:
         held[fixed] = True
     # The pull per unit of the sphere's area: each vertex stands for m_i of
     # the mean vertex's share, 4 pi / n.
-    share = areas * (4.0 * np.pi / n)
+    share = weights * (4.0 * np.pi / n)
     # The work of a stage is capped at PULL_WORK moves, so the pull on a
     # large region takes fewer sweeps.
     sweeps = max(1, min(PULL_SWEEPS, PULL_WORK // int(region.sum())))
@@ -491,7 +606,8 @@ class _Slerp:
 
     def __init__(self, p: np.ndarray, q: np.ndarray) -> None:
         self.p, self.q = p, q
-        self.angle = _angles(p, q)[:, None]
+        self.angles = _angles(p, q)
+        self.angle = self.angles[:, None]
         sine = np.sin(self.angle)
         self.safe = np.where(sine > 1e-12, sine, 1.0)
 

@@ -28,6 +28,13 @@ const MIN_CHUNK: usize = 64;
 /// one core of two (issue 23, register's wall time).
 const CHUNKS_PER_THREAD: usize = 4;
 
+/// A hint's bound is its triangle's squared distance times `1 + HINT_SLACK`
+/// plus the square of [`HINT_FLOOR`] times the largest coordinate: far
+/// above the rounding of a squared distance or of a box's (module doc of
+/// [`ClosestPoints::closest_from`]).
+const HINT_SLACK: f64 = 1e-6;
+const HINT_FLOOR: f64 = 1e-12;
+
 #[derive(Debug, Clone, Copy)]
 struct Node {
     min: [f64; 3],
@@ -54,6 +61,8 @@ pub struct ClosestPoints {
     faces: Vec<[u32; 3]>,
     order: Vec<u32>,
     nodes: Vec<Node>,
+    /// The square of [`HINT_FLOOR`] times the largest coordinate's size.
+    hint_floor2: f64,
 }
 
 fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
@@ -140,11 +149,13 @@ impl ClosestPoints {
                 [(a[0] + b[0] + c[0]) / 3.0, (a[1] + b[1] + c[1]) / 3.0, (a[2] + b[2] + c[2]) / 3.0]
             })
             .collect();
+        let extent = positions.iter().flatten().fold(0.0f64, |m, x| m.max(x.abs()));
         let mut tree = ClosestPoints {
             order: (0..faces.len() as u32).collect(),
             nodes: Vec::with_capacity(2 * faces.len() / LEAF_SIZE + 2),
             positions,
             faces,
+            hint_floor2: (HINT_FLOOR * extent) * (HINT_FLOOR * extent),
         };
         if !tree.faces.is_empty() {
             tree.nodes.push(Node { min: [0.0; 3], max: [0.0; 3], start: 0, count: 0 });
@@ -203,11 +214,40 @@ impl ClosestPoints {
     /// The closest point of the surface to `p` (None for an empty mesh or a
     /// point that is not finite).
     pub fn closest(&self, p: [f64; 3]) -> Option<SurfacePoint> {
+        self.closest_from(p, None)
+    }
+
+    /// [`closest`](Self::closest), the branch and bound started from a bound
+    /// just above the squared distance from `p` to triangle `hint` (the
+    /// answer for a nearby query, as an ICP's previous iteration gives),
+    /// instead of from infinity: boxes beyond it are skipped from the start.
+    /// The same answer to the bit. The walk visits the tree in the same
+    /// fixed order; it only skips more boxes, all at least the bound away.
+    /// The bound exceeds the answer's squared distance (at most the hint's)
+    /// by far more than the rounding of a distance or of a box's, so every
+    /// triangle that could be the answer or a rival within that rounding
+    /// is met as before, and the best so far agrees with the plain walk's
+    /// whenever it is below the bound: the first least-distance triangle of
+    /// the walk is the same. A hint out of range is no hint; should nothing
+    /// be found below the bound (which only a rounding far beyond the
+    /// slack could cause), the plain walk answers.
+    pub fn closest_from(&self, p: [f64; 3], hint: Option<u32>) -> Option<SurfacePoint> {
         if self.nodes.is_empty() || !p.iter().all(|x| x.is_finite()) {
             return None;
         }
         let mut best: Option<SurfacePoint> = None;
         let mut best_d2 = f64::INFINITY;
+        let hinted = hint.filter(|&h| (h as usize) < self.faces.len());
+        if let Some(h) = hinted {
+            let f = self.faces[h as usize];
+            let (a, b, c) = (
+                self.positions[f[0] as usize],
+                self.positions[f[1] as usize],
+                self.positions[f[2] as usize],
+            );
+            let e = sub(combine(closest_on_triangle(p, a, b, c), a, b, c), p);
+            best_d2 = dot(e, e) * (1.0 + HINT_SLACK) + self.hint_floor2;
+        }
         let mut stack: Vec<(u32, f64)> = Vec::with_capacity(64);
         stack.push((0, box_distance2(&self.nodes[0], p)));
         while let Some((index, d2)) = stack.pop() {
@@ -248,6 +288,9 @@ impl ClosestPoints {
                 stack.push((r, dr));
             }
         }
+        if best.is_none() && hinted.is_some() {
+            return self.closest_from(p, None);
+        }
         best
     }
 
@@ -259,9 +302,22 @@ impl ClosestPoints {
         points: &[[f64; 3]],
         go_on: &(dyn Fn(usize, usize) -> bool + Sync),
     ) -> Option<Vec<SurfacePoint>> {
+        self.closest_many_from(points, None, go_on)
+    }
+
+    /// [`closest_many`](Self::closest_many) with a hint per point
+    /// ([`closest_from`](Self::closest_from); `u32::MAX` or out of range: none):
+    /// the same answers.
+    pub fn closest_many_from(
+        &self,
+        points: &[[f64; 3]],
+        hints: Option<&[u32]>,
+        go_on: &(dyn Fn(usize, usize) -> bool + Sync),
+    ) -> Option<Vec<SurfacePoint>> {
         let missing = SurfacePoint { face: u32::MAX, bary: [f64::NAN; 3], point: [f64::NAN; 3] };
         // Each query is answered alone, so the chunking changes no bits.
         let size = chunk_size(points.len(), rayon::current_num_threads());
+        let hint = |row: usize| hints.and_then(|h| h.get(row).copied());
         let chunks: Vec<Option<Vec<SurfacePoint>>> = points
             .par_chunks(size)
             .enumerate()
@@ -269,7 +325,13 @@ impl ClosestPoints {
                 if !go_on(k * size, points.len()) {
                     return None;
                 }
-                Some(chunk.iter().map(|&p| self.closest(p).unwrap_or(missing)).collect())
+                Some(
+                    chunk
+                        .iter()
+                        .enumerate()
+                        .map(|(i, &p)| self.closest_from(p, hint(k * size + i)).unwrap_or(missing))
+                        .collect(),
+                )
             })
             .collect();
         let mut out = Vec::with_capacity(points.len());
@@ -349,6 +411,48 @@ mod tests {
             assert!(dot(sub(q, hit.point), sub(q, hit.point)) < 1e-24);
             assert!(hit.bary.iter().all(|&w| (-1e-12..=1.0 + 1e-12).contains(&w)));
         }
+    }
+
+    #[test]
+    fn a_hint_changes_no_answer() {
+        // Hints from a nearby query (an ICP's previous iteration), from far
+        // away, out of range: the same answer to the bit, near and far, on
+        // a soup and on a closed mesh whose queries often land on shared
+        // vertices and edges.
+        let mut rng = Lcg::new(9);
+        let soup = random_soup(400, &mut rng);
+        let sphere = {
+            let m = crate::solids::icosphere(3);
+            ClosestPoints::new(m.positions().to_vec(), m.faces().to_vec())
+        };
+        for tree in [&soup, &sphere] {
+            for k in 0..600 {
+                let spread = [0.5, 3.0, 30.0][k % 3];
+                let p = [
+                    spread * (rng.next_f64() - 0.3),
+                    spread * (rng.next_f64() - 0.3),
+                    spread * (rng.next_f64() - 0.5),
+                ];
+                let plain = tree.closest(p);
+                let nearby = [p[0] + 0.01, p[1] - 0.02, p[2] + 0.005];
+                let hints = [
+                    tree.closest(nearby).map(|h| h.face),
+                    plain.map(|h| h.face),
+                    Some((rng.next_f64() * tree.len() as f64) as u32),
+                    Some(u32::MAX),
+                    Some(tree.len() as u32),
+                ];
+                for hint in hints {
+                    assert_eq!(tree.closest_from(p, hint), plain, "{p:?} {hint:?}");
+                }
+            }
+        }
+        let points: Vec<[f64; 3]> = (0..3000)
+            .map(|_| [rng.next_f64() * 5.0, rng.next_f64() * 5.0, rng.next_f64()])
+            .collect();
+        let plain = soup.closest_many(&points, &|_, _| true).expect("not stopped");
+        let hints: Vec<u32> = plain.iter().rev().map(|h| h.face).collect();
+        assert_eq!(soup.closest_many_from(&points, Some(&hints), &|_, _| true), Some(plain));
     }
 
     #[test]

@@ -46,21 +46,41 @@ impl CoreClosestPoints {
         Ok(CoreClosestPoints { tree })
     }
 
-    /// closest(points (k, 3) float64) -> (face ids (k,) int64, bary (k, 3),
-    /// points (k, 3)): the exact closest point of the surface to each row;
-    /// face -1 and NaN for a row that is not finite.
+    /// closest(points (k, 3) float64, hints (k,) int64 or None) -> (face ids
+    /// (k,) int64, bary (k, 3), points (k, 3)): the exact closest point of the
+    /// surface to each row; face -1 and NaN for a row that is not finite.
+    /// `hints`: a face per row from an earlier call on nearby points (-1 or
+    /// out of range: none), which only speeds the search (the same answers).
     #[allow(clippy::type_complexity)]
+    #[pyo3(signature = (points, hints=None))]
     fn closest<'py>(
         &self,
         py: Python<'py>,
         points: PyReadonlyArrayDyn<'_, f64>,
+        hints: Option<PyReadonlyArrayDyn<'_, i64>>,
     ) -> PyResult<(Bound<'py, PyArray1<i64>>, Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<f64>>)>
     {
         let points = rows::<f64, 3>(&points, "points")?;
+        let hints: Option<Vec<u32>> = match hints {
+            None => None,
+            Some(h) => {
+                let h = h.as_array();
+                if h.ndim() != 1 || h.len() != points.len() {
+                    return Err(mesh_error(format!(
+                        "hints must be one face id per point ({}), got shape {:?}",
+                        points.len(),
+                        h.shape()
+                    )));
+                }
+                Some(h.iter().map(|&f| u32::try_from(f).unwrap_or(u32::MAX)).collect())
+            }
+        };
         let tree = &self.tree;
         // Through progress::run so that Ctrl-C stops a long search.
-        let hits = crate::progress::run(py, None, |go_on| tree.closest_many(&points, go_on))?
-            .ok_or_else(|| mesh_error("the closest-point search was stopped"))?;
+        let hits = crate::progress::run(py, None, |go_on| {
+            tree.closest_many_from(&points, hints.as_deref(), go_on)
+        })?
+        .ok_or_else(|| mesh_error("the closest-point search was stopped"))?;
         let faces: Vec<i64> =
             hits.iter().map(|h| if h.face == u32::MAX { -1 } else { i64::from(h.face) }).collect();
         let bary: Vec<[f64; 3]> = hits.iter().map(|h| h.bary).collect();

@@ -117,6 +117,31 @@ impl<const D: usize> CompactNode<D> {
     }
 }
 
+/// The items near the last region a query gathered
+/// ([`Bvh::for_each_box_containing_near`]); one per worker.
+#[derive(Debug, Clone)]
+pub struct NearCache<const D: usize> {
+    region: Aabb<D>,
+    /// Leaf-order positions of the items whose box meets `region`.
+    at: Vec<u32>,
+}
+
+impl<const D: usize> Default for NearCache<D> {
+    fn default() -> Self {
+        // An empty region: the first point gathers.
+        NearCache {
+            region: Aabb { min: [f64::INFINITY; D], max: [f64::NEG_INFINITY; D] },
+            at: Vec::new(),
+        }
+    }
+}
+
+impl<const D: usize> NearCache<D> {
+    fn holds(&self, p: &[f64; D]) -> bool {
+        (0..D).all(|i| self.region.min[i] <= p[i] && p[i] <= self.region.max[i])
+    }
+}
+
 /// A box tree over items `0..n`.
 #[derive(Debug, Clone)]
 pub struct Bvh<const D: usize> {
@@ -227,6 +252,77 @@ impl<const D: usize> Bvh<D> {
         }
     }
 
+    /// [`Bvh::for_each_box_containing`] through `cache`: the items whose box
+    /// meets a small region around a point (`reach` on every side) are
+    /// gathered once, in the walk's order, and every later point inside that
+    /// region is tested on them alone instead of walking the tree again.
+    /// The same items in the same order as the walk: a point `p` of the
+    /// region passes a node's test (or an item's) only where the region
+    /// does (the same comparisons with the same rounded bounds, and
+    /// `min <= p <= max` on every axis), so the gathered items hold every
+    /// item the walk from `p` visits, in the order of the same walk, and
+    /// the item test then decides alone. Points located in a spatial order
+    /// come in clusters (a Gauss-Newton step's probes, a few millionths
+    /// apart): those after the first skip the walk (issue 23, speed).
+    pub fn for_each_box_containing_near(
+        &self,
+        p: &[f64; D],
+        slack: f64,
+        reach: f64,
+        cache: &mut NearCache<D>,
+        mut visit: impl FnMut(u32),
+    ) {
+        if !cache.holds(p) {
+            cache.region = Aabb {
+                min: std::array::from_fn(|i| p[i] - reach),
+                max: std::array::from_fn(|i| p[i] + reach),
+            };
+            cache.at.clear();
+            self.gather_meeting(&cache.region, slack, &mut cache.at);
+        }
+        for &k in &cache.at {
+            if self.item_boxes[k as usize].contains(p, slack) {
+                visit(self.items[k as usize]);
+            }
+        }
+    }
+
+    /// The leaf-order positions of the items whose own box, grown by
+    /// `slack`, meets `region`, in the order of
+    /// [`Bvh::for_each_box_containing`]'s walk (the same node tests, passed
+    /// wherever some point of `region` would pass them).
+    fn gather_meeting(&self, region: &Aabb<D>, slack: f64, out: &mut Vec<u32>) {
+        if self.compact.is_empty() {
+            return;
+        }
+        let meets = |min: &[f64; D], max: &[f64; D]| {
+            (0..D).all(|i| region.max[i] >= min[i] - slack && region.min[i] <= max[i] + slack)
+        };
+        let mut stack = [0u32; 64];
+        let mut top = 1usize;
+        while top > 0 {
+            top -= 1;
+            let node = &self.compact[stack[top] as usize];
+            let min: [f64; D] = node.min.map(f64::from);
+            let max: [f64; D] = node.max.map(f64::from);
+            if !meets(&min, &max) {
+                continue;
+            }
+            if node.count > 0 {
+                for k in node.start..node.start + node.count {
+                    let b = &self.item_boxes[k as usize];
+                    if meets(&b.min, &b.max) {
+                        out.push(k);
+                    }
+                }
+            } else {
+                stack[top] = node.start;
+                stack[top + 1] = node.start + 1;
+                top += 2;
+            }
+        }
+    }
+
     /// The item ranges of the leaves whose bounds, grown by `slack`, contain
     /// `p`, depth first (the second child before the first).
     fn for_each_leaf_containing(
@@ -306,6 +402,54 @@ mod tests {
                 (0..500u32).filter(|&i| boxes[i as usize].contains(&p, 0.0)).collect();
             assert_eq!(got, want);
         }
+    }
+
+    #[test]
+    fn the_near_cache_visits_what_the_walk_visits() {
+        // Clusters of points a few reaches wide (some inside the cached
+        // region, some just outside it, some on box edges), with a slack:
+        // the cached path visits the same items in the same order.
+        let mut s = Lcg::new(11);
+        let boxes: Vec<Aabb<3>> = (0..2000)
+            .map(|_| {
+                let c = [s.next_f64(), s.next_f64(), s.next_f64()];
+                let size = [s.next_f64().powi(4), s.next_f64().powi(8), s.next_f64().powi(2)];
+                Aabb {
+                    min: std::array::from_fn(|i| c[i]),
+                    max: std::array::from_fn(|i| c[i] + 0.05 * size[i]),
+                }
+            })
+            .collect();
+        let bvh = Bvh::new(&boxes);
+        let mut cache = NearCache::default();
+        let reach = 1e-3;
+        for k in 0..400 {
+            let base = if k % 5 == 0 {
+                // On a box's corner: the comparisons at their edges.
+                boxes[(s.next_f64() * 2000.0) as usize].max
+            } else {
+                [s.next_f64(), s.next_f64(), s.next_f64()]
+            };
+            for _ in 0..8 {
+                let p: [f64; 3] =
+                    std::array::from_fn(|i| base[i] + 3.0 * reach * (s.next_f64() - 0.5));
+                for slack in [0.0, 1e-10] {
+                    let mut walk = Vec::new();
+                    bvh.for_each_box_containing(&p, slack, |i| walk.push(i));
+                    let mut near = Vec::new();
+                    bvh.for_each_box_containing_near(&p, slack, reach, &mut cache, |i| {
+                        near.push(i)
+                    });
+                    assert_eq!(near, walk);
+                }
+            }
+        }
+        // Not finite: nothing, as the walk.
+        let mut near = Vec::new();
+        bvh.for_each_box_containing_near(&[f64::NAN, 0.5, 0.5], 0.0, reach, &mut cache, |i| {
+            near.push(i)
+        });
+        assert!(near.is_empty());
     }
 
     #[test]

@@ -13,8 +13,17 @@
 use spherify_mesh::predicates::{det3_sign, Sign};
 use spherify_mesh::vec3::{cross, det3, dot, norm, scale};
 
-use crate::point_map::bvh::{Aabb, Bvh};
+use crate::point_map::bvh::{Aabb, Bvh, NearCache};
 use crate::point_map::weight_bound::{clamp_weights, ratio_weights, Candidates, UNIT_ROUNDOFF};
+
+/// The slack of point location's box tests (far more than the boxes'
+/// outward rounding).
+const BOX_SLACK: f64 = 1e-10;
+/// How far around a point [`GcMap::to_surface_near`] gathers the candidate
+/// faces for the points after it: a Gauss-Newton probe is a step of 1e-6
+/// (spherify._align) from its residual's point, so a step's seven (or
+/// thirteen) points of one vertex lie within about 2e-6 of each other.
+const NEAR_REACH: f64 = 4e-6;
 
 /// The GC map of one embedding.
 #[derive(Debug, Clone)]
@@ -164,6 +173,18 @@ impl GcMap {
     /// answers. The bound is the worst over every face that a point within
     /// the rounding error could lie in, since the preimage may be there.
     pub fn to_surface(&self, p: [f64; 3], sizes: &[f64]) -> (u32, [f64; 3], f64) {
+        self.to_surface_near(p, sizes, None)
+    }
+
+    /// [`GcMap::to_surface`], the candidate faces taken from `cache` where
+    /// `p` lies in the region it last gathered ([`Bvh::for_each_box_containing_near`]:
+    /// the same faces in the same order, so the same answer to the bit).
+    pub fn to_surface_near(
+        &self,
+        p: [f64; 3],
+        sizes: &[f64],
+        cache: Option<&mut NearCache<3>>,
+    ) -> (u32, [f64; 3], f64) {
         let mut found = Candidates::default();
         let consider = |f: u32, found: &mut Candidates| {
             let fw = self.face_weights(f, p);
@@ -176,7 +197,16 @@ impl GcMap {
         // fallback, which is not used when some face holds p (and when none
         // does, every face is offered below). So only the faces whose box
         // holds p are weighed, in the order of the tree's leaves as before.
-        self.locator.for_each_box_containing(&p, 1e-10, |x| consider(x, &mut found));
+        match cache {
+            Some(cache) => {
+                self.locator.for_each_box_containing_near(&p, BOX_SLACK, NEAR_REACH, cache, |x| {
+                    consider(x, &mut found)
+                })
+            }
+            None => {
+                self.locator.for_each_box_containing(&p, BOX_SLACK, |x| consider(x, &mut found))
+            }
+        }
         if !found.found() {
             // The boxes cover the sphere, so this is a safety net only.
             for f in 0..self.faces.len() as u32 {
@@ -208,7 +238,42 @@ fn permanent([x, y, z]: [[f64; 3]; 3]) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use spherify_mesh::solids::octahedron;
+    use spherify_mesh::lcg::Lcg;
+    use spherify_mesh::solids::{icosphere, octahedron};
+
+    #[test]
+    fn near_location_gives_the_same_bits() {
+        // Clusters of sphere points a few millionths apart (Gauss-Newton's
+        // probes), some on vertices and edges: the cached candidates give
+        // the walk's answers to the bit.
+        let mesh = icosphere(3);
+        let points: Vec<[f64; 3]> =
+            mesh.positions().iter().map(|&p| scale(p, 1.0 / norm(p))).collect();
+        let map = GcMap::new(mesh.faces(), &points);
+        let sizes = vec![0.1; mesh.n_faces()];
+        let mut cache = NearCache::default();
+        let mut s = Lcg::new(5);
+        for k in 0..300 {
+            let base = if k % 3 == 0 {
+                points[k % points.len()]
+            } else {
+                let f = (s.next_f64() * mesh.n_faces() as f64) as u32;
+                let w = if k % 3 == 1 { [0.5, 0.5, 0.0] } else { [s.next_f64(), 0.3, 0.2] };
+                let t = w[0] + w[1] + w[2];
+                map.to_sphere(f, w.map(|x| x / t))
+            };
+            for j in 0..7 {
+                let d = if j == 0 { 0.0 } else { 2e-6 };
+                let q: [f64; 3] = std::array::from_fn(|i| base[i] + d * (s.next_f64() - 0.5));
+                let q = scale(q, 1.0 / norm(q));
+                let walk = map.to_surface(q, &sizes);
+                let near = map.to_surface_near(q, &sizes, Some(&mut cache));
+                assert_eq!(walk.0, near.0);
+                assert_eq!(walk.1.map(f64::to_bits), near.1.map(f64::to_bits));
+                assert_eq!(walk.2.to_bits(), near.2.to_bits());
+            }
+        }
+    }
 
     #[test]
     fn octahedron_round_trips() {

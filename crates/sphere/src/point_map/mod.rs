@@ -27,6 +27,7 @@ use spherify_mesh::Mesh;
 
 use crate::embed::{Details, Embedding};
 use crate::memory_budget::{self, ResourceError};
+use crate::point_map::bvh::NearCache;
 use crate::point_map::gc_map::GcMap;
 use crate::point_map::h_map::ThetaPhiMap;
 
@@ -319,9 +320,13 @@ impl PointMap {
             // still in the cache) and written back to their rows; each
             // point's answer is its own, so the order changes no bits.
             let order = spatial_order(batch);
+            // Each worker keeps the candidate faces of the last few
+            // millionths it located (GcMap::to_surface_near): the points
+            // after the first of a cluster skip the tree walk, with the same
+            // answers.
             let answers: Vec<(u32, [f64; 3], f64)> = order
                 .par_iter()
-                .map(|&row| {
+                .map_init(NearCache::default, |cache, &row| {
                     let p = batch[row as usize];
                     match &self.inner {
                         Inner::ThetaPhi(m) => {
@@ -331,7 +336,7 @@ impl PointMap {
                         // Containment is a sign of det[p, b, c], which scaling
                         // p does not change: the point as given is located,
                         // not its rounded normalisation.
-                        Inner::Gc(m) => m.to_surface(p, &self.sizes),
+                        Inner::Gc(m) => m.to_surface_near(p, &self.sizes, Some(cache)),
                     }
                 })
                 .collect();

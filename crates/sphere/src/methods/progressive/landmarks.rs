@@ -206,6 +206,18 @@ const FLOW_SWEEPS: usize = 2;
 /// Most rounds in all: the drag's work is bounded.
 const MAX_ROUNDS: usize = 1000;
 
+/// A cosine above cos([`MAX_ARC`]) = 1/2 by a margin far beyond rounding.
+const WITHIN_ARC_COS: f64 = 0.5 + 1e-6;
+
+/// Whether the angle between `p` and `q` is surely at most [`MAX_ARC`], and
+/// so [`angle`] (whose rounding is far below the margin of
+/// [`WITHIN_ARC_COS`]) at most `MAX_ARC` too: their cosine, p . q over
+/// |p| |q|, is at least `WITHIN_ARC_COS`. False says nothing.
+fn surely_within_arc(p: [f64; 3], q: [f64; 3]) -> bool {
+    let d = dot(p, q);
+    d > 0.0 && d * d >= WITHIN_ARC_COS * WITHIN_ARC_COS * dot(p, p) * dot(q, q)
+}
+
 /// The angle between two unit vectors, accurate near 0 and pi.
 pub(crate) fn angle(a: [f64; 3], b: [f64; 3]) -> f64 {
     norm(cross(a, b)).atan2(dot(a, b))
@@ -252,8 +264,18 @@ pub(crate) fn drag_above(
     if p == goal {
         return Some(goal);
     }
-    let theta = angle(p, goal);
-    let waypoint = if theta <= MAX_ARC { goal } else { slerp(p, goal, MAX_ARC / theta) };
+    // The angle (an atan2, a tenth of the registration's rounds of moves)
+    // only where the cosine does not already say it is within MAX_ARC.
+    let waypoint = if surely_within_arc(p, goal) {
+        goal
+    } else {
+        let theta = angle(p, goal);
+        if theta <= MAX_ARC {
+            goal
+        } else {
+            slerp(p, goal, MAX_ARC / theta)
+        }
+    };
     let d = sub(waypoint, p);
     let m = ring.len();
     let mut s_safe = f64::INFINITY;

@@ -376,3 +376,31 @@ fn the_layout_gives_the_same_bits_on_one_and_two_threads() {
     };
     assert_eq!(run(1), run(2));
 }
+
+#[test]
+fn the_cosine_test_agrees_with_the_angle() {
+    // Wherever surely_within_arc says yes, the angle is within MAX_ARC, on
+    // pairs spread over every angle and crowded near MAX_ARC itself.
+    let mut s = spherify_mesh::lcg::Lcg::new(17);
+    let mut yes = 0;
+    for k in 0..200_000 {
+        let p = normalize([s.next_f64() - 0.5, s.next_f64() - 0.5, s.next_f64() - 0.5]);
+        let Some(p) = p else { continue };
+        let (e1, e2) = tangent_basis(p);
+        let theta = if k % 2 == 0 {
+            std::f64::consts::PI * s.next_f64()
+        } else {
+            MAX_ARC + 4e-6 * (s.next_f64() - 0.5)
+        };
+        let phi = std::f64::consts::TAU * s.next_f64();
+        let dir = add(scale(e1, phi.cos()), scale(e2, phi.sin()));
+        let q = add(scale(p, theta.cos()), scale(dir, theta.sin()));
+        // Lengths a little off 1, as a map's points may be.
+        let q = scale(q, 1.0 + 1e-12 * (s.next_f64() - 0.5));
+        if surely_within_arc(p, q) {
+            yes += 1;
+            assert!(angle(p, q) <= MAX_ARC, "{p:?} {q:?}");
+        }
+    }
+    assert!(yes > 50_000);
+}
