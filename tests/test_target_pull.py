@@ -160,12 +160,10 @@ def test_the_scaffold_gives_way_where_its_layout_grows_the_mesh_past_its_bound(
         sp.improve(map_a, max_vertices=3)
 
 
-def test_a_registration_through_a_refined_scaffold_transfers_inverts_and_morphs(
-        monkeypatch: pytest.MonkeyPatch) -> None:
-    # Forced here (the gate off, 48 pinned vertices, no bound on the
-    # growth): the layout refines these tentacles (3041 -> 22,089 vertices,
-    # measured), so the map of A has more rows than A, its first rows A's
-    # own, as for a landmark map.
+def forced_scaffold(monkeypatch: pytest.MonkeyPatch) -> Tuple[sp.SphereMap, sp.SphereMap]:
+    """The scaffold forced (the gate off, 48 pinned vertices, no bound on
+    the growth) on a pair of tentacles whose layout refines A: the maps of
+    A and B."""
     monkeypatch.setattr(_warp, "SCAFFOLD", 48)
     monkeypatch.setattr(_warp, "SCAFFOLD_LAG", 0.0)
     monkeypatch.setattr(_warp, "SCAFFOLD_GROWTH", 1e3)
@@ -173,7 +171,15 @@ def test_a_registration_through_a_refined_scaffold_transfers_inverts_and_morphs(
         warnings.simplefilter("ignore", sp.SpherifyWarning)
         m_a = sp.embed(sp.datasets.tentacles(3000))
         copy = sp.datasets.deformed_copy(m_a, level=3, seed=2)
-        m_b = sp.embed(copy.mesh)
+        return m_a, sp.embed(copy.mesh)
+
+
+def test_a_registration_through_a_refined_scaffold_transfers_inverts_and_morphs(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    # The layout refines these tentacles (3041 -> 22,089 vertices,
+    # measured), so the map of A has more rows than A, its first rows A's
+    # own, as for a landmark map.
+    m_a, m_b = forced_scaffold(monkeypatch)
     morph = sp.morph(m_a, m_b, align="warp")
     c = morph.correspondence
     assert c is not None
@@ -192,14 +198,7 @@ def test_a_refined_scaffold_that_the_memory_policy_refuses_leaves_the_plain_roun
     # The scaffold's refined mesh is asked of the memory policy again before
     # the rounds work on it; refused (here by a policy that fits A and B as
     # given and nothing larger), the registration goes on without it.
-    monkeypatch.setattr(_warp, "SCAFFOLD", 48)
-    monkeypatch.setattr(_warp, "SCAFFOLD_LAG", 0.0)
-    monkeypatch.setattr(_warp, "SCAFFOLD_GROWTH", 1e3)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", sp.SpherifyWarning)
-        m_a = sp.embed(sp.datasets.tentacles(3000))
-        copy = sp.datasets.deformed_copy(m_a, level=3, seed=2)
-        m_b = sp.embed(copy.mesh)
+    m_a, m_b = forced_scaffold(monkeypatch)
     given = m_a.mesh.n_vertices + m_b.mesh.n_vertices
     asked = []
     check = _warp._core.check_application
