@@ -179,16 +179,7 @@ impl Problem<'_> {
     pub fn area_scale(&self, stars: &Stars, points: &[[f64; 3]]) -> f64 {
         let per_vertex: Vec<f64> = (0..stars.len() as u32)
             .into_par_iter()
-            .map(|i| {
-                let mut sum = 0.0;
-                let ring = stars.ring(i);
-                let m = ring.len();
-                for j in 0..m {
-                    let [p, pa, pb] = [i, ring[j], ring[(j + 1) % m]].map(|v| points[v as usize]);
-                    sum += 0.5 * det3(p, pa, pb);
-                }
-                sum
-            })
+            .map(|i| vertex_area(i, stars.ring(i), points))
             .collect();
         // A fixed order of summation: the same scale on every thread count.
         let chord = per_vertex.iter().fold(0.0, |s, x| s + x);
@@ -199,22 +190,28 @@ impl Problem<'_> {
     pub fn total_energy(&self, k: f64, stars: &Stars, points: &[[f64; 3]]) -> f64 {
         let per_vertex: Vec<f64> = (0..stars.len() as u32)
             .into_par_iter()
-            .map(|i| {
-                let (ring, refs) = (stars.ring(i), stars.refs(i));
-                let m = ring.len();
-                let p = points[i as usize];
-                (0..m)
-                    .filter(|&j| i < ring[j] && i < ring[(j + 1) % m])
-                    .map(|j| {
-                        let (a, b) = (points[ring[j] as usize], points[ring[(j + 1) % m] as usize]);
-                        face_energy(self.energy, &refs[j], k, p, a, b)
-                    })
-                    .sum::<f64>()
-                    + self.pull.map_or(0.0, |pull| pull.energy(i, p))
-            })
+            .map(|i| self.vertex_energy(i, stars, points, k))
             .collect();
         // A fixed order of summation: the same total on every thread count.
         per_vertex.iter().sum::<f64>()
+    }
+
+    /// Vertex `i`'s share of [`Problem::total_energy`] at `k`: the energies
+    /// of its faces that it is the smallest corner of, in ring order, plus
+    /// its pull (also what [`Passes::energies`] sums).
+    #[inline]
+    fn vertex_energy(&self, i: u32, stars: &Stars, points: &[[f64; 3]], k: f64) -> f64 {
+        let (ring, refs) = (stars.ring(i), stars.refs(i));
+        let m = ring.len();
+        let p = points[i as usize];
+        (0..m)
+            .filter(|&j| i < ring[j] && i < ring[(j + 1) % m])
+            .map(|j| {
+                let (a, b) = (points[ring[j] as usize], points[ring[(j + 1) % m] as usize]);
+                face_energy(self.energy, &refs[j], k, p, a, b)
+            })
+            .sum::<f64>()
+            + self.pull.map_or(0.0, |pull| pull.energy(i, p))
     }
 
     /// The energy of the current faces per unit of scaled surface area.
@@ -242,17 +239,7 @@ impl Problem<'_> {
     pub fn chord_total(&self, stars: &Stars, points: &[[f64; 3]]) -> f64 {
         let per_vertex: Vec<f64> = (0..stars.len() as u32)
             .into_par_iter()
-            .map(|i| {
-                let ring = stars.ring(i);
-                let m = ring.len();
-                let p = points[i as usize];
-                (0..m)
-                    .filter(|&j| i < ring[j] && i < ring[(j + 1) % m])
-                    .map(|j| {
-                        chord_area(p, points[ring[j] as usize], points[ring[(j + 1) % m] as usize])
-                    })
-                    .sum::<f64>()
-            })
+            .map(|i| vertex_chord(i, stars.ring(i), points))
             .collect();
         per_vertex.iter().sum::<f64>()
     }
@@ -524,13 +511,7 @@ pub(crate) fn star_energy(
     refs.iter()
         .enumerate()
         .map(|(j, r)| {
-            let (a, b) = (corners[j], corners[(j + 1) % m]);
-            let e = face_energy(energy, r, k, p, a, b);
-            if chord == 0.0 {
-                e
-            } else {
-                e + chord * chord_area(p, a, b)
-            }
+            star_lanes::face_energy_one(energy, r, k, chord, [p, corners[j], corners[(j + 1) % m]])
         })
         .sum()
 }
@@ -706,26 +687,7 @@ impl Passes {
     ) -> (f64, Option<f64>) {
         let sums = |i: u32| -> (f64, f64) {
             let ring = stars.ring(i);
-            let m = ring.len();
-            // As `Problem::area_scale`.
-            let mut sum = 0.0;
-            for j in 0..m {
-                let [p, pa, pb] = [i, ring[j], ring[(j + 1) % m]].map(|v| points[v as usize]);
-                sum += 0.5 * det3(p, pa, pb);
-            }
-            // As `Problem::chord_total`.
-            let c = if chord {
-                let p = points[i as usize];
-                (0..m)
-                    .filter(|&j| i < ring[j] && i < ring[(j + 1) % m])
-                    .map(|j| {
-                        chord_area(p, points[ring[j] as usize], points[ring[(j + 1) % m] as usize])
-                    })
-                    .sum::<f64>()
-            } else {
-                0.0
-            };
-            (sum, c)
+            (vertex_area(i, ring, points), if chord { vertex_chord(i, ring, points) } else { 0.0 })
         };
         let (first, second) = (&mut self.first, &mut self.second);
         match flags {
@@ -758,27 +720,41 @@ impl Passes {
         stars: &Stars,
         points: &[[f64; 3]],
     ) -> (f64, Option<f64>) {
-        let at = |i: u32, ring: &[u32], refs: &[Reference], p: [f64; 3], k: f64| -> f64 {
-            let m = ring.len();
-            (0..m)
-                .filter(|&j| i < ring[j] && i < ring[(j + 1) % m])
-                .map(|j| {
-                    let (a, b) = (points[ring[j] as usize], points[ring[(j + 1) % m] as usize]);
-                    face_energy(problem.energy, &refs[j], k, p, a, b)
-                })
-                .sum::<f64>()
-                + problem.pull.map_or(0.0, |pull| pull.energy(i, p))
-        };
         let each = (0..stars.len() as u32).into_par_iter().with_min_len(1024).map(|i| {
-            let (ring, refs) = (stars.ring(i), stars.refs(i));
-            let p = points[i as usize];
-            (at(i, ring, refs, p, k), also.map_or(0.0, |other| at(i, ring, refs, p, other)))
+            let at = |k: f64| problem.vertex_energy(i, stars, points, k);
+            (at(k), also.map_or(0.0, at))
         });
         let (first, second) = (&mut self.first, &mut self.second);
         fill(each, also.is_some(), first, second);
         // Fixed orders of summation: the same totals on every thread count.
         (first.iter().sum::<f64>(), also.map(|_| second.iter().sum::<f64>()))
     }
+}
+
+/// Vertex `i`'s share of [`Problem::area_scale`]'s image area: half the
+/// determinants of its faces, in ring order (each face counted from each of
+/// its three corners, as the surface total counts it).
+#[inline]
+fn vertex_area(i: u32, ring: &[u32], points: &[[f64; 3]]) -> f64 {
+    let m = ring.len();
+    let mut sum = 0.0;
+    for j in 0..m {
+        let [p, pa, pb] = [i, ring[j], ring[(j + 1) % m]].map(|v| points[v as usize]);
+        sum += 0.5 * det3(p, pa, pb);
+    }
+    sum
+}
+
+/// Vertex `i`'s share of [`Problem::chord_total`]: the chord areas of its
+/// faces that it is the smallest corner of, in ring order.
+#[inline]
+fn vertex_chord(i: u32, ring: &[u32], points: &[[f64; 3]]) -> f64 {
+    let m = ring.len();
+    let p = points[i as usize];
+    (0..m)
+        .filter(|&j| i < ring[j] && i < ring[(j + 1) % m])
+        .map(|j| chord_area(p, points[ring[j] as usize], points[ring[(j + 1) % m] as usize]))
+        .sum::<f64>()
 }
 
 /// The per-vertex pairs of `each` into `first` and, when `both`, `second`.

@@ -164,25 +164,23 @@ mod tests {
         // indices out of order (one loop).
         let index: Vec<u32> = (0..n as u32).filter(|i| i % 3 != 1).collect();
         let value = |x: usize| (x % 7 != 3).then_some(x as u64 * 11);
-        let mut serial = vec![1u64; n];
-        for (x, &i) in index.iter().enumerate() {
-            if let Some(v) = value(x) {
-                serial[i as usize] = v;
+        // The serial loop: each index's value in turn, the later winning.
+        let serial = |index: &[u32]| {
+            let mut out = vec![1u64; n];
+            for (x, &i) in index.iter().enumerate() {
+                if let Some(v) = value(x) {
+                    out[i as usize] = v;
+                }
             }
-        }
+            out
+        };
         let mut blocks = vec![1u64; n];
         write_ascending(&mut blocks, &index, value);
-        assert_eq!(blocks, serial);
+        assert_eq!(blocks, serial(&index));
         let mut reversed = index.clone();
         reversed.reverse();
-        let mut expected = vec![1u64; n];
-        for (x, &i) in reversed.iter().enumerate() {
-            if let Some(v) = value(x) {
-                expected[i as usize] = v;
-            }
-        }
         let mut got = vec![1u64; n];
         write_ascending(&mut got, &reversed, value);
-        assert_eq!(got, expected);
+        assert_eq!(got, serial(&reversed));
     }
 }

@@ -582,9 +582,15 @@ mod lanes {
         let (a, d, f) = (a.lanes(), d.lanes(), f.lanes());
         let mut all = true;
         for l in 0..len {
-            all &= d[l] > 0.0 && d[l].is_finite() && a[l].is_finite() && f[l].is_finite();
+            all &= admissible(a[l], d[l]) && f[l].is_finite();
         }
         all
+    }
+
+    /// Whether `Energy::density` takes its formula at (a, d), not infinity.
+    #[inline(always)]
+    fn admissible(a: f64, d: f64) -> bool {
+        d > 0.0 && d.is_finite() && a.is_finite()
     }
 
     /// A density by lane: f, f_a, f_d (`Energy::density`) and f_ad, f_dd
@@ -770,6 +776,20 @@ mod lanes {
         };
     }
 
+    /// The chord triangle's normal n = q1 x q2 by lane: |n|, the lanes
+    /// where the triangle is not degenerate (|n| nonzero and finite), and
+    /// the unit normal n / |n| (the start of [`chord_terms`] and of
+    /// `face_gradients_with`'s chord step).
+    #[inline(always)]
+    fn chord_normal(q1: [F4; 3], q2: [F4; 3]) -> (F4, F4, [F4; 3]) {
+        let n = cross(q1, q2);
+        let len = dot(n, n).sqrt();
+        // len != 0 and finite: len is a square root, so 0 < len < inf.
+        let keep = len.gt(F4::splat(0.0)).and(F4::splat(f64::INFINITY).gt(len));
+        let inv = F4::splat(1.0) / len;
+        (len, keep, [n[0] * inv, n[1] * inv, n[2] * inv])
+    }
+
     /// `chord_area_hessian(p, a, b)` by lane, with q1 = a - p, q2 = b - p:
     /// the chord area, its gradient and its Hessian at p, zero where the
     /// chord triangle is degenerate (|n| zero or not finite).
@@ -780,12 +800,7 @@ mod lanes {
         a: [F4; 3],
         b: [F4; 3],
     ) -> (F4, [F4; 3], [[F4; 3]; 3]) {
-        let n = cross(q1, q2);
-        let len = dot(n, n).sqrt();
-        // len != 0 and finite: len is a square root, so 0 < len < inf.
-        let keep = len.gt(F4::splat(0.0)).and(F4::splat(f64::INFINITY).gt(len));
-        let inv = F4::splat(1.0) / len;
-        let u = [n[0] * inv, n[1] * inv, n[2] * inv];
+        let (len, keep, u) = chord_normal(q1, q2);
         let e = [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
         let w = cross(u, e);
         let (ee, half) = (dot(e, e), F4::splat(0.5) / len);
@@ -922,29 +937,44 @@ mod lanes {
         refs: &[Reference],
         corners: &[[f64; 3]],
     ) -> f64 {
-        let (c, half) = (F4::splat(chord), F4::splat(0.5));
         // In ring order, as `Iterator::sum` added the faces (from -0.0;
         // every face's energy is positive, so the start changes no bit).
         let mut total = -0.0;
         for first in (0..corners.len()).step_by(LANES) {
             let g = group(refs, corners, first);
-            let t = terms(k, p, &g);
-            let f = density.value(t.a, t.d).lanes();
-            let (a, d, area_s) = (t.a.lanes(), t.d.lanes(), t.area_s.lanes());
-            // chord * chord_area(p, a, b), chord_area = 0.5 |q1 x q2|.
-            let chord_term = if chord != 0.0 {
-                let n = cross(t.q1, t.q2);
-                (c * (half * dot(n, n).sqrt())).lanes()
-            } else {
-                [0.0; LANES]
-            };
-            for l in 0..g.len {
-                let admissible = d[l] > 0.0 && d[l].is_finite() && a[l].is_finite();
-                let e = area_s[l] * if admissible { f[l] } else { f64::INFINITY };
-                total += if chord == 0.0 { e } else { e + chord_term[l] };
-            }
+            group_energy(density, k, chord, splat3(p), &g, &mut total);
         }
         total
+    }
+
+    /// The energies of a group's faces with first corners `pv` (splatted
+    /// for a star, by lane for a face list), each plus `chord` times its
+    /// chord area when `chord` is nonzero, added to `total` face by face in
+    /// order (`face_energy_one`'s arithmetic, the scalar sum's order): the
+    /// one tail of [`energy_with`] and [`faces_energy_with`].
+    #[inline(always)]
+    fn group_energy<D: LaneDensity>(
+        density: D,
+        k: f64,
+        chord: f64,
+        pv: [F4; 3],
+        g: &Group,
+        total: &mut f64,
+    ) {
+        let t = terms_at(k, pv, g);
+        let f = density.value(t.a, t.d).lanes();
+        let (a, d, area_s) = (t.a.lanes(), t.d.lanes(), t.area_s.lanes());
+        // chord * chord_area(p, a, b), chord_area = 0.5 |q1 x q2|.
+        let chord_term = if chord != 0.0 {
+            let n = cross(t.q1, t.q2);
+            (F4::splat(chord) * (F4::splat(0.5) * dot(n, n).sqrt())).lanes()
+        } else {
+            [0.0; LANES]
+        };
+        for l in 0..g.len {
+            let e = area_s[l] * if admissible(a[l], d[l]) { f[l] } else { f64::INFINITY };
+            *total += if chord == 0.0 { e } else { e + chord_term[l] };
+        }
     }
 
     /// Up to four faces of a face list by lane: the first corners, and the
@@ -1049,11 +1079,7 @@ mod lanes {
                 // chord_area_gradients: n = q1 x q2, u = n / |n|, the
                 // gradient at each corner (next - previous) x u / 2; zero
                 // for a degenerate chord triangle.
-                let n = cross(q1, q2);
-                let len = dot(n, n).sqrt();
-                let keep = len.gt(F4::splat(0.0)).and(F4::splat(f64::INFINITY).gt(len));
-                let inv = F4::splat(1.0) / len;
-                let u = [n[0] * inv, n[1] * inv, n[2] * inv];
+                let (len, keep, u) = chord_normal(q1, q2);
                 let ends = [(p1, p2), (p2, p0), (p0, p1)];
                 // Only where the face's energy is finite, as the scalar code.
                 let fin = e.finite_mask();
@@ -1078,7 +1104,7 @@ mod lanes {
                 let (a, d, f) = (lanes_a[l], lanes_d[l], lanes_f[l]);
                 // Energy::density's admissibility and face_energy_gradients'
                 // test of f.
-                out[first + l] = if d > 0.0 && d.is_finite() && a.is_finite() && f.is_finite() {
+                out[first + l] = if admissible(a, d) && f.is_finite() {
                     let grad = |c: usize| [gl[c][0][l], gl[c][1][l], gl[c][2][l]];
                     (e[l], [grad(0), grad(1), grad(2)], f_a[l])
                 } else {
@@ -1098,24 +1124,10 @@ mod lanes {
         faces: &[[u32; 3]],
         refs: &[Reference],
     ) -> f64 {
-        let (m, half) = (F4::splat(mu), F4::splat(0.5));
         let mut total = -0.0;
         for first in (0..faces.len()).step_by(LANES) {
             let (p0, g) = list_group(points, faces, refs, first);
-            let t = terms_at(k, p0, &g);
-            let f = density.value(t.a, t.d).lanes();
-            let (a, d, area_s) = (t.a.lanes(), t.d.lanes(), t.area_s.lanes());
-            let chord_term = if mu != 0.0 {
-                let n = cross(t.q1, t.q2);
-                (m * (half * dot(n, n).sqrt())).lanes()
-            } else {
-                [0.0; LANES]
-            };
-            for l in 0..g.len {
-                let admissible = d[l] > 0.0 && d[l].is_finite() && a[l].is_finite();
-                let e = area_s[l] * if admissible { f[l] } else { f64::INFINITY };
-                total += if mu == 0.0 { e } else { e + chord_term[l] };
-            }
+            group_energy(density, k, mu, p0, &g, &mut total);
         }
         total
     }
