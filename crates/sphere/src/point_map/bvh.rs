@@ -226,6 +226,28 @@ impl<const D: usize> Bvh<D> {
         // ones: it reaches every leaf the double walk reaches (and a few
         // more, by a rounding), in the same order, and the items' own boxes
         // (doubles) then decide alone.
+        self.walk_compact(
+            |node| node.contains(p, slack),
+            |range| {
+                for (&it, b) in self.items[range.clone()].iter().zip(&self.item_boxes[range]) {
+                    if b.contains(p, slack) {
+                        visit(it);
+                    }
+                }
+            },
+        );
+    }
+
+    /// The single-precision tree depth first (the second child before the
+    /// first), into the nodes that pass `enters`, handing each leaf's
+    /// leaf-order item range to `leaf`: the one walk of
+    /// [`Bvh::for_each_box_containing`] and of the near cache's gather, so
+    /// that both visit the leaves in the same order.
+    fn walk_compact(
+        &self,
+        enters: impl Fn(&CompactNode<D>) -> bool,
+        mut leaf: impl FnMut(std::ops::Range<usize>),
+    ) {
         if self.compact.is_empty() {
             return;
         }
@@ -234,16 +256,11 @@ impl<const D: usize> Bvh<D> {
         while top > 0 {
             top -= 1;
             let node = &self.compact[stack[top] as usize];
-            if !node.contains(p, slack) {
+            if !enters(node) {
                 continue;
             }
             if node.count > 0 {
-                let range = node.start as usize..(node.start + node.count) as usize;
-                for (&it, b) in self.items[range.clone()].iter().zip(&self.item_boxes[range]) {
-                    if b.contains(p, slack) {
-                        visit(it);
-                    }
-                }
+                leaf(node.start as usize..(node.start + node.count) as usize);
             } else {
                 stack[top] = node.start;
                 stack[top + 1] = node.start + 1;
@@ -292,35 +309,20 @@ impl<const D: usize> Bvh<D> {
     /// [`Bvh::for_each_box_containing`]'s walk (the same node tests, passed
     /// wherever some point of `region` would pass them).
     fn gather_meeting(&self, region: &Aabb<D>, slack: f64, out: &mut Vec<u32>) {
-        if self.compact.is_empty() {
-            return;
-        }
         let meets = |min: &[f64; D], max: &[f64; D]| {
             (0..D).all(|i| region.max[i] >= min[i] - slack && region.min[i] <= max[i] + slack)
         };
-        let mut stack = [0u32; 64];
-        let mut top = 1usize;
-        while top > 0 {
-            top -= 1;
-            let node = &self.compact[stack[top] as usize];
-            let min: [f64; D] = node.min.map(f64::from);
-            let max: [f64; D] = node.max.map(f64::from);
-            if !meets(&min, &max) {
-                continue;
-            }
-            if node.count > 0 {
-                for k in node.start..node.start + node.count {
-                    let b = &self.item_boxes[k as usize];
+        self.walk_compact(
+            |node| meets(&node.min.map(f64::from), &node.max.map(f64::from)),
+            |range| {
+                for k in range {
+                    let b = &self.item_boxes[k];
                     if meets(&b.min, &b.max) {
-                        out.push(k);
+                        out.push(k as u32);
                     }
                 }
-            } else {
-                stack[top] = node.start;
-                stack[top + 1] = node.start + 1;
-                top += 2;
-            }
-        }
+            },
+        );
     }
 
     /// The item ranges of the leaves whose bounds, grown by `slack`, contain
