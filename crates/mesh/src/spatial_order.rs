@@ -11,6 +11,8 @@
 //! query's answer depends on that query alone, so the order changes no bit
 //! of any answer; the answers are written back to the queries' own rows.
 
+use crate::vec3::finite_bounds;
+
 /// Bits per axis of the Morton code (3 x 21 = 63 bits).
 const BITS: u32 = 21;
 
@@ -29,14 +31,7 @@ fn spread(x: u64) -> u64 {
 /// bounding box (ties, and points that are not finite, which go first, in
 /// row order). O(n log n).
 pub fn spatial_order(points: &[[f64; 3]]) -> Vec<u32> {
-    let mut lo = [f64::INFINITY; 3];
-    let mut hi = [f64::NEG_INFINITY; 3];
-    for p in points.iter().filter(|p| p.iter().all(|x| x.is_finite())) {
-        for i in 0..3 {
-            lo[i] = lo[i].min(p[i]);
-            hi[i] = hi[i].max(p[i]);
-        }
-    }
+    let (lo, hi) = finite_bounds(points);
     let cells = ((1u64 << BITS) - 1) as f64;
     let scale: [f64; 3] =
         std::array::from_fn(|i| if hi[i] > lo[i] { cells / (hi[i] - lo[i]) } else { 0.0 });

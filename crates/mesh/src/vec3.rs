@@ -56,6 +56,20 @@ pub fn triangle_area(a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> f64 {
     0.5 * norm(cross(sub(b, a), sub(c, a)))
 }
 
+/// The bounding box (lowest and highest coordinates) of the points whose
+/// coordinates are all finite; infinite bounds, low above high, when none is.
+pub fn finite_bounds(points: &[[f64; 3]]) -> ([f64; 3], [f64; 3]) {
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    for p in points.iter().filter(|p| p.iter().all(|x| x.is_finite())) {
+        for i in 0..3 {
+            lo[i] = lo[i].min(p[i]);
+            hi[i] = hi[i].max(p[i]);
+        }
+    }
+    (lo, hi)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -77,5 +91,14 @@ mod tests {
             triangle_area([1.0, 0.0, 0.0], [3.0, 0.0, 0.0], [1.0, 3.0, 5.0]),
             0.5 * 2.0 * 34f64.sqrt()
         );
+    }
+
+    #[test]
+    fn the_bounds_leave_out_points_that_are_not_finite() {
+        let points =
+            [[1.0, -2.0, 3.0], [f64::NAN, 9.0, 9.0], [-1.0, 4.0, f64::INFINITY], [0.5, 2.0, -3.0]];
+        assert_eq!(finite_bounds(&points), ([0.5, -2.0, -3.0], [1.0, 2.0, 3.0]));
+        let (lo, hi) = finite_bounds(&[[f64::NAN; 3]]);
+        assert!(lo.iter().zip(&hi).all(|(l, h)| l > h));
     }
 }

@@ -6,6 +6,8 @@
 //! the signs are those of the original mesh, and the sums neither underflow for
 //! a mesh 1e-120 across nor overflow for one 1e103 across.
 
+use crate::vec3::finite_bounds;
+
 /// Volumes of the components in normalised units; multiply by `unit^3` for the
 /// volume in the mesh's own units.
 pub(crate) struct Volumes {
@@ -30,14 +32,7 @@ pub(crate) fn component_volumes(
     n_components: usize,
     flip: Option<&[bool]>,
 ) -> Volumes {
-    let mut lo = [f64::INFINITY; 3];
-    let mut hi = [f64::NEG_INFINITY; 3];
-    for p in positions.iter().filter(|p| p.iter().all(|x| x.is_finite())) {
-        for i in 0..3 {
-            lo[i] = lo[i].min(p[i]);
-            hi[i] = hi[i].max(p[i]);
-        }
-    }
+    let (lo, hi) = finite_bounds(positions);
     let half_size = (0..3).map(|i| hi[i] / 2.0 - lo[i] / 2.0).fold(0.0, f64::max);
     let unit =
         if half_size > 0.0 && half_size.is_finite() { half_size.log2().ceil().exp2() } else { 1.0 };
