@@ -240,7 +240,9 @@ pub fn decimate(
             return None;
         }
         hierarchy.rounds.push(start..hierarchy.collapses.len());
-        alive.retain(|&v| mesh.is_alive(v));
+        // In parallel, in order (1M-vertex `tentacles`: 0.03 s serial over
+        // the rounds).
+        alive = alive.par_iter().copied().filter(|&v| mesh.is_alive(v)).collect();
         round += 1;
         if !report(n - mesh.n_alive) {
             return None;
