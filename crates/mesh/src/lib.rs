@@ -17,6 +17,7 @@ pub mod edge_table;
 pub mod error;
 pub mod graph;
 pub mod halfedge;
+pub mod huge_pages;
 pub mod io;
 pub mod lcg;
 pub mod mesh;

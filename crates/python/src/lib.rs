@@ -85,3 +85,8 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }
+
+/// Large blocks offered transparent huge pages (see the module notes).
+#[global_allocator]
+static ALLOCATOR: spherify_mesh::huge_pages::HugePageAllocator =
+    spherify_mesh::huge_pages::HugePageAllocator;
