@@ -93,8 +93,18 @@ impl Mesh {
     }
 
     /// The faces' corners grouped by undirected edge (built once, then cached).
+    ///
+    /// The table is built outside the cell's initialisation: its build runs
+    /// in parallel, and a rayon worker waiting inside it may take up another
+    /// job that asks for the same table, which would wait forever on an
+    /// initialisation held further down its own stack. Two callers that
+    /// race may both build it; the first stored wins (the same table).
     pub fn edge_table(&self) -> &EdgeTable {
-        self.edge_table.get_or_init(|| EdgeTable::new(self.positions.len(), &self.faces))
+        if let Some(table) = self.edge_table.get() {
+            return table;
+        }
+        let built = EdgeTable::new(self.positions.len(), &self.faces);
+        self.edge_table.get_or_init(|| built)
     }
 
     /// Frees the cached edge table; the next [`Mesh::edge_table`] rebuilds it.
@@ -140,6 +150,35 @@ fn first_out_of_range(faces: &[[u32; 3]], n: usize) -> Option<(usize, u32)> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Many first calls for one mesh's edge table at once, each from its own
+    /// thread into one 2-thread pool (as concurrent `embed` calls from Python
+    /// threads do): none may wait on a build that a worker left to run
+    /// another caller's job (it did when the parallel build ran inside the
+    /// cell's initialisation: a hang found by concurrent registrations).
+    #[test]
+    fn first_calls_from_many_threads_into_one_pool_all_return() {
+        use std::sync::{mpsc, Arc};
+        let pool = Arc::new(rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap());
+        for _ in 0..12 {
+            // 81,920 faces: the build runs on ranges in parallel.
+            let mesh = Arc::new(crate::solids::icosphere(6));
+            let (done, finished) = mpsc::channel();
+            for _ in 0..6 {
+                let (mesh, pool, done) = (Arc::clone(&mesh), Arc::clone(&pool), done.clone());
+                std::thread::spawn(move || {
+                    let edges = pool.install(|| mesh.edge_table().n_edges());
+                    done.send(edges).ok();
+                });
+            }
+            for _ in 0..6 {
+                let edges = finished
+                    .recv_timeout(std::time::Duration::from_secs(60))
+                    .expect("a first call for the edge table never returned");
+                assert_eq!(edges, 3 * 81_920 / 2);
+            }
+        }
+    }
 
     #[test]
     fn rejects_empty_nan_and_out_of_range() {

@@ -82,10 +82,16 @@ impl GenusZeroMesh {
     /// checks every requirement `HalfEdgeMesh::new` has (closed, manifold at
     /// edges and vertices, no repeated or unreferenced vertex) and the
     /// orientation is made consistent before.
+    ///
+    /// Built outside the cell's initialisation, as [`Mesh::edge_table`] is
+    /// (the build may run rayon jobs, and a worker waiting there may take up
+    /// another call for the same cell).
     pub fn half_edges(&self) -> &HalfEdgeMesh {
-        self.half_edges.get_or_init(|| {
-            HalfEdgeMesh::new(&self.mesh).expect("a validated, oriented genus-0 mesh")
-        })
+        if let Some(made) = self.half_edges.get() {
+            return made;
+        }
+        let built = HalfEdgeMesh::new(&self.mesh).expect("a validated, oriented genus-0 mesh");
+        self.half_edges.get_or_init(|| built)
     }
 
     /// Where the [`Neighbourhoods`] are kept once made
