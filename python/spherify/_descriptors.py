@@ -183,10 +183,13 @@ def heights(surface: Surface, queries: np.ndarray, normals: np.ndarray,
             d2 += gap * gap
             along += normals[:, c][q] * gap
             agree += normals[:, c][q] * facing[:, c][p]
-        w = area[p] * np.exp(d2 * (-0.5 / (r * r)))
-        w[d2 > 4.0 * r * r] = 0.0
+        # Only the pairs within the cut (and on the same side) count; the
+        # others would add zeros, so leaving them out keeps every sum's bits.
+        inside = d2 <= 4.0 * r * r
         if SAME_SIDE:
-            w[agree <= 0.0] = 0.0
+            inside &= agree > 0.0
+        q, d2, along = q[inside], d2[inside], along[inside]
+        w = area[p[inside]] * np.exp(d2 * (-0.5 / (r * r)))
         total = np.bincount(q, w, n)
         found = total > 0
         out[found, k] = np.bincount(q, w * along, n)[found] / total[found]
@@ -226,6 +229,10 @@ class DescriptorPairs:
         for c in range(3):
             gap = x[:, c][q] - self.points[:, c][p]
             near += gap * gap
+        # A pair farther than the reach in space is farther in both measures:
+        # it cannot be a certain answer.
+        within = near <= self.reach ** 2
+        q, p, near = q[within], p[within], near[within]
         both = near.copy()
         for c in range(features.shape[1]):
             gap = features[:, c][q] - self.features[:, c][p]

@@ -420,16 +420,18 @@ def nonrigid_icp(a: np.ndarray, a_normals: np.ndarray, area: np.ndarray,
                 if descriptors is not None:
                     # Where the candidate of B nearest in position and
                     # descriptor is not the one nearest in position alone,
-                    # the pair moves by the difference of the two, taken in
-                    # the plane of B's face at the closest point (off B by
-                    # about |shift|^2 times the curvature: 0.05 apart, a
-                    # few thousandths of the rms radius at most).
+                    # the pair goes to the closest point of B to the point
+                    # moved by the difference of the two.
                     pairs, a_features = descriptors
                     best, plain, certain = pairs(moved, a_features)
-                    shift = np.where(certain[:, None],
-                                     pairs.points[best] - pairs.points[plain], 0.0)
-                    shift -= b_normals * (shift * b_normals).sum(1)[:, None]
-                    on_b = on_b + shift
+                    shift = certain & (best != plain)
+                    if shift.any():
+                        at, _, onto = nearest(moved[shift] + pairs.points[best[shift]]
+                                              - pairs.points[plain[shift]])
+                        on_b = on_b.copy()
+                        on_b[shift] = onto
+                        b_normals = b_normals.copy()
+                        b_normals[shift] = b_face_normals[at]
                 agree = (turned * b_normals).sum(1)
                 use = agree > NORMAL_COSINE
                 targets = on_b
