@@ -56,6 +56,17 @@ not understood (see the doc). The soft stages go on one-way (with the pairs on e
 stage igea's targets went 1.19% -> 1.30%). With landmarks the pairs already
 hold the limbs and the reverse pairs made the targets a little worse (igea
 0.73% -> 0.80%, hand 0.60% -> 0.63%), so they are not used.
+
+The closest points hold a point tangentially where the last fit put it, so
+on a smooth surface a slide of the start survives the ICP. With
+``descriptors`` (:mod:`spherify._descriptors`), a pair whose nearest
+candidate of B in position *and* in the heights of the surface around it is
+not its nearest in position alone moves by the difference of the two
+(feature-augmented ICP: Johnson and Kang 1999; Sharp, Lee and Wehe 2002).
+Measured on issue 23's pairs (docs/correspondence.md, "Session 10: igea and
+Möbius"), the warp without landmarks: igea 1.21% / 2.84% -> 0.69% / 1.55%
+(mean / p95), hand 1.00% / 2.27% -> 0.80% / 1.76%, horse 1.34% / 4.28% ->
+1.05% / 4.27%.
 """
 
 from __future__ import annotations
