@@ -55,7 +55,7 @@ from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
-from . import _core, _landmarks, _nricp
+from . import _core, _descriptors, _landmarks, _nricp
 from ._align import kabsch
 from ._embed import improve
 from ._errors import MapError, MeshError, ResourceError
@@ -251,6 +251,30 @@ def sphere_targets(map_a: SphereMap, m_b: SphereMap, *, fixed: Optional[np.ndarr
     return targets, icp
 
 
+def _descriptor_pairs(a_all: np.ndarray, a_faces: np.ndarray, a_sample: np.ndarray,
+                      a_normals: np.ndarray, b_all: np.ndarray, b_faces: np.ndarray
+                      ) -> Tuple[_descriptors.DescriptorPairs, np.ndarray]:
+    """The ICP's descriptor pairs (:mod:`spherify._descriptors`): B's
+    candidates and the descriptors of A's sample (``a_sample``, with their
+    ``a_normals``; both shapes in the ICP's normalised frame). A's and B's
+    descriptors side by side (spherify._workers; each its own bits)."""
+    scales = _nricp.DESCRIPTOR_SCALES
+
+    def a_side() -> np.ndarray:
+        return _descriptors.heights(_descriptors.Surface(a_all, a_faces), a_sample, a_normals,
+                                    scales)
+
+    def b_side() -> Tuple[np.ndarray, np.ndarray]:
+        surface = _descriptors.Surface(b_all, b_faces)
+        candidates, _, b_normals = surface.samples(_nricp.DESCRIPTOR_SPACING)
+        return candidates, _descriptors.heights(surface, candidates, b_normals, scales)
+
+    a_heights, (candidates, b_heights) = beside(a_side, b_side)
+    pairs = _descriptors.DescriptorPairs(candidates, b_heights, _nricp.DESCRIPTOR_WEIGHT,
+                                         _nricp.DESCRIPTOR_REACH)
+    return pairs, a_heights
+
+
 def _sphere_targets(map_a: SphereMap, m_b: SphereMap, *, fixed: Optional[np.ndarray] = None,
                     fixed_on_b: Optional[np.ndarray] = None,
                     schedule: Sequence[Tuple[float, float, int]] = _nricp.SCHEDULE,
@@ -312,12 +336,16 @@ def _targets_and_areas(map_a: SphereMap, m_b: SphereMap, *,
                                lambda: _nricp.control_points(a_all[sample]))
     # B's sample for the reverse pairs, which are used without landmarks only.
     b_sample = None if held else b_side.reverse_sample()
+    descriptors = None
+    if _nricp.DESCRIPTOR_WEIGHT > 0:
+        descriptors = _descriptor_pairs(a_all, a_mesh.faces, a_all[sample], normals[sample],
+                                        b_all, b_mesh.faces)
     model, icp = _nricp.nonrigid_icp(
         a_all[sample], normals[sample], areas[sample],
         first, nearest, b_normals, landmarks=landmarks, b_sample=b_sample,
         a_faces=a_mesh.faces if len(sample) == n else None,
         landmark_weight=LANDMARK_WEIGHT, schedule=schedule, should_stop=should_stop,
-        controls=controls)
+        controls=controls, descriptors=descriptors)
     faces, bary, _ = nearest(model(a_all))
     targets = m_b.to_sphere(faces, bary)
     if held:
