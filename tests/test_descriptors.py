@@ -9,6 +9,8 @@ import numpy as np
 import spherify as sp
 from spherify import _descriptors, _nricp
 
+import _descriptors_reference as reference
+
 
 def unit_rms(mesh: sp.Mesh) -> np.ndarray:
     v = mesh.vertices - mesh.vertices.mean(axis=0)
@@ -16,18 +18,48 @@ def unit_rms(mesh: sp.Mesh) -> np.ndarray:
     return out
 
 
-def test_the_grid_finds_every_point_within_a_cell() -> None:
+def test_the_reference_grid_finds_every_point_within_a_cell() -> None:
     rng = np.random.default_rng(1)
     points = rng.normal(size=(2000, 3))
     queries = rng.normal(size=(300, 3)) * 1.3
     cell = 0.4
-    q, p = _descriptors.Grid(points, cell).pairs(queries)
+    q, p = reference.Grid(points, cell).pairs(queries)
     assert np.all(np.diff(q) >= 0)
     found = set(zip(q.tolist(), p.tolist()))
     assert len(found) == len(q)
     d = np.linalg.norm(queries[:, None, :] - points[None, :, :], axis=2)
     within = set(zip(*np.nonzero(d <= cell)))
     assert within <= found
+
+
+def test_the_core_gives_the_references_samples_heights_and_pairs() -> None:
+    # Two shapes as registration sees them (unit rms radius), one bent:
+    # the core's samples equal numpy's to the bit, the heights to the last
+    # bits of exp, and the pairs are the same.
+    mesh = sp.datasets.bumpy_blob(3000, bumps=6, amplitude=0.4, seed=5)
+    a = unit_rms(mesh)
+    b = a + 0.05 * np.sin(3.0 * a[:, [1, 2, 0]])
+    n = _nricp.vertex_normals(a, mesh.faces)
+    sample = np.arange(0, len(a), 3)
+    scales = _nricp.DESCRIPTOR_SCALES
+    old_b, new_b = reference.Surface(b, mesh.faces), _descriptors.Surface(b, mesh.faces)
+    for spacing in (_nricp.DESCRIPTOR_SPACING, 0.15):
+        for x, y in zip(old_b.samples(spacing), new_b.samples(spacing)):
+            assert np.array_equal(x, y)
+    cand, _, b_normals = new_b.samples(_nricp.DESCRIPTOR_SPACING)
+    old_h = reference.heights(old_b, cand, b_normals, scales)
+    new_h = _descriptors.heights(new_b, cand, b_normals, scales)
+    assert np.allclose(new_h, old_h, rtol=1e-12, atol=1e-15)
+    old_a = reference.heights(reference.Surface(a, mesh.faces), a[sample], n[sample], scales)
+    new_a = _descriptors.heights(_descriptors.Surface(a, mesh.faces), a[sample], n[sample], scales)
+    assert np.allclose(new_a, old_a, rtol=1e-12, atol=1e-15)
+    weight, reach = _nricp.DESCRIPTOR_WEIGHT, _nricp.DESCRIPTOR_REACH
+    old_p = reference.DescriptorPairs(cand, new_h, weight, reach)
+    new_p = _descriptors.DescriptorPairs(cand, new_h, weight, reach)
+    for shift in (0.0, 0.01, 0.03):
+        x = a[sample] + shift
+        for u, v in zip(old_p(x, new_a), new_p(x, new_a)):
+            assert np.array_equal(u, v)
 
 
 def test_surface_samples_keep_the_area_and_the_normals_point_out() -> None:
