@@ -161,8 +161,10 @@ def _vertex_areas(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
 class BSide:
     """B's side of the warp, which depends on B alone (not on A's pose):
     B centred and scaled to unit rms radius (:func:`_frame`), its outward
-    face normals and the reverse pairs' sample of B (:data:`REVERSE_SAMPLE`
-    of its vertices with their normals and vertex areas). Each part is made
+    face normals, the reverse pairs' sample of B (:data:`REVERSE_SAMPLE`
+    of its vertices with their normals and vertex areas) and the descriptor
+    pairs' candidates on B with their heights (:mod:`spherify._descriptors`;
+    once a registration, where a second warp made them again). Each part is made
     once, by whichever caller asks first (a lock: registration makes them on
     a pool thread beside its search for the rotation, :meth:`make`, where
     the other core had little to do, instead of on the warp's path)."""
@@ -173,6 +175,7 @@ class BSide:
         self._frame: Optional[Tuple[np.ndarray, float, np.ndarray]] = None
         self._normals: Optional[np.ndarray] = None
         self._sample: Optional[Tuple[np.ndarray, np.ndarray, np.ndarray]] = None
+        self._candidates: Optional[Tuple[np.ndarray, np.ndarray]] = None
 
     def frame(self) -> Tuple[np.ndarray, float, np.ndarray]:
         """B's centre, rms radius and vertices centred and scaled by them."""
@@ -203,10 +206,25 @@ class BSide:
                                 _vertex_areas(b_all, faces)[rows])
             return self._sample
 
+    def candidates(self) -> Tuple[np.ndarray, np.ndarray]:
+        """The descriptor pairs' candidates on B (B's surface
+        :data:`spherify._nricp.DESCRIPTOR_SPACING` apart, (k, 3)) and their
+        heights at :data:`spherify._nricp.DESCRIPTOR_SCALES` (k, scales)."""
+        b_all = self.frame()[2]
+        with self._lock:
+            if self._candidates is None:
+                surface = _descriptors.Surface(b_all, self._mesh.faces)
+                points, _, normals = surface.samples(_nricp.DESCRIPTOR_SPACING)
+                self._candidates = (points, _descriptors.heights(surface, points, normals,
+                                                                 _nricp.DESCRIPTOR_SCALES))
+            return self._candidates
+
     def make(self) -> None:
         """Every part, now."""
         self.face_normals()
         self.reverse_sample()
+        if _nricp.DESCRIPTOR_WEIGHT > 0:
+            self.candidates()
 
 
 def _frame(x: np.ndarray) -> Tuple[np.ndarray, float]:
@@ -252,24 +270,18 @@ def sphere_targets(map_a: SphereMap, m_b: SphereMap, *, fixed: Optional[np.ndarr
 
 
 def _descriptor_pairs(a_all: np.ndarray, a_faces: np.ndarray, a_sample: np.ndarray,
-                      a_normals: np.ndarray, b_all: np.ndarray, b_faces: np.ndarray
+                      a_normals: np.ndarray, b_side: BSide
                       ) -> Tuple[_descriptors.DescriptorPairs, np.ndarray]:
     """The ICP's descriptor pairs (:mod:`spherify._descriptors`): B's
-    candidates and the descriptors of A's sample (``a_sample``, with their
-    ``a_normals``; both shapes in the ICP's normalised frame). A's and B's
-    descriptors side by side (spherify._workers; each its own bits)."""
-    scales = _nricp.DESCRIPTOR_SCALES
-
+    candidates (:meth:`BSide.candidates`) and the descriptors of A's sample
+    (``a_sample``, with their ``a_normals``; both shapes in the ICP's
+    normalised frame). A's and B's descriptors side by side
+    (spherify._workers; each its own bits) where B's are not made yet."""
     def a_side() -> np.ndarray:
         return _descriptors.heights(_descriptors.Surface(a_all, a_faces), a_sample, a_normals,
-                                    scales)
+                                    _nricp.DESCRIPTOR_SCALES)
 
-    def b_side() -> Tuple[np.ndarray, np.ndarray]:
-        surface = _descriptors.Surface(b_all, b_faces)
-        candidates, _, b_normals = surface.samples(_nricp.DESCRIPTOR_SPACING)
-        return candidates, _descriptors.heights(surface, candidates, b_normals, scales)
-
-    a_heights, (candidates, b_heights) = beside(a_side, b_side)
+    a_heights, (candidates, b_heights) = beside(a_side, b_side.candidates)
     pairs = _descriptors.DescriptorPairs(candidates, b_heights, _nricp.DESCRIPTOR_WEIGHT,
                                          _nricp.DESCRIPTOR_REACH)
     return pairs, a_heights
@@ -339,7 +351,7 @@ def _targets_and_areas(map_a: SphereMap, m_b: SphereMap, *,
     descriptors = None
     if _nricp.DESCRIPTOR_WEIGHT > 0:
         descriptors = _descriptor_pairs(a_all, a_mesh.faces, a_all[sample], normals[sample],
-                                        b_all, b_mesh.faces)
+                                        b_side)
     model, icp = _nricp.nonrigid_icp(
         a_all[sample], normals[sample], areas[sample],
         first, nearest, b_normals, landmarks=landmarks, b_sample=b_sample,
