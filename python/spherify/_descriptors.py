@@ -40,7 +40,7 @@ bits of ``exp``), is the reference of ``tests/test_descriptors.py``.
 
 from __future__ import annotations
 
-from typing import Sequence, Tuple
+from typing import Optional, Sequence, Tuple
 
 import numpy as np
 
@@ -72,7 +72,17 @@ class Surface:
         up, at most :data:`MAX_SPLIT`), each represented by its centroid,
         then lumped into grid cells of side ``spacing`` (areas summed;
         area-weighted centroids and normals). O(area / spacing^2 + faces)."""
-        return self.core.samples(float(spacing))
+        points, area, normals, _ = self.core.samples(float(spacing))
+        return points, area, normals
+
+    def samples_on_faces(self, spacing: float
+                         ) -> Tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """:meth:`samples` and a face near each point (k,) int64 (the face
+        of the first sub-triangle lumped into its cell: a closest-point
+        search's hint)."""
+        out: Tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] = \
+            self.core.samples(float(spacing))
+        return out
 
 
 def surface_samples(vertices: np.ndarray, faces: np.ndarray,
@@ -108,11 +118,13 @@ class DescriptorPairs:
     (``spherify_mesh::feature_nearest``)."""
 
     def __init__(self, points: np.ndarray, descriptors: np.ndarray, weight: float,
-                 reach: float) -> None:
+                 reach: float, faces: Optional[np.ndarray] = None) -> None:
         spread = descriptors.std(axis=0)
         self.unit = np.where(spread > 0, spread, 1.0)
         self.weight = float(weight)
         self.points = points
+        # A face of B near each candidate, if known (a search's hint).
+        self.faces = faces
         self.features = self.weight * descriptors / self.unit
         self.reach = float(reach)
         self.core = _core.CoreFeatureNearest(np.ascontiguousarray(points, dtype=np.float64),

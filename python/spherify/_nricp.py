@@ -441,10 +441,13 @@ def nonrigid_icp(a: np.ndarray, a_normals: np.ndarray, area: np.ndarray,
                     best, plain, certain = pairs(moved, a_features)
                     shift = certain & (best != plain)
                     if shift.any():
-                        # The moved point's own face bounds the search of
-                        # the shifted one (a hint: the same answers).
+                        # A face near the best candidate (else the moved
+                        # point's own) bounds the search of the shifted
+                        # point (a hint: the same answers).
+                        hint = (faces[shift] if pairs.faces is None
+                                else pairs.faces[best[shift]])
                         at, _, onto = nearest(moved[shift] + pairs.points[best[shift]]
-                                              - pairs.points[plain[shift]], faces[shift])
+                                              - pairs.points[plain[shift]], hint)
                         on_b = on_b.copy()
                         on_b[shift] = onto
                         b_normals = b_normals.copy()

@@ -175,7 +175,7 @@ class BSide:
         self._frame: Optional[Tuple[np.ndarray, float, np.ndarray]] = None
         self._normals: Optional[np.ndarray] = None
         self._sample: Optional[Tuple[np.ndarray, np.ndarray, np.ndarray]] = None
-        self._candidates: Optional[Tuple[np.ndarray, np.ndarray]] = None
+        self._candidates: Optional[Tuple[np.ndarray, np.ndarray, np.ndarray]] = None
 
     def frame(self) -> Tuple[np.ndarray, float, np.ndarray]:
         """B's centre, rms radius and vertices centred and scaled by them."""
@@ -206,17 +206,18 @@ class BSide:
                                 _vertex_areas(b_all, faces)[rows])
             return self._sample
 
-    def candidates(self) -> Tuple[np.ndarray, np.ndarray]:
+    def candidates(self) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The descriptor pairs' candidates on B (B's surface
-        :data:`spherify._nricp.DESCRIPTOR_SPACING` apart, (k, 3)) and their
-        heights at :data:`spherify._nricp.DESCRIPTOR_SCALES` (k, scales)."""
+        :data:`spherify._nricp.DESCRIPTOR_SPACING` apart, (k, 3)), their
+        heights at :data:`spherify._nricp.DESCRIPTOR_SCALES` (k, scales) and
+        a face of B near each (k,)."""
         b_all = self.frame()[2]
         with self._lock:
             if self._candidates is None:
                 surface = _descriptors.Surface(b_all, self._mesh.faces)
-                points, _, normals = surface.samples(_nricp.DESCRIPTOR_SPACING)
+                points, _, normals, faces = surface.samples_on_faces(_nricp.DESCRIPTOR_SPACING)
                 self._candidates = (points, _descriptors.heights(surface, points, normals,
-                                                                 _nricp.DESCRIPTOR_SCALES))
+                                                                 _nricp.DESCRIPTOR_SCALES), faces)
             return self._candidates
 
     def make(self) -> None:
@@ -281,9 +282,9 @@ def _descriptor_pairs(a_all: np.ndarray, a_faces: np.ndarray, a_sample: np.ndarr
         return _descriptors.heights(_descriptors.Surface(a_all, a_faces), a_sample, a_normals,
                                     _nricp.DESCRIPTOR_SCALES)
 
-    a_heights, (candidates, b_heights) = beside(a_side, b_side.candidates)
+    a_heights, (candidates, b_heights, faces) = beside(a_side, b_side.candidates)
     pairs = _descriptors.DescriptorPairs(candidates, b_heights, _nricp.DESCRIPTOR_WEIGHT,
-                                         _nricp.DESCRIPTOR_REACH)
+                                         _nricp.DESCRIPTOR_REACH, faces)
     return pairs, a_heights
 
 

@@ -8,6 +8,33 @@
 //! which the sums and minima over them keep, so their bits do not depend on
 //! the threads. This is the order of `spherify._descriptors.Grid.pairs`.
 
+/// Rows `0..keys.len()` ordered by key, rows of one key by increasing row
+/// (a stable sort), with the keys in `0..cells`: a counting sort where
+/// `cells` is at most [`DENSE_PER_POINT`] times the rows (or
+/// [`DENSE_FLOOR`]), else a comparison sort. Returns the order and, for
+/// the counting sort, where each key's rows start (`cells + 1` entries).
+pub fn order_by_key(keys: &[i64], cells: Option<usize>) -> (Vec<u32>, Option<Vec<u32>>) {
+    if let Some(cells) = cells.filter(|&c| c <= (DENSE_PER_POINT * keys.len()).max(DENSE_FLOOR)) {
+        let mut first = vec![0u32; cells + 1];
+        for &k in keys {
+            first[k as usize + 1] += 1;
+        }
+        for c in 0..cells {
+            first[c + 1] += first[c];
+        }
+        let mut next = first.clone();
+        let mut order = vec![0u32; keys.len()];
+        for (row, &k) in keys.iter().enumerate() {
+            order[next[k as usize] as usize] = row as u32;
+            next[k as usize] += 1;
+        }
+        return (order, Some(first));
+    }
+    let mut sorted: Vec<(i64, u32)> = keys.iter().zip(0u32..).map(|(&k, i)| (k, i)).collect();
+    sorted.sort_unstable();
+    (sorted.into_iter().map(|(_, i)| i).collect(), None)
+}
+
 /// A uniform grid of side `cell` over a set of points.
 #[derive(Debug, Clone)]
 pub struct CellGrid {
@@ -22,7 +49,17 @@ pub struct CellGrid {
     /// The points' rows, by cell and then by row.
     order: Vec<u32>,
     span: [i64; 3],
+    /// Where the first point of each cell of the box (occupied or not) is
+    /// in `order`, one more entry at the end: a cell's points, and those of
+    /// a run of cells along z, are one slice of `order` found in O(1)
+    /// (None where the box has too many cells; then `keys` are searched).
+    first: Option<Vec<u32>>,
 }
+
+/// The box's cells at most, for [`CellGrid`]'s dense table: this many
+/// times the points, and at least [`DENSE_FLOOR`].
+const DENSE_PER_POINT: usize = 16;
+const DENSE_FLOOR: usize = 1 << 16;
 
 /// The cell of a coordinate (`floor(x / cell)`; a NaN is cell 0, which the
 /// callers' distance tests then leave out).
@@ -48,20 +85,28 @@ impl CellGrid {
             high = [-1; 3];
         }
         let span = [0, 1, 2].map(|c| (high[c] - low[c] + 1).max(1));
-        let mut grid =
-            CellGrid { cell, low, high, keys: Vec::new(), starts: Vec::new(), order: Vec::new(), span };
+        let mut grid = CellGrid {
+            cell,
+            low,
+            high,
+            keys: Vec::new(),
+            starts: Vec::new(),
+            order: Vec::new(),
+            span,
+            first: None,
+        };
         let keyed: Vec<i64> = at.iter().map(|a| grid.key(*a)).collect();
-        // By cell, a cell's points by increasing row.
-        let mut sorted: Vec<(i64, u32)> = keyed.iter().zip(0u32..).map(|(&k, i)| (k, i)).collect();
-        sorted.sort_unstable();
-        let order: Vec<u32> = sorted.iter().map(|&(_, i)| i).collect();
-        for (k, &(key, _)) in sorted.iter().enumerate() {
+        let cells = span.iter().try_fold(1usize, |acc, &s| acc.checked_mul(s as usize));
+        let (order, first) = order_by_key(&keyed, cells);
+        for (k, &i) in order.iter().enumerate() {
+            let key = keyed[i as usize];
             if grid.keys.last() != Some(&key) {
                 grid.keys.push(key);
                 grid.starts.push(k);
             }
         }
         grid.starts.push(order.len());
+        grid.first = first;
         grid.order = order;
         grid
     }
@@ -83,6 +128,20 @@ impl CellGrid {
             for dy in -1..=1i64 {
                 let y = at[1].saturating_add(dy);
                 if y < self.low[1] || y > self.high[1] {
+                    continue;
+                }
+                if let Some(first) = &self.first {
+                    // The cells z - 1, z, z + 1 (within the box) are one
+                    // run of keys, so one slice of `order`, in their order.
+                    let z0 = at[2].saturating_sub(1).max(self.low[2]);
+                    let z1 = at[2].saturating_add(1).min(self.high[2]);
+                    if z0 > z1 {
+                        continue;
+                    }
+                    let (k0, k1) = (self.key([x, y, z0]) as usize, self.key([x, y, z1]) as usize);
+                    for &row in &self.order[first[k0] as usize..first[k1 + 1] as usize] {
+                        visit(row as usize);
+                    }
                     continue;
                 }
                 for dz in -1..=1i64 {
@@ -128,6 +187,18 @@ mod tests {
                 }
             }
         }
+        // The dense table and the search of the keys: the same rows in the
+        // same order.
+        let mut searched = grid.clone();
+        searched.first = None;
+        for _ in 0..100 {
+            let q = [rng.next_f64() * 2.4 - 1.2, rng.next_f64() * 1.2 - 0.1, rng.next_f64() * 0.7 - 0.1];
+            let (mut x, mut y) = (Vec::new(), Vec::new());
+            grid.for_each_near(q, |r| x.push(r));
+            searched.for_each_near(q, |r| y.push(r));
+            assert_eq!(x, y);
+        }
+        assert!(grid.first.is_some());
         // Far away: nothing.
         let mut none = 0;
         grid.for_each_near([100.0, 0.0, 0.0], |_| none += 1);

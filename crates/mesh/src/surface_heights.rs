@@ -32,7 +32,7 @@
 
 use rayon::prelude::*;
 
-use crate::cell_grid::CellGrid;
+use crate::cell_grid::{order_by_key, CellGrid};
 
 /// Subdivisions of a face along an edge, at most (a face longer than this
 /// many spacings is sampled more coarsely than the rest).
@@ -48,6 +48,10 @@ pub struct SurfaceSamples {
     pub points: Vec<[f64; 3]>,
     pub area: Vec<f64>,
     pub normals: Vec<[f64; 3]>,
+    /// A face each point lies near: the face of the first of its cell's
+    /// samples (within a cell's diagonal of the point; a closest-point
+    /// search's hint).
+    pub faces: Vec<u32>,
 }
 
 fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
@@ -119,11 +123,13 @@ impl SampledSurface {
         let mut points = Vec::new();
         let mut weights = Vec::new();
         let mut normals = Vec::new();
+        let mut faces = Vec::new();
         for (f, &m) in split.iter().enumerate() {
             if m == 1 {
                 points.push(self.centroid[f]);
                 weights.push(self.area[f]);
                 normals.push(self.cross[f]);
+                faces.push(f as u32);
             }
         }
         let mut counts = [0usize; MAX_SPLIT + 1];
@@ -158,10 +164,11 @@ impl SampledSurface {
                     points.push([0, 1, 2].map(|k| b[0] * c[0][k] + b[1] * c[1][k] + b[2] * c[2][k]));
                     weights.push(share);
                     normals.push(normal);
+                    faces.push(f as u32);
                 }
             }
         }
-        lump(&points, &weights, &normals, spacing)
+        lump(&points, &weights, &normals, &faces, spacing)
     }
 }
 
@@ -169,7 +176,16 @@ impl SampledSurface {
 /// summed, its area-weighted centroid and its unit summed normal, in the
 /// order of the cells' keys (empty cells and cells whose normals cancel left
 /// out). Each cell sums its samples in their order.
-fn lump(points: &[[f64; 3]], weights: &[f64], normals: &[[f64; 3]], spacing: f64) -> SurfaceSamples {
+fn lump(
+    points: &[[f64; 3]],
+    weights: &[f64],
+    normals: &[[f64; 3]],
+    faces: &[u32],
+    spacing: f64,
+) -> SurfaceSamples {
+    if points.is_empty() {
+        return SurfaceSamples::default();
+    }
     let at: Vec<[i64; 3]> =
         points.iter().map(|p| p.map(|x| (x / spacing).floor() as i64)).collect();
     let mut low = [i64::MAX; 3];
@@ -185,15 +201,14 @@ fn lump(points: &[[f64; 3]], weights: &[f64], normals: &[[f64; 3]], spacing: f64
         .iter()
         .map(|a| ((a[0] - low[0]) * span[1] + (a[1] - low[1])) * span[2] + (a[2] - low[2]))
         .collect();
-    // By key, then by row (a stable sort's order; sorting the pairs is
-    // faster than sorting rows by a looked-up key).
-    let mut keyed: Vec<(i64, u32)> = keys.iter().zip(0u32..).map(|(&k, i)| (k, i)).collect();
-    keyed.sort_unstable();
-    let order: Vec<u32> = keyed.into_iter().map(|(_, i)| i).collect();
+    // By key, then by row (a stable sort's order).
+    let cells = span.iter().try_fold(1usize, |acc, &s| acc.checked_mul(s as usize));
+    let (order, _) = order_by_key(&keys, cells);
     let mut out = SurfaceSamples::default();
     let mut k = 0;
     while k < order.len() {
         let key = keys[order[k] as usize];
+        let start = k;
         let mut end = k;
         let mut total = 0.0;
         let mut moment = [0.0; 3];
@@ -214,6 +229,7 @@ fn lump(points: &[[f64; 3]], weights: &[f64], normals: &[[f64; 3]], spacing: f64
             out.points.push(moment.map(|x| x / total));
             out.area.push(total);
             out.normals.push(summed.map(|x| x / length));
+            out.faces.push(faces[order[start] as usize]);
         }
     }
     out
@@ -321,7 +337,11 @@ mod tests {
             let s = surface.samples(spacing);
             let area: f64 = s.area.iter().sum();
             assert!((area - whole).abs() < 1e-12 * whole);
-            for (p, n) in s.points.iter().zip(&s.normals) {
+            for ((p, n), &f) in s.points.iter().zip(&s.normals).zip(&s.faces) {
+                // The face is within a cell's diagonal (and the face's size).
+                let c = surface.centroid[f as usize];
+                let d = dot(sub(*p, c), sub(*p, c)).sqrt();
+                assert!(d <= 3f64.sqrt() * spacing + surface.longest[f as usize], "{d}");
                 assert!(dot(*p, *n) > 0.0);
                 assert!((dot(*n, *n) - 1.0).abs() < 1e-12);
             }

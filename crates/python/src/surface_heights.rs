@@ -68,17 +68,28 @@ impl CoreSampledSurface {
     }
 
     /// samples(spacing) -> (points (k, 3), areas (k,), unit outward normals
-    /// (k, 3)): the surface about `spacing` apart.
+    /// (k, 3), faces (k,) int64): the surface about `spacing` apart, and a
+    /// face near each point (a closest-point search's hint).
     #[allow(clippy::type_complexity)]
     fn samples<'py>(
         &self,
         py: Python<'py>,
         spacing: f64,
-    ) -> PyResult<(Bound<'py, PyArray2<f64>>, Bound<'py, PyArray1<f64>>, Bound<'py, PyArray2<f64>>)>
-    {
+    ) -> PyResult<(
+        Bound<'py, PyArray2<f64>>,
+        Bound<'py, PyArray1<f64>>,
+        Bound<'py, PyArray2<f64>>,
+        Bound<'py, PyArray1<i64>>,
+    )> {
         let spacing = positive(spacing, "spacing")?;
         let s = crate::pool::detach(py, || self.surface.samples(spacing))?;
-        Ok((to_numpy(py, &s.points), s.area.into_pyarray(py), to_numpy(py, &s.normals)))
+        let faces: Vec<i64> = s.faces.iter().map(|&f| i64::from(f)).collect();
+        Ok((
+            to_numpy(py, &s.points),
+            s.area.into_pyarray(py),
+            to_numpy(py, &s.normals),
+            faces.into_pyarray(py),
+        ))
     }
 
     /// heights(queries (q, 3), normals (q, 3), scales (s,), source_spacing)
