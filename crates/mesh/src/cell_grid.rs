@@ -168,12 +168,17 @@ mod tests {
     #[test]
     fn every_point_within_a_cell_is_visited_once_in_row_order_per_cell() {
         let mut rng = Lcg::new(7);
-        let points: Vec<[f64; 3]> =
-            (0..500).map(|_| [rng.next_f64() * 2.0 - 1.0, rng.next_f64(), rng.next_f64() * 0.5]).collect();
+        let points: Vec<[f64; 3]> = (0..500)
+            .map(|_| [rng.next_f64() * 2.0 - 1.0, rng.next_f64(), rng.next_f64() * 0.5])
+            .collect();
         let cell = 0.13;
         let grid = CellGrid::new(&points, cell);
         for _ in 0..200 {
-            let q = [rng.next_f64() * 2.4 - 1.2, rng.next_f64() * 1.2 - 0.1, rng.next_f64() * 0.7 - 0.1];
+            let q = [
+                rng.next_f64() * 2.4 - 1.2,
+                rng.next_f64() * 1.2 - 0.1,
+                rng.next_f64() * 0.7 - 0.1,
+            ];
             let mut seen = Vec::new();
             grid.for_each_near(q, |r| seen.push(r));
             let mut unique = seen.clone();
@@ -192,7 +197,11 @@ mod tests {
         let mut searched = grid.clone();
         searched.first = None;
         for _ in 0..100 {
-            let q = [rng.next_f64() * 2.4 - 1.2, rng.next_f64() * 1.2 - 0.1, rng.next_f64() * 0.7 - 0.1];
+            let q = [
+                rng.next_f64() * 2.4 - 1.2,
+                rng.next_f64() * 1.2 - 0.1,
+                rng.next_f64() * 0.7 - 0.1,
+            ];
             let (mut x, mut y) = (Vec::new(), Vec::new());
             grid.for_each_near(q, |r| x.push(r));
             searched.for_each_near(q, |r| y.push(r));

@@ -51,7 +51,12 @@ pub struct FeatureNearest {
 impl FeatureNearest {
     /// `points` (finite) with `features` (`points.len()` rows of `width`,
     /// row-major) and the search's `reach` (positive).
-    pub fn new(points: Vec<[f64; 3]>, features: Vec<f64>, width: usize, reach: f64) -> FeatureNearest {
+    pub fn new(
+        points: Vec<[f64; 3]>,
+        features: Vec<f64>,
+        width: usize,
+        reach: f64,
+    ) -> FeatureNearest {
         assert_eq!(features.len(), points.len() * width, "one row of features per point");
         let grid = CellGrid::new(&points, reach);
         FeatureNearest { points, features, width, reach, grid }
@@ -86,7 +91,8 @@ impl FeatureNearest {
             let c = self.points[p];
             let gap = [q[0] - c[0], q[1] - c[1], q[2] - c[2]];
             let near = gap[0] * gap[0] + gap[1] * gap[1] + gap[2] * gap[2];
-            if !(near <= reach2) {
+            // Within reach (a NaN is not).
+            if near.is_nan() || near > reach2 {
                 return;
             }
             let mut both = near;
@@ -121,8 +127,9 @@ mod tests {
         let features: Vec<f64> = (0..2 * n).map(|_| rng.next_f64() * 0.1).collect();
         let reach = 0.12;
         let near = FeatureNearest::new(points.clone(), features.clone(), 2, reach);
-        let queries: Vec<[f64; 3]> =
-            (0..300).map(|_| [rng.next_f64() * 1.2 - 0.1, rng.next_f64(), rng.next_f64() * 0.4]).collect();
+        let queries: Vec<[f64; 3]> = (0..300)
+            .map(|_| [rng.next_f64() * 1.2 - 0.1, rng.next_f64(), rng.next_f64() * 0.4])
+            .collect();
         let qf: Vec<f64> = (0..600).map(|_| rng.next_f64() * 0.1).collect();
         let got = near.nearest(&queries, &qf);
         let mut certain = 0;

@@ -16,10 +16,10 @@
 pub mod cell_grid;
 pub mod closest_point;
 pub mod cut;
-pub mod feature_nearest;
 pub mod dijkstra;
 pub mod edge_table;
 pub mod error;
+pub mod feature_nearest;
 pub mod graph;
 pub mod halfedge;
 pub mod io;

@@ -96,7 +96,10 @@ impl SampledSurface {
         let longest = corners
             .iter()
             .map(|c| {
-                square(sub(c[1], c[0])).max(square(sub(c[2], c[1]))).max(square(sub(c[0], c[2]))).sqrt()
+                square(sub(c[1], c[0]))
+                    .max(square(sub(c[2], c[1])))
+                    .max(square(sub(c[0], c[2])))
+                    .sqrt()
             })
             .collect();
         let area = crosses.iter().map(|x| 0.5 * square(*x).sqrt()).collect();
@@ -115,7 +118,11 @@ impl SampledSurface {
             .iter()
             .map(|&l| {
                 let m = (l / spacing).ceil();
-                if m.is_nan() { 1 } else { m.clamp(1.0, MAX_SPLIT as f64) as usize }
+                if m.is_nan() {
+                    1
+                } else {
+                    m.clamp(1.0, MAX_SPLIT as f64) as usize
+                }
             })
             .collect();
         // The samples: whole faces first, then by split m ascending, each
@@ -136,10 +143,7 @@ impl SampledSurface {
         for &m in &split {
             counts[m] += 1;
         }
-        for m in 2..=MAX_SPLIT {
-            if counts[m] == 0 {
-                continue;
-            }
+        for (m, _) in counts.iter().enumerate().skip(2).filter(|(_, &c)| c > 0) {
             // The centroids of the m^2 sub-triangles, barycentric (1 - u - v,
             // u, v): the upright ones at (i + 1/3, j + 1/3) / m, i + j <= m - 1,
             // the turned ones at (i + 2/3, j + 2/3) / m, i + j <= m - 2.
@@ -161,7 +165,8 @@ impl SampledSurface {
                 let normal = self.cross[f].map(|x| x / squares);
                 for &(u, v) in &uv {
                     let b = [1.0 - u - v, u, v];
-                    points.push([0, 1, 2].map(|k| b[0] * c[0][k] + b[1] * c[1][k] + b[2] * c[2][k]));
+                    points
+                        .push([0, 1, 2].map(|k| b[0] * c[0][k] + b[1] * c[1][k] + b[2] * c[2][k]));
                     weights.push(share);
                     normals.push(normal);
                     faces.push(f as u32);
@@ -277,7 +282,14 @@ pub fn surface_heights(
 
 /// One query's height at one scale: the weighted mean of n . (q - p) over
 /// the samples p within the cut on q's side.
-fn height(grid: &CellGrid, samples: &SurfaceSamples, q: [f64; 3], n: [f64; 3], cut: f64, rate: f64) -> f64 {
+fn height(
+    grid: &CellGrid,
+    samples: &SurfaceSamples,
+    q: [f64; 3],
+    n: [f64; 3],
+    cut: f64,
+    rate: f64,
+) -> f64 {
     let mut total = 0.0;
     let mut along_sum = 0.0;
     grid.for_each_near(q, |p| {
@@ -292,7 +304,11 @@ fn height(grid: &CellGrid, samples: &SurfaceSamples, q: [f64; 3], n: [f64; 3], c
             along_sum += w * along;
         }
     });
-    if total > 0.0 { along_sum / total } else { 0.0 }
+    if total > 0.0 {
+        along_sum / total
+    } else {
+        0.0
+    }
 }
 
 #[cfg(test)]
@@ -325,7 +341,11 @@ mod tests {
                 sum += w * dot(n, gap);
             }
         }
-        if total > 0.0 { sum / total } else { 0.0 }
+        if total > 0.0 {
+            sum / total
+        } else {
+            0.0
+        }
     }
 
     #[test]
@@ -410,11 +430,22 @@ mod tests {
         let queries: Vec<[f64; 3]> = coarse_v.clone();
         let normals: Vec<[f64; 3]> = coarse_v.clone();
         let scales = [0.1, 0.3];
-        let a = surface_heights(&SampledSurface::new(&coarse_v, &coarse_f), &queries, &normals, &scales, 0.75);
+        let a = surface_heights(
+            &SampledSurface::new(&coarse_v, &coarse_f),
+            &queries,
+            &normals,
+            &scales,
+            0.75,
+        );
         let b = surface_heights(&SampledSurface::new(&v, &f), &queries, &normals, &scales, 0.75);
         for (x, y) in a.iter().zip(&b) {
             for k in 0..2 {
-                assert!(x[k] > 0.0 && (x[k] - y[k]).abs() < 0.1 * y[k], "{} against {}", x[k], y[k]);
+                assert!(
+                    x[k] > 0.0 && (x[k] - y[k]).abs() < 0.1 * y[k],
+                    "{} against {}",
+                    x[k],
+                    y[k]
+                );
             }
         }
     }

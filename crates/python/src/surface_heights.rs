@@ -59,7 +59,10 @@ impl CoreSampledSurface {
         let mut out = Vec::with_capacity(corners.len());
         for (k, f) in corners.iter().enumerate() {
             if f.iter().any(|&v| v < 0 || v >= n) {
-                return Err(mesh_error(format!("face {k} names a vertex out of range 0..{}", n - 1)));
+                return Err(mesh_error(format!(
+                    "face {k} names a vertex out of range 0..{}",
+                    n - 1
+                )));
             }
             out.push([f[0] as u32, f[1] as u32, f[2] as u32]);
         }
