@@ -66,7 +66,9 @@ not its nearest in position alone moves by the difference of the two
 Measured on issue 23's pairs (docs/correspondence.md, "Session 10: igea and
 Möbius"), the warp without landmarks: igea 1.21% / 2.84% -> 0.69% / 1.55%
 (mean / p95), hand 1.00% / 2.27% -> 0.80% / 1.76%, horse 1.34% / 4.28% ->
-1.05% / 4.27%.
+1.05% / 4.27%. Their cost, with the heights and the search in the core
+("Session 11: the descriptor pairs in the core"): +4.5-6.5% of `register`'s
+CPU on the speed pairs, most of it the shifted pairs' closest-point searches.
 """
 
 from __future__ import annotations
