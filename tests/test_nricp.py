@@ -179,3 +179,36 @@ def test_reverse_pairs_on_a_surface_split_over_their_face() -> None:
     rows = _nricp.fit(np.vstack(rows_a), np.vstack(rows_y), np.concatenate(rows_w),
                       controls, 0.6, 1e-4)
     assert np.abs(merged(a) - rows(a)).max() < 1e-9
+
+
+def test_descriptor_pairs_recover_more_of_a_slide_on_a_round_shape() -> None:
+    # A round blob of three bumps: the closest points alone recover little of
+    # a slide along it (test above); pairs that also match the heights of the
+    # surface (spherify._descriptors) see where along it a point belongs.
+    from spherify import _descriptors
+    mesh = sp.datasets.bumpy_blob(3000, bumps=3, amplitude=0.5, seed=5)
+    a = mesh.vertices - mesh.vertices.mean(axis=0)
+    a /= np.sqrt((a * a).sum(axis=1).mean())
+    faces = mesh.faces
+    bent = a + 0.1 * np.sin(1.3 * a[:, [1]] + 0.2) * np.array([1.0, 0.0, 0.3])
+    nearest = NearestOnSurface(bent, faces)
+    c, s = np.cos(0.15), np.sin(0.15)
+    turn = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    _, _, start = nearest(a @ turn.T + (bent - a))
+    normals = _nricp.vertex_normals(a, faces)
+    scales = _nricp.DESCRIPTOR_SCALES
+    surface_b = _descriptors.Surface(bent, faces)
+    candidates, _, b_normals = surface_b.samples(_nricp.DESCRIPTOR_SPACING)
+    pairs = _descriptors.DescriptorPairs(
+        candidates, _descriptors.heights(surface_b, candidates, b_normals, scales),
+        _nricp.DESCRIPTOR_WEIGHT, _nricp.DESCRIPTOR_REACH)
+    a_heights = _descriptors.heights(_descriptors.Surface(a, faces), a, normals, scales)
+    errors = []
+    for descriptors in (None, (pairs, a_heights)):
+        model, _ = _nricp.nonrigid_icp(a, normals, np.ones(len(a)), start, nearest,
+                                       _nricp.face_normals(bent, faces),
+                                       descriptors=descriptors)
+        errors.append(np.linalg.norm(nearest(model(a))[2] - bent, axis=1).mean())
+    before = np.linalg.norm(start - bent, axis=1).mean()
+    # Measured 0.76 of the start's error without them and 0.59 with them.
+    assert errors[1] < 0.85 * errors[0] and errors[1] < 0.65 * before, (before, errors)

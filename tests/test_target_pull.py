@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import spherify as sp
-from spherify import _landmarks, _warp
+from spherify import _landmarks, _nricp, _warp
 
 
 @pytest.fixture(scope="module")
@@ -124,11 +124,16 @@ def test_the_scaffold_pins_its_vertices_and_carries_the_map_to_the_targets(
     assert now < 0.7 * before, (now, before)
 
 
-def test_the_scaffold_gives_way_where_no_map_places_it(stopped_short: Tuple) -> None:
-    # 128 vertices of these tentacles cannot be pinned on a mesh of bounded
-    # size: None, not an error (the warp then keeps its plain rounds).
-    map_a, m_b, targets, _ = stopped_short
-    _, _, place = _warp._sphere_targets(map_a, m_b)
+def test_the_scaffold_gives_way_where_no_map_places_it(stopped_short: Tuple,
+                                                      monkeypatch: pytest.MonkeyPatch) -> None:
+    # 128 vertices of these tentacles at the targets of the closest points
+    # alone cannot be pinned on a mesh of bounded size: None, not an error
+    # (the warp then keeps its plain rounds). (At the targets of the
+    # descriptor pairs, spherify._descriptors, the layout places them, on a
+    # refined mesh of 80,593 vertices: measured.)
+    monkeypatch.setattr(_nricp, "DESCRIPTOR_WEIGHT", 0.0)
+    map_a, m_b, _, _ = stopped_short
+    targets, _, place = _warp._sphere_targets(map_a, m_b)
     assert _warp.scaffold(map_a, targets, place) is None
 
 

@@ -1,14 +1,14 @@
 # Type stubs of the Rust extension spherify._core (checked by mypy.stubtest in CI).
 from os import PathLike
 from pathlib import Path
-from typing import Any, Callable, Dict, List, Optional, Tuple, final
+from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple, final
 
 import numpy as np
 import numpy.typing as npt
 
 from ._report import MeshReport, SphereReport
 
-__all__ = ["AtomicWrite", "CoreClosestPoints", "CoreMesh", "CoreSphereMap", "__version__", "boundary_loop", "check", "check_application", "check_memory", "check_raw", "check_sphere", "choices", "dijkstra", "embed", "embed_need", "encode", "face_quality", "from_points", "get_num_threads", "harmonics_evaluate", "harmonics_fit", "improve", "is_stale_temporary", "is_temporary", "load", "method_options", "methods", "move_towards", "orient", "pull_towards", "quality", "remove_stale_temporaries", "require_regular_file", "restore_map", "save", "save_textured_obj", "set_num_threads", "shortest_path", "special_kind", "temporary_path", "tutte", "weld", "write_atomic"]
+__all__ = ["AtomicWrite", "CoreClosestPoints", "CoreFeatureNearest", "CoreMesh", "CoreSampledSurface", "CoreSphereMap", "__version__", "boundary_loop", "check", "check_application", "check_memory", "check_raw", "check_sphere", "choices", "dijkstra", "embed", "embed_need", "encode", "face_quality", "from_points", "get_num_threads", "harmonics_evaluate", "harmonics_fit", "improve", "is_stale_temporary", "is_temporary", "load", "method_options", "methods", "move_towards", "orient", "pull_towards", "quality", "remove_stale_temporaries", "require_regular_file", "restore_map", "save", "save_textured_obj", "set_num_threads", "shortest_path", "special_kind", "temporary_path", "tutte", "weld", "write_atomic"]
 
 __version__: str
 
@@ -203,3 +203,14 @@ def embed_need(
 ) -> int: ...
 def check_memory(call: str, n_vertices: int, bytes: int) -> None: ...
 def check_application(name: str, n_vertices: int, n_faces: int, items: int) -> None: ...
+
+@final
+class CoreSampledSurface:
+    def __new__(cls, vertices: npt.NDArray[np.float64], faces: npt.NDArray[np.int64]) -> CoreSampledSurface: ...
+    def samples(self, spacing: float) -> Tuple[npt.NDArray[np.float64], npt.NDArray[np.float64], npt.NDArray[np.float64], npt.NDArray[np.int64]]: ...
+    def heights(self, queries: npt.NDArray[np.float64], normals: npt.NDArray[np.float64], scales: Sequence[float], source_spacing: float) -> npt.NDArray[np.float64]: ...
+
+@final
+class CoreFeatureNearest:
+    def __new__(cls, points: npt.NDArray[np.float64], features: npt.NDArray[np.float64], reach: float) -> CoreFeatureNearest: ...
+    def nearest(self, x: npt.NDArray[np.float64], features: npt.NDArray[np.float64]) -> Tuple[npt.NDArray[np.int64], npt.NDArray[np.int64], npt.NDArray[np.bool_]]: ...

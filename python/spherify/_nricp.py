@@ -56,6 +56,19 @@ not understood (see the doc). The soft stages go on one-way (with the pairs on e
 stage igea's targets went 1.19% -> 1.30%). With landmarks the pairs already
 hold the limbs and the reverse pairs made the targets a little worse (igea
 0.73% -> 0.80%, hand 0.60% -> 0.63%), so they are not used.
+
+The closest points hold a point tangentially where the last fit put it, so
+on a smooth surface a slide of the start survives the ICP. With
+``descriptors`` (:mod:`spherify._descriptors`), a pair whose nearest
+candidate of B in position *and* in the heights of the surface around it is
+not its nearest in position alone moves by the difference of the two
+(feature-augmented ICP: Johnson and Kang 1999; Sharp, Lee and Wehe 2002).
+Measured on issue 23's pairs (docs/correspondence.md, "Session 10: igea and
+Möbius"), the warp without landmarks: igea 1.21% / 2.84% -> 0.69% / 1.55%
+(mean / p95), hand 1.00% / 2.27% -> 0.80% / 1.76%, horse 1.34% / 4.28% ->
+1.05% / 4.27%. Their cost, with the heights and the search in the core
+("Session 11: the descriptor pairs in the core"): +4.5-6.5% of `register`'s
+CPU on the speed pairs, most of it the shifted pairs' closest-point searches.
 """
 
 from __future__ import annotations
@@ -65,6 +78,7 @@ from typing import Any, Callable, Dict, Optional, Sequence, Tuple
 
 import numpy as np
 
+from ._descriptors import DescriptorPairs
 from ._nearest import NearestOnSurface
 from ._workers import beside, run_all
 
@@ -103,6 +117,20 @@ NORMAL_COSINE = 0.0
 REVERSE = 1.0
 REVERSE_SIGMA = 0.4
 REVERSE_FAR = 2.0
+# The descriptor pairs (spherify._descriptors): the heights of the surface
+# over its neighbourhood at DESCRIPTOR_SCALES (over the rms radius), each
+# scaled by its spread over B's candidates (B's surface DESCRIPTOR_SPACING
+# apart) and weighted by DESCRIPTOR_WEIGHT against the position (0: closest
+# points only); a pair is certain where the weighted distance is at most
+# DESCRIPTOR_REACH (else the closest point stands). Measured on issue 23's
+# pairs (docs/correspondence.md, "Session 10: igea and Möbius"), warp without
+# landmarks, mean / p95: weight 0.04 left igea at 0.86% / 2.03% and blub's p95
+# at 6.61% (its bar 6.18%), 0.06 igea 0.69% / 1.55%; used in every stage
+# (only at sigma <= 0.25 or <= 0.4, igea 0.96% and 0.88%).
+DESCRIPTOR_WEIGHT = 0.06
+DESCRIPTOR_SCALES = (0.1, 0.2)
+DESCRIPTOR_REACH = 0.1
+DESCRIPTOR_SPACING = 0.05
 # Control points of the radial part. Fitted to the true pairs of horse's
 # bend, 100 or 300 reproduce it to 0.06-0.1% of the diagonal; 300 leave room
 # for bends less smooth than the bench's.
@@ -293,7 +321,8 @@ def nonrigid_icp(a: np.ndarray, a_normals: np.ndarray, area: np.ndarray,
                  a_faces: Optional[np.ndarray] = None,
                  schedule: Sequence[Tuple[float, float, int]] = SCHEDULE,
                  should_stop: Callable[[int, int], bool] = lambda done, total: False,
-                 controls: Optional[np.ndarray] = None
+                 controls: Optional[np.ndarray] = None,
+                 descriptors: Optional[Tuple[DescriptorPairs, np.ndarray]] = None
                  ) -> Tuple[Deformation, Dict[str, Any]]:
     """Fit a deformation of A's points ``a`` (all in one normalised frame)
     onto B's surface (``nearest``), starting from ``first_targets``.
@@ -305,7 +334,10 @@ def nonrigid_icp(a: np.ndarray, a_normals: np.ndarray, area: np.ndarray,
     landmarks, leaves them out. ``a_faces``: faces over the rows of ``a``
     where ``a`` is all of a mesh (the reverse pairs then find its surface).
     ``first_targets`` None starts from closest points. ``controls`` are
-    :func:`control_points` of ``a`` if already made. Returns the
+    :func:`control_points` of ``a`` if already made. ``descriptors``
+    (B's :class:`spherify._descriptors.DescriptorPairs` and the descriptors
+    of ``a``'s rows) moves each pair along B by the descriptor pairs' word
+    (module doc of :mod:`spherify._descriptors`). Returns the
     deformation and a record (``kept``: the fraction of
     pairs used at each iteration, ``distance``: their mean distance).
     """
@@ -401,7 +433,28 @@ def nonrigid_icp(a: np.ndarray, a_normals: np.ndarray, area: np.ndarray,
                 hints = faces
                 distance = np.linalg.norm(on_b - moved, axis=1)
                 turned = model.turn_normals(a_normals)
-                agree = (turned * b_face_normals[faces]).sum(1)
+                b_normals = b_face_normals[faces]
+                if descriptors is not None:
+                    # Where the candidate of B nearest in position and
+                    # descriptor is not the one nearest in position alone,
+                    # the pair goes to the closest point of B to the point
+                    # moved by the difference of the two.
+                    pairs, a_features = descriptors
+                    best, plain, certain = pairs(moved, a_features)
+                    shift = certain & (best != plain)
+                    if shift.any():
+                        # A face near the best candidate (else the moved
+                        # point's own) bounds the search of the shifted
+                        # point (a hint: the same answers).
+                        hint = (faces[shift] if pairs.faces is None
+                                else pairs.faces[best[shift]])
+                        at, _, onto = nearest(moved[shift] + pairs.points[best[shift]]
+                                              - pairs.points[plain[shift]], hint)
+                        on_b = on_b.copy()
+                        on_b[shift] = onto
+                        b_normals = b_normals.copy()
+                        b_normals[shift] = b_face_normals[at]
+                agree = (turned * b_normals).sum(1)
                 use = agree > NORMAL_COSINE
                 targets = on_b
                 back_w = np.zeros(n)

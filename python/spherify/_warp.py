@@ -55,7 +55,7 @@ from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
-from . import _core, _landmarks, _nricp
+from . import _core, _descriptors, _landmarks, _nricp
 from ._align import kabsch
 from ._embed import improve
 from ._errors import MapError, MeshError, ResourceError
@@ -161,8 +161,10 @@ def _vertex_areas(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
 class BSide:
     """B's side of the warp, which depends on B alone (not on A's pose):
     B centred and scaled to unit rms radius (:func:`_frame`), its outward
-    face normals and the reverse pairs' sample of B (:data:`REVERSE_SAMPLE`
-    of its vertices with their normals and vertex areas). Each part is made
+    face normals, the reverse pairs' sample of B (:data:`REVERSE_SAMPLE`
+    of its vertices with their normals and vertex areas) and the descriptor
+    pairs' candidates on B with their heights (:mod:`spherify._descriptors`;
+    once a registration, where a second warp made them again). Each part is made
     once, by whichever caller asks first (a lock: registration makes them on
     a pool thread beside its search for the rotation, :meth:`make`, where
     the other core had little to do, instead of on the warp's path)."""
@@ -173,6 +175,7 @@ class BSide:
         self._frame: Optional[Tuple[np.ndarray, float, np.ndarray]] = None
         self._normals: Optional[np.ndarray] = None
         self._sample: Optional[Tuple[np.ndarray, np.ndarray, np.ndarray]] = None
+        self._candidates: Optional[Tuple[np.ndarray, np.ndarray, np.ndarray]] = None
 
     def frame(self) -> Tuple[np.ndarray, float, np.ndarray]:
         """B's centre, rms radius and vertices centred and scaled by them."""
@@ -203,10 +206,26 @@ class BSide:
                                 _vertex_areas(b_all, faces)[rows])
             return self._sample
 
+    def candidates(self) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The descriptor pairs' candidates on B (B's surface
+        :data:`spherify._nricp.DESCRIPTOR_SPACING` apart, (k, 3)), their
+        heights at :data:`spherify._nricp.DESCRIPTOR_SCALES` (k, scales) and
+        a face of B near each (k,)."""
+        b_all = self.frame()[2]
+        with self._lock:
+            if self._candidates is None:
+                surface = _descriptors.Surface(b_all, self._mesh.faces)
+                points, _, normals, faces = surface.samples_on_faces(_nricp.DESCRIPTOR_SPACING)
+                self._candidates = (points, _descriptors.heights(surface, points, normals,
+                                                                 _nricp.DESCRIPTOR_SCALES), faces)
+            return self._candidates
+
     def make(self) -> None:
         """Every part, now."""
         self.face_normals()
         self.reverse_sample()
+        if _nricp.DESCRIPTOR_WEIGHT > 0:
+            self.candidates()
 
 
 def _frame(x: np.ndarray) -> Tuple[np.ndarray, float]:
@@ -249,6 +268,24 @@ def sphere_targets(map_a: SphereMap, m_b: SphereMap, *, fixed: Optional[np.ndarr
     targets, icp, _ = _sphere_targets(map_a, m_b, fixed=fixed, fixed_on_b=fixed_on_b,
                                       schedule=schedule, should_stop=should_stop, b_tree=b_tree)
     return targets, icp
+
+
+def _descriptor_pairs(a_all: np.ndarray, a_faces: np.ndarray, a_sample: np.ndarray,
+                      a_normals: np.ndarray, b_side: BSide
+                      ) -> Tuple[_descriptors.DescriptorPairs, np.ndarray]:
+    """The ICP's descriptor pairs (:mod:`spherify._descriptors`): B's
+    candidates (:meth:`BSide.candidates`) and the descriptors of A's sample
+    (``a_sample``, with their ``a_normals``; both shapes in the ICP's
+    normalised frame). A's and B's descriptors side by side
+    (spherify._workers; each its own bits) where B's are not made yet."""
+    def a_side() -> np.ndarray:
+        return _descriptors.heights(_descriptors.Surface(a_all, a_faces), a_sample, a_normals,
+                                    _nricp.DESCRIPTOR_SCALES)
+
+    a_heights, (candidates, b_heights, faces) = beside(a_side, b_side.candidates)
+    pairs = _descriptors.DescriptorPairs(candidates, b_heights, _nricp.DESCRIPTOR_WEIGHT,
+                                         _nricp.DESCRIPTOR_REACH, faces)
+    return pairs, a_heights
 
 
 def _sphere_targets(map_a: SphereMap, m_b: SphereMap, *, fixed: Optional[np.ndarray] = None,
@@ -312,12 +349,16 @@ def _targets_and_areas(map_a: SphereMap, m_b: SphereMap, *,
                                lambda: _nricp.control_points(a_all[sample]))
     # B's sample for the reverse pairs, which are used without landmarks only.
     b_sample = None if held else b_side.reverse_sample()
+    descriptors = None
+    if _nricp.DESCRIPTOR_WEIGHT > 0:
+        descriptors = _descriptor_pairs(a_all, a_mesh.faces, a_all[sample], normals[sample],
+                                        b_side)
     model, icp = _nricp.nonrigid_icp(
         a_all[sample], normals[sample], areas[sample],
         first, nearest, b_normals, landmarks=landmarks, b_sample=b_sample,
         a_faces=a_mesh.faces if len(sample) == n else None,
         landmark_weight=LANDMARK_WEIGHT, schedule=schedule, should_stop=should_stop,
-        controls=controls)
+        controls=controls, descriptors=descriptors)
     faces, bary, _ = nearest(model(a_all))
     targets = m_b.to_sphere(faces, bary)
     if held:

@@ -26,6 +26,7 @@ mod relaxation;
 mod restore;
 mod sphere;
 mod sphere_map;
+mod surface_heights;
 mod theta_phi;
 mod tutte;
 mod validate;
@@ -41,6 +42,8 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<mesh::CoreMesh>()?;
     m.add_class::<sphere_map::CoreSphereMap>()?;
     m.add_class::<closest_point::CoreClosestPoints>()?;
+    m.add_class::<surface_heights::CoreSampledSurface>()?;
+    m.add_class::<surface_heights::CoreFeatureNearest>()?;
     m.add_function(wrap_pyfunction!(io::load, m)?)?;
     m.add_function(wrap_pyfunction!(io::save, m)?)?;
     m.add_function(wrap_pyfunction!(io::write_atomic, m)?)?;
