@@ -33,6 +33,7 @@
 use rayon::prelude::*;
 
 use crate::cell_grid::{order_by_key, CellGrid};
+use crate::vec3::{cross, dot, sub};
 
 /// Subdivisions of a face along an edge, at most (a face longer than this
 /// many spacings is sampled more coarsely than the rest).
@@ -52,18 +53,6 @@ pub struct SurfaceSamples {
     /// samples (within a cell's diagonal of the point; a closest-point
     /// search's hint).
     pub faces: Vec<u32>,
-}
-
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
-}
-
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
 /// The surface's faces, made once for samples at several spacings: corners,
