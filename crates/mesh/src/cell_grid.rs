@@ -67,19 +67,26 @@ fn cell_of(x: f64, cell: f64) -> i64 {
     (x / cell).floor() as i64
 }
 
+/// The smallest and largest cell index along each axis (`i64::MAX` and
+/// `i64::MIN` where there is no cell).
+pub fn cell_bounds(at: &[[i64; 3]]) -> ([i64; 3], [i64; 3]) {
+    let mut low = [i64::MAX; 3];
+    let mut high = [i64::MIN; 3];
+    for a in at {
+        for c in 0..3 {
+            low[c] = low[c].min(a[c]);
+            high[c] = high[c].max(a[c]);
+        }
+    }
+    (low, high)
+}
+
 impl CellGrid {
     /// The grid of side `cell` (positive) over `points` (finite).
     pub fn new(points: &[[f64; 3]], cell: f64) -> CellGrid {
         let at: Vec<[i64; 3]> =
             points.iter().map(|p| [0, 1, 2].map(|c| cell_of(p[c], cell))).collect();
-        let mut low = [i64::MAX; 3];
-        let mut high = [i64::MIN; 3];
-        for a in &at {
-            for c in 0..3 {
-                low[c] = low[c].min(a[c]);
-                high[c] = high[c].max(a[c]);
-            }
-        }
+        let (mut low, mut high) = cell_bounds(&at);
         if at.is_empty() {
             low = [0; 3];
             high = [-1; 3];

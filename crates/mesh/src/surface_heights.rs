@@ -32,7 +32,7 @@
 
 use rayon::prelude::*;
 
-use crate::cell_grid::{order_by_key, CellGrid};
+use crate::cell_grid::{cell_bounds, order_by_key, CellGrid};
 use crate::vec3::{cross, dot, sub};
 
 /// Subdivisions of a face along an edge, at most (a face longer than this
@@ -182,14 +182,7 @@ fn lump(
     }
     let at: Vec<[i64; 3]> =
         points.iter().map(|p| p.map(|x| (x / spacing).floor() as i64)).collect();
-    let mut low = [i64::MAX; 3];
-    let mut high = [i64::MIN; 3];
-    for a in &at {
-        for c in 0..3 {
-            low[c] = low[c].min(a[c]);
-            high[c] = high[c].max(a[c]);
-        }
-    }
+    let (low, high) = cell_bounds(&at);
     let span = [0, 1, 2].map(|c| high[c] - low[c] + 1);
     let keys: Vec<i64> = at
         .iter()

@@ -5,7 +5,7 @@ use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArrayDyn};
 use pyo3::prelude::*;
 use spherify_mesh::closest_point::ClosestPoints;
 
-use crate::convert::{rows, to_numpy};
+use crate::convert::{rows, surface_rows, to_numpy};
 use crate::errors::mesh_error;
 
 /// Closest points of one triangle mesh's surface (any vertex positions: the
@@ -24,22 +24,7 @@ impl CoreClosestPoints {
         vertices: PyReadonlyArrayDyn<'_, f64>,
         faces: PyReadonlyArrayDyn<'_, i64>,
     ) -> PyResult<Self> {
-        let positions = rows::<f64, 3>(&vertices, "vertices")?;
-        let corners = rows::<i64, 3>(&faces, "faces")?;
-        if let Some(bad) = positions.iter().position(|p| !p.iter().all(|x| x.is_finite())) {
-            return Err(mesh_error(format!("vertex {bad} is not finite")));
-        }
-        let n = positions.len() as i64;
-        let mut out = Vec::with_capacity(corners.len());
-        for (k, f) in corners.iter().enumerate() {
-            if f.iter().any(|&v| v < 0 || v >= n) {
-                return Err(mesh_error(format!(
-                    "face {k} names a vertex out of range 0..{}",
-                    n - 1
-                )));
-            }
-            out.push([f[0] as u32, f[1] as u32, f[2] as u32]);
-        }
+        let (positions, out) = surface_rows(&vertices, &faces)?;
         // Without the GIL, so that registration builds its two trees side by
         // side (spherify._rigid_icp); tens of milliseconds for 100k faces.
         let tree = crate::pool::detach(py, || ClosestPoints::new(positions, out))?;

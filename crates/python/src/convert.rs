@@ -1,5 +1,6 @@
 //! numpy <-> core arrays. Shape checks live here because they are about the
-//! conversion; content checks (finite, in range) are the core's.
+//! conversion; content checks (finite, in range) are the core's, but for the
+//! bare surfaces of registration, which are no `CoreMesh` ([`surface_rows`]).
 
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray2, PyReadonlyArrayDyn};
@@ -38,6 +39,33 @@ pub fn rows<T: numpy::Element + Copy + Default, const K: usize>(
         }
     }
     Ok(out)
+}
+
+/// A bare triangle surface: vertex positions and faces.
+pub type SurfaceRows = (Vec<[f64; 3]>, Vec<[u32; 3]>);
+
+/// The rows of `(n, 3)` vertices that must be finite and `(m, 3)` faces whose
+/// ids must name them, as core arrays, or `MeshError` naming the first bad
+/// vertex or face: a triangle surface that is not a `CoreMesh` (any vertex
+/// positions, no validation of the topology), as registration's shapes are.
+pub fn surface_rows(
+    vertices: &PyReadonlyArrayDyn<'_, f64>,
+    faces: &PyReadonlyArrayDyn<'_, i64>,
+) -> PyResult<SurfaceRows> {
+    let positions = rows::<f64, 3>(vertices, "vertices")?;
+    let corners = rows::<i64, 3>(faces, "faces")?;
+    if let Some(bad) = positions.iter().position(|p| !p.iter().all(|x| x.is_finite())) {
+        return Err(mesh_error(format!("vertex {bad} is not finite")));
+    }
+    let n = positions.len() as i64;
+    let mut out = Vec::with_capacity(corners.len());
+    for (k, f) in corners.iter().enumerate() {
+        if f.iter().any(|&v| v < 0 || v >= n) {
+            return Err(mesh_error(format!("face {k} names a vertex out of range 0..{}", n - 1)));
+        }
+        out.push([f[0] as u32, f[1] as u32, f[2] as u32]);
+    }
+    Ok((positions, out))
 }
 
 /// Rows as a new `(n, K)` numpy array.

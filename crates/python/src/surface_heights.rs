@@ -9,7 +9,7 @@ use pyo3::prelude::*;
 use spherify_mesh::feature_nearest::FeatureNearest;
 use spherify_mesh::surface_heights::{surface_heights, SampledSurface};
 
-use crate::convert::{rows, to_numpy};
+use crate::convert::{rows, surface_rows, to_numpy};
 use crate::errors::mesh_error;
 
 fn finite_rows(rows: &[[f64; 3]], what: &str) -> PyResult<()> {
@@ -52,20 +52,7 @@ impl CoreSampledSurface {
         vertices: PyReadonlyArrayDyn<'_, f64>,
         faces: PyReadonlyArrayDyn<'_, i64>,
     ) -> PyResult<Self> {
-        let positions = rows::<f64, 3>(&vertices, "vertices")?;
-        let corners = rows::<i64, 3>(&faces, "faces")?;
-        finite_rows(&positions, "vertices")?;
-        let n = positions.len() as i64;
-        let mut out = Vec::with_capacity(corners.len());
-        for (k, f) in corners.iter().enumerate() {
-            if f.iter().any(|&v| v < 0 || v >= n) {
-                return Err(mesh_error(format!(
-                    "face {k} names a vertex out of range 0..{}",
-                    n - 1
-                )));
-            }
-            out.push([f[0] as u32, f[1] as u32, f[2] as u32]);
-        }
+        let (positions, out) = surface_rows(&vertices, &faces)?;
         let surface = crate::pool::detach(py, || SampledSurface::new(&positions, &out))?;
         Ok(CoreSampledSurface { surface })
     }
