@@ -129,8 +129,14 @@ impl EdgeTable {
 /// faces).
 pub fn vertex_ranges(n_vertices: usize, n_faces: usize) -> Vec<std::ops::Range<usize>> {
     let parts = if n_faces < 1 << 15 { 1 } else { rayon::current_num_threads().clamp(1, 16) };
-    let step = n_vertices.div_ceil(parts).max(1);
-    (0..n_vertices).step_by(step).map(|a| a..(a + step).min(n_vertices)).collect()
+    split_ranges(n_vertices, parts)
+}
+
+/// `0..n` cut into at most `parts` consecutive ranges of equal length (the
+/// last shorter); none when `n` is 0.
+pub fn split_ranges(n: usize, parts: usize) -> Vec<std::ops::Range<usize>> {
+    let step = n.div_ceil(parts.max(1)).max(1);
+    (0..n).step_by(step).map(|a| a..(a + step).min(n)).collect()
 }
 
 /// Calls `each(low - range.start, key)` for every non-loop corner, in corner
@@ -210,24 +216,18 @@ mod tests {
     #[test]
     fn any_split_into_vertex_ranges_gives_the_reference_table() {
         // A soup with repeated, looped, non-manifold and isolated elements.
-        let mut state = 7u64;
-        let mut next = |m: u64| {
-            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            ((state >> 33) % m) as u32
-        };
+        let mut rng = crate::lcg::Lcg::new(7);
         let n = 300;
-        let faces: Vec<[u32; 3]> = (0..2000).map(|_| [next(n), next(n), next(n)]).collect();
+        let faces: Vec<[u32; 3]> =
+            (0..2000).map(|_| [0; 3].map(|_| rng.below(n) as u32)).collect();
         let (corners, sizes) = reference(&faces);
         for parts in [1, 2, 3, 7, 300, 301] {
-            let step = (n as usize).div_ceil(parts);
-            let ranges: Vec<_> =
-                (0..n as usize).step_by(step).map(|a| a..(a + step).min(n as usize)).collect();
-            let table = EdgeTable::by_ranges(&faces, &ranges);
+            let table = EdgeTable::by_ranges(&faces, &split_ranges(n, parts));
             assert_eq!(table.corners, corners, "{parts} ranges");
             let got: Vec<usize> = (0..table.n_edges()).map(|e| table.group(e).len()).collect();
             assert_eq!(got, sizes, "{parts} ranges");
         }
-        let table = EdgeTable::new(n as usize, &faces);
+        let table = EdgeTable::new(n, &faces);
         assert_eq!(table.corners, corners);
     }
 

@@ -273,6 +273,8 @@ fn rings_of_range(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use spherify_mesh::edge_table::split_ranges;
+    use spherify_mesh::lcg::Lcg;
     use spherify_mesh::solids::icosphere;
 
     fn sorted_faces(m: &RingMesh) -> Vec<[u32; 3]> {
@@ -306,20 +308,16 @@ mod tests {
         let mesh = icosphere(3);
         let n = mesh.positions().len();
         let mut order: Vec<u32> = (0..n as u32).collect();
-        let mut state = 11u64;
+        let mut rng = Lcg::new(11);
         for i in (1..n).rev() {
-            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            order.swap(i, ((state >> 33) % (i as u64 + 1)) as usize);
+            order.swap(i, rng.below(i + 1));
         }
         let faces: Vec<[u32; 3]> =
             mesh.faces().iter().map(|f| f.map(|v| order[v as usize])).collect();
-        let whole = std::iter::once(0..n).collect::<Vec<_>>();
-        let one = RingMesh::by_ranges(n, &faces, &whole).unwrap();
+        let one = RingMesh::by_ranges(n, &faces, &split_ranges(n, 1)).unwrap();
         assert_eq!(canonical(&one.faces()), canonical(&faces));
         for parts in [2, 3, 5, n] {
-            let step = n.div_ceil(parts);
-            let ranges: Vec<_> = (0..n).step_by(step).map(|a| a..(a + step).min(n)).collect();
-            let split = RingMesh::by_ranges(n, &faces, &ranges).unwrap();
+            let split = RingMesh::by_ranges(n, &faces, &split_ranges(n, parts)).unwrap();
             assert_eq!(split.rings, one.rings, "{parts} ranges");
         }
     }
