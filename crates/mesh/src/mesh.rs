@@ -92,19 +92,10 @@ impl Mesh {
         Mesh { positions: self.positions.clone(), faces, edge_table: OnceLock::new() }
     }
 
-    /// The faces' corners grouped by undirected edge (built once, then cached).
-    ///
-    /// The table is built outside the cell's initialisation: its build runs
-    /// in parallel, and a rayon worker waiting inside it may take up another
-    /// job that asks for the same table, which would wait forever on an
-    /// initialisation held further down its own stack. Two callers that
-    /// race may both build it; the first stored wins (the same table).
+    /// The faces' corners grouped by undirected edge (built once, then
+    /// cached; its build runs in parallel, so through [`built_once`]).
     pub fn edge_table(&self) -> &EdgeTable {
-        if let Some(table) = self.edge_table.get() {
-            return table;
-        }
-        let built = EdgeTable::new(self.positions.len(), &self.faces);
-        self.edge_table.get_or_init(|| built)
+        built_once(&self.edge_table, || EdgeTable::new(self.positions.len(), &self.faces))
     }
 
     /// Frees the cached edge table; the next [`Mesh::edge_table`] rebuilds it.
@@ -145,6 +136,21 @@ fn first_out_of_range(faces: &[[u32; 3]], n: usize) -> Option<(usize, u32)> {
         .iter()
         .enumerate()
         .find_map(|(f, c)| c.iter().find(|&&i| i as usize >= n).map(|&i| (f, i)))
+}
+
+/// The value in `cell`, made by `build` if there is none yet. `build` runs
+/// outside the cell's initialisation: a build that runs rayon jobs may, while
+/// a worker waits inside it, have that worker take up another job that asks
+/// for the same cell, which would then wait forever on an initialisation held
+/// further down its own stack (`OnceLock::get_or_init` blocks). Two callers
+/// that race may both build; the first stored wins, so `build` must give the
+/// same value each time.
+pub fn built_once<T>(cell: &OnceLock<T>, build: impl FnOnce() -> T) -> &T {
+    if let Some(made) = cell.get() {
+        return made;
+    }
+    let made = build();
+    cell.get_or_init(|| made)
 }
 
 #[cfg(test)]

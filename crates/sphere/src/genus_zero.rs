@@ -12,6 +12,7 @@
 
 use std::sync::{Arc, OnceLock};
 
+use spherify_mesh::mesh::built_once;
 use spherify_mesh::orient::orient;
 use spherify_mesh::{validate, HalfEdgeMesh, Mesh, TopologyError, TopologyProblem};
 
@@ -83,15 +84,12 @@ impl GenusZeroMesh {
     /// edges and vertices, no repeated or unreferenced vertex) and the
     /// orientation is made consistent before.
     ///
-    /// Built outside the cell's initialisation, as [`Mesh::edge_table`] is
-    /// (the build may run rayon jobs, and a worker waiting there may take up
-    /// another call for the same cell).
+    /// Through [`built_once`]: the build reads the edge table, which is made
+    /// in parallel.
     pub fn half_edges(&self) -> &HalfEdgeMesh {
-        if let Some(made) = self.half_edges.get() {
-            return made;
-        }
-        let built = HalfEdgeMesh::new(&self.mesh).expect("a validated, oriented genus-0 mesh");
-        self.half_edges.get_or_init(|| built)
+        built_once(&self.half_edges, || {
+            HalfEdgeMesh::new(&self.mesh).expect("a validated, oriented genus-0 mesh")
+        })
     }
 
     /// Where the [`Neighbourhoods`] are kept once made
