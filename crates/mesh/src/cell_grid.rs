@@ -13,7 +13,7 @@
 /// `cells` is at most [`DENSE_PER_POINT`] times the rows (or
 /// [`DENSE_FLOOR`]), else a comparison sort. Returns the order and, for
 /// the counting sort, where each key's rows start (`cells + 1` entries).
-pub fn order_by_key(keys: &[i64], cells: Option<usize>) -> (Vec<u32>, Option<Vec<u32>>) {
+fn order_by_key(keys: &[i64], cells: Option<usize>) -> (Vec<u32>, Option<Vec<u32>>) {
     if let Some(cells) = cells.filter(|&c| c <= (DENSE_PER_POINT * keys.len()).max(DENSE_FLOOR)) {
         let mut first = vec![0u32; cells + 1];
         for &k in keys {
@@ -69,7 +69,7 @@ fn cell_of(x: f64, cell: f64) -> i64 {
 
 /// The smallest and largest cell index along each axis (`i64::MAX` and
 /// `i64::MIN` where there is no cell).
-pub fn cell_bounds(at: &[[i64; 3]]) -> ([i64; 3], [i64; 3]) {
+fn cell_bounds(at: &[[i64; 3]]) -> ([i64; 3], [i64; 3]) {
     let mut low = [i64::MAX; 3];
     let mut high = [i64::MIN; 3];
     for a in at {
@@ -116,6 +116,12 @@ impl CellGrid {
         grid.first = first;
         grid.order = order;
         grid
+    }
+
+    /// The rows of each occupied cell (by increasing row), the cells in
+    /// ascending key.
+    pub fn cells(&self) -> impl Iterator<Item = &[u32]> + '_ {
+        self.starts.windows(2).map(|w| &self.order[w[0]..w[1]])
     }
 
     fn key(&self, a: [i64; 3]) -> i64 {

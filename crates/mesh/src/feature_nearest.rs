@@ -21,6 +21,7 @@
 use rayon::prelude::*;
 
 use crate::cell_grid::CellGrid;
+use crate::vec3::{dot, sub};
 
 /// Queries per parallel chunk.
 const CHUNK: usize = 256;
@@ -89,8 +90,8 @@ impl FeatureNearest {
         let (mut plain, mut plain_value) = (None, f64::INFINITY);
         self.grid.for_each_near(q, |p| {
             let c = self.points[p];
-            let gap = [q[0] - c[0], q[1] - c[1], q[2] - c[2]];
-            let near = gap[0] * gap[0] + gap[1] * gap[1] + gap[2] * gap[2];
+            let gap = sub(q, c);
+            let near = dot(gap, gap);
             // Within reach (a NaN is not).
             if near.is_nan() || near > reach2 {
                 return;

@@ -32,8 +32,8 @@
 
 use rayon::prelude::*;
 
-use crate::cell_grid::{cell_bounds, order_by_key, CellGrid};
-use crate::vec3::{cross, dot, sub};
+use crate::cell_grid::CellGrid;
+use crate::vec3::{cross, dot, norm, sub};
 
 /// Subdivisions of a face along an edge, at most (a face longer than this
 /// many spacings is sampled more coarsely than the rest).
@@ -81,17 +81,13 @@ impl SampledSurface {
                 *x = x.map(|v| -v);
             }
         }
-        let square = |a: [f64; 3]| a[0] * a[0] + a[1] * a[1] + a[2] * a[2];
+        // (sqrt is monotonic and correctly rounded: the longest of the
+        // lengths is the root of the longest square, to the bit.)
         let longest = corners
             .iter()
-            .map(|c| {
-                square(sub(c[1], c[0]))
-                    .max(square(sub(c[2], c[1])))
-                    .max(square(sub(c[0], c[2])))
-                    .sqrt()
-            })
+            .map(|c| norm(sub(c[1], c[0])).max(norm(sub(c[2], c[1]))).max(norm(sub(c[0], c[2]))))
             .collect();
-        let area = crosses.iter().map(|x| 0.5 * square(*x).sqrt()).collect();
+        let area = crosses.iter().map(|x| 0.5 * norm(*x)).collect();
         let centroid = corners
             .iter()
             .map(|c| [0, 1, 2].map(|k| (c[0][k] + c[1][k] + c[2][k]) / 3.0))
@@ -138,10 +134,10 @@ impl SampledSurface {
             // the turned ones at (i + 2/3, j + 2/3) / m, i + j <= m - 2.
             let mf = m as f64;
             let mut uv = Vec::with_capacity(m * m);
-            for (offset, limit) in [(1.0 / 3.0, m - 1), (2.0 / 3.0, m.wrapping_sub(2))] {
+            for (offset, limit) in [(1.0 / 3.0, m - 1), (2.0 / 3.0, m - 2)] {
                 for i in 0..m {
                     for j in 0..m {
-                        if m >= 2 && i + j <= limit {
+                        if i + j <= limit {
                             uv.push(((i as f64 + offset) / mf, (j as f64 + offset) / mf));
                         }
                     }
@@ -166,10 +162,10 @@ impl SampledSurface {
     }
 }
 
-/// The samples lumped into grid cells of side `spacing`: each cell's area
-/// summed, its area-weighted centroid and its unit summed normal, in the
-/// order of the cells' keys (empty cells and cells whose normals cancel left
-/// out). Each cell sums its samples in their order.
+/// The samples lumped into grid cells of side `spacing` ([`CellGrid`]'s
+/// cells): each cell's area summed, its area-weighted centroid and its unit
+/// summed normal, in the order of the cells' keys (cells whose normals
+/// cancel left out). Each cell sums its samples in their order.
 fn lump(
     points: &[[f64; 3]],
     weights: &[f64],
@@ -177,46 +173,26 @@ fn lump(
     faces: &[u32],
     spacing: f64,
 ) -> SurfaceSamples {
-    if points.is_empty() {
-        return SurfaceSamples::default();
-    }
-    let at: Vec<[i64; 3]> =
-        points.iter().map(|p| p.map(|x| (x / spacing).floor() as i64)).collect();
-    let (low, high) = cell_bounds(&at);
-    let span = [0, 1, 2].map(|c| high[c] - low[c] + 1);
-    let keys: Vec<i64> = at
-        .iter()
-        .map(|a| ((a[0] - low[0]) * span[1] + (a[1] - low[1])) * span[2] + (a[2] - low[2]))
-        .collect();
-    // By key, then by row (a stable sort's order).
-    let cells = span.iter().try_fold(1usize, |acc, &s| acc.checked_mul(s as usize));
-    let (order, _) = order_by_key(&keys, cells);
     let mut out = SurfaceSamples::default();
-    let mut k = 0;
-    while k < order.len() {
-        let key = keys[order[k] as usize];
-        let start = k;
-        let mut end = k;
+    for rows in CellGrid::new(points, spacing).cells() {
         let mut total = 0.0;
         let mut moment = [0.0; 3];
         let mut summed = [0.0; 3];
-        while end < order.len() && keys[order[end] as usize] == key {
-            let i = order[end] as usize;
+        for &i in rows {
+            let i = i as usize;
             let w = weights[i];
             total += w;
             for c in 0..3 {
                 moment[c] += w * points[i][c];
                 summed[c] += normals[i][c];
             }
-            end += 1;
         }
-        k = end;
-        let length = (summed[0] * summed[0] + summed[1] * summed[1] + summed[2] * summed[2]).sqrt();
+        let length = norm(summed);
         if total > 0.0 && length > 0.0 {
             out.points.push(moment.map(|x| x / total));
             out.area.push(total);
             out.normals.push(summed.map(|x| x / length));
-            out.faces.push(faces[order[start] as usize]);
+            out.faces.push(faces[rows[0] as usize]);
         }
     }
     out
@@ -277,7 +253,7 @@ fn height(
     grid.for_each_near(q, |p| {
         let x = samples.points[p];
         let gap = sub(q, x);
-        let d2 = gap[0] * gap[0] + gap[1] * gap[1] + gap[2] * gap[2];
+        let d2 = dot(gap, gap);
         let along = dot(n, gap);
         let agree = dot(n, samples.normals[p]);
         if d2 <= cut && agree > 0.0 {
