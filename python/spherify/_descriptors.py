@@ -48,8 +48,6 @@ from . import _core
 
 __all__ = ["DescriptorPairs", "Surface", "heights", "surface_samples"]
 
-# Subdivisions of a face along an edge, at most (the core's MAX_SPLIT).
-MAX_SPLIT = 64
 # The sampling spacing of the surface around a query, over the scale r.
 SOURCE_SPACING = 0.75
 
@@ -69,7 +67,7 @@ class Surface:
         """Points of the surface (k, 3), their areas (k,) and unit outward
         normals (k, 3), about ``spacing`` apart: each face split into m^2
         equal sub-triangles (m the longest edge over ``spacing``, rounded
-        up, at most :data:`MAX_SPLIT`), each represented by its centroid,
+        up, at most 64: the core's ``MAX_SPLIT``), each represented by its centroid,
         then lumped into grid cells of side ``spacing`` (areas summed;
         area-weighted centroids and normals). O(area / spacing^2 + faces)."""
         points, area, normals, _ = self.core.samples(float(spacing))

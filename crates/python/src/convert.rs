@@ -41,6 +41,15 @@ pub fn rows<T: numpy::Element + Copy + Default, const K: usize>(
     Ok(out)
 }
 
+/// `MeshError` naming the first row of `rows` that is not finite ("`what`
+/// N is not finite").
+pub fn finite_rows(rows: &[[f64; 3]], what: &str) -> PyResult<()> {
+    match rows.iter().position(|p| !p.iter().all(|x| x.is_finite())) {
+        Some(bad) => Err(mesh_error(format!("{what} {bad} is not finite"))),
+        None => Ok(()),
+    }
+}
+
 /// A bare triangle surface: vertex positions and faces.
 pub type SurfaceRows = (Vec<[f64; 3]>, Vec<[u32; 3]>);
 
@@ -54,9 +63,7 @@ pub fn surface_rows(
 ) -> PyResult<SurfaceRows> {
     let positions = rows::<f64, 3>(vertices, "vertices")?;
     let corners = rows::<i64, 3>(faces, "faces")?;
-    if let Some(bad) = positions.iter().position(|p| !p.iter().all(|x| x.is_finite())) {
-        return Err(mesh_error(format!("vertex {bad} is not finite")));
-    }
+    finite_rows(&positions, "vertex")?;
     let n = positions.len() as i64;
     let mut out = Vec::with_capacity(corners.len());
     for (k, f) in corners.iter().enumerate() {

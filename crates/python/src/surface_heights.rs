@@ -9,15 +9,8 @@ use pyo3::prelude::*;
 use spherify_mesh::feature_nearest::FeatureNearest;
 use spherify_mesh::surface_heights::{surface_heights, SampledSurface};
 
-use crate::convert::{rows, surface_rows, to_numpy};
+use crate::convert::{finite_rows, rows, surface_rows, to_numpy};
 use crate::errors::mesh_error;
-
-fn finite_rows(rows: &[[f64; 3]], what: &str) -> PyResult<()> {
-    match rows.iter().position(|p| !p.iter().all(|x| x.is_finite())) {
-        Some(bad) => Err(mesh_error(format!("{what}: row {bad} is not finite"))),
-        None => Ok(()),
-    }
-}
 
 fn positive(x: f64, what: &str) -> PyResult<f64> {
     if x.is_finite() && x > 0.0 {
@@ -129,7 +122,7 @@ impl CoreFeatureNearest {
         reach: f64,
     ) -> PyResult<Self> {
         let points = rows::<f64, 3>(&points, "points")?;
-        finite_rows(&points, "points")?;
+        finite_rows(&points, "point")?;
         let (n, k, features) = table(&features, "features")?;
         if n != points.len() {
             return Err(mesh_error("one row of features per point"));
