@@ -2,10 +2,11 @@
 //! every block of at least [`ADVISED_FROM`] bytes (32 MiB) offered transparent huge
 //! pages (`madvise(MADV_HUGEPAGE)` on the 2 MiB pages that lie wholly inside
 //! it). Linux's default THP mode, `madvise`, gives huge pages only where
-//! asked. The large buffers of a big map (points, quadrics, star references,
-//! edge tables) are touched first in parallel passes and then read at random:
-//! with 4 KiB pages each first touch is a page fault (327k of them in a
-//! 1M-vertex default map) and each random read risks a TLB miss.
+//! asked. The largest buffers of a big map (at 1M vertices the hierarchy's
+//! quadrics and the sweeps' star references, each over 32 MiB) are touched
+//! first in parallel passes and then read at random: with 4 KiB pages each
+//! first touch is a page fault (327k of them in one process that makes and
+//! maps a 1M-vertex shape) and each random read risks a TLB miss.
 //!
 //! Measured on 1M-vertex `tentacles`, default map, 2 threads (issue 27): see
 //! `docs/benchmarks.md`, "Issue 27: session 11". The advice changes no result:
