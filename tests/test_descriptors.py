@@ -5,6 +5,7 @@ direct computation."""
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 import spherify as sp
 from spherify import _descriptors, _nricp
@@ -131,3 +132,37 @@ def test_descriptor_pairs_are_the_nearest_in_position_and_descriptor() -> None:
     assert np.array_equal(best[certain], both.argmin(axis=1)[certain])
     assert np.array_equal(plain[certain], near.argmin(axis=1)[certain])
     assert np.all(both.min(axis=1)[~certain] > reach ** 2 - 1e-12) or not (~certain).any()
+
+
+def test_the_core_refuses_bad_surfaces_points_and_parameters() -> None:
+    """Bad input to the core's descriptor classes and closest points is a
+    MeshError naming the row or the parameter, never a panic."""
+    from spherify import _core
+    from spherify._nearest import NearestOnSurface
+    v = np.eye(3) * 2.0 - 1.0
+    f = np.array([[0, 1, 2]])
+    bad = v.copy()
+    bad[1, 2] = np.nan
+    with pytest.raises(sp.MeshError, match="vertex 1 is not finite"):
+        _core.CoreSampledSurface(bad, f)
+    with pytest.raises(sp.MeshError, match="vertex 1 is not finite"):
+        NearestOnSurface(bad, f)
+    with pytest.raises(sp.MeshError, match="face 0 names a vertex out of range"):
+        _core.CoreSampledSurface(v, np.array([[0, 1, 3]]))
+    surface = _core.CoreSampledSurface(v, f)
+    with pytest.raises(sp.MeshError, match="spacing must be positive"):
+        surface.samples(0.0)
+    with pytest.raises(sp.MeshError, match="scale must be positive"):
+        surface.heights(v, v, [float("nan")], 0.75)
+    with pytest.raises(sp.MeshError, match="one normal per query"):
+        surface.heights(v, v[:2], [0.1], 0.75)
+    features = np.zeros((3, 2))
+    with pytest.raises(sp.MeshError, match="point 1 is not finite"):
+        _core.CoreFeatureNearest(bad, features, 1.0)
+    with pytest.raises(sp.MeshError, match="one row of features per point"):
+        _core.CoreFeatureNearest(v, features[:2], 1.0)
+    with pytest.raises(sp.MeshError, match="reach must be positive"):
+        _core.CoreFeatureNearest(v, features, -1.0)
+    near = _core.CoreFeatureNearest(v, features, 1.0)
+    with pytest.raises(sp.MeshError, match=r"features must have shape \(3, 2\)"):
+        near.nearest(v, np.zeros((3, 1)))

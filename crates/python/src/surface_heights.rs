@@ -4,7 +4,6 @@
 
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArrayDyn};
-use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use spherify_mesh::feature_nearest::FeatureNearest;
 use spherify_mesh::surface_heights::{surface_heights, SampledSurface};
@@ -16,7 +15,7 @@ fn positive(x: f64, what: &str) -> PyResult<f64> {
     if x.is_finite() && x > 0.0 {
         Ok(x)
     } else {
-        Err(PyValueError::new_err(format!("{what} must be positive and finite, got {x}")))
+        Err(mesh_error(format!("{what} must be positive and finite, got {x}")))
     }
 }
 
