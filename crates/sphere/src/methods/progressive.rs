@@ -239,7 +239,7 @@ pub fn progressive(
     }
 
     let started = Instant::now();
-    let mut rings = RingMesh::from_faces(n, mesh.faces())?;
+    let mut rings = RingMesh::for_collapses(n, mesh.faces())?;
     // progress(0, 0) only asks whether to go on; the other calls report.
     let go_on = || progress(0, 0);
     let mut hierarchy = hierarchy::decimate(&mut rings, positions, &mut |removed| {

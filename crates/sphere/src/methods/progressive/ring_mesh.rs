@@ -12,6 +12,9 @@ use spherify_mesh::edge_table::vertex_ranges;
 
 use crate::memory_budget::{filled, reserved, ResourceError};
 
+/// Spare slots in each list of [`RingMesh::for_collapses`].
+pub const COLLAPSE_ROOM: usize = 4;
+
 /// A half-edge collapse `u -> v`: `u` is removed and its faces become a fan
 /// around `v`. `ring` is `u`'s ring at that moment, rotated to start at `v`.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -40,19 +43,35 @@ impl RingMesh {
         // by a scan of all faces in order, so every list is built from the
         // same corners in the same order for any number of ranges (issue 27:
         // the serial gathering was 0.08 s of the 1M-vertex default map).
-        RingMesh::by_ranges(n_vertices, faces, &vertex_ranges(n_vertices, faces.len()))
+        RingMesh::by_ranges(n_vertices, faces, &vertex_ranges(n_vertices, faces.len()), 0)
+    }
+
+    /// [`RingMesh::from_faces`] with room for [`COLLAPSE_ROOM`] more
+    /// neighbours in every list, for the hierarchy's collapses: a collapse
+    /// `u -> v` grows `v`'s list by the degree of `u` less three, which made
+    /// the serial collapse loop reallocate nearly every target's list (issue
+    /// 27, 1M-vertex `tentacles`: that loop 0.38 s without the room, 0.33 s
+    /// with it). The room costs 16 bytes a vertex while the rings live; they
+    /// are let go before the final sweeps' references, the method's peak.
+    ///
+    /// # Errors
+    /// As [`RingMesh::from_faces`].
+    pub fn for_collapses(n_vertices: usize, faces: &[[u32; 3]]) -> Result<RingMesh, ResourceError> {
+        let ranges = vertex_ranges(n_vertices, faces.len());
+        RingMesh::by_ranges(n_vertices, faces, &ranges, COLLAPSE_ROOM)
     }
 
     /// [`RingMesh::from_faces`] with the vertex ranges given (they must cover
-    /// the vertices in order).
+    /// the vertices in order), each list with room for `room` more.
     fn by_ranges(
         n_vertices: usize,
         faces: &[[u32; 3]],
         ranges: &[std::ops::Range<usize>],
+        room: usize,
     ) -> Result<RingMesh, ResourceError> {
         let parts: Vec<Vec<Vec<u32>>> = ranges
             .par_iter()
-            .map(|range| rings_of_range(faces, range))
+            .map(|range| rings_of_range(faces, range, room))
             .collect::<Result<_, _>>()?;
         let mut rings = reserved(n_vertices, "the progressive method's rings")?;
         for part in parts {
@@ -226,6 +245,7 @@ pub fn prefetch<T>(at: *const T) {
 fn rings_of_range(
     faces: &[[u32; 3]],
     range: &std::ops::Range<usize>,
+    room: usize,
 ) -> Result<Vec<Vec<u32>>, ResourceError> {
     let mut start = filled(range.len() + 1, 0u32, "the progressive method's ring offsets")?;
     let mine = |x: u32| range.contains(&(x as usize));
@@ -254,7 +274,7 @@ fn rings_of_range(
     // Each vertex's list is ordered on its own: in parallel.
     rings.par_extend((0..range.len()).into_par_iter().map(|i| {
         let own = &pairs[start[i] as usize..start[i + 1] as usize];
-        let mut ring = Vec::with_capacity(own.len());
+        let mut ring = Vec::with_capacity(own.len() + room);
         if let Some(&[first, _]) = own.first() {
             let mut current = first;
             for _ in 0..own.len() {
@@ -314,12 +334,16 @@ mod tests {
         }
         let faces: Vec<[u32; 3]> =
             mesh.faces().iter().map(|f| f.map(|v| order[v as usize])).collect();
-        let one = RingMesh::by_ranges(n, &faces, &split_ranges(n, 1)).unwrap();
+        let one = RingMesh::by_ranges(n, &faces, &split_ranges(n, 1), 0).unwrap();
         assert_eq!(canonical(&one.faces()), canonical(&faces));
         for parts in [2, 3, 5, n] {
-            let split = RingMesh::by_ranges(n, &faces, &split_ranges(n, parts)).unwrap();
+            let split = RingMesh::by_ranges(n, &faces, &split_ranges(n, parts), 0).unwrap();
             assert_eq!(split.rings, one.rings, "{parts} ranges");
         }
+        // The hierarchy's rings: the same lists, each with its room.
+        let roomy = RingMesh::for_collapses(n, &faces).unwrap();
+        assert_eq!(roomy.rings, one.rings);
+        assert!(roomy.rings.iter().all(|r| r.capacity() >= r.len() + COLLAPSE_ROOM));
     }
 
     #[test]
