@@ -74,7 +74,7 @@ CPU on the speed pairs, most of it the shifted pairs' closest-point searches.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, Callable, Dict, Optional, Sequence, Tuple
+from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
@@ -286,9 +286,17 @@ class _Reverse:
         self.dots = np.repeat(np.arange(n, dtype=np.int64)[:, None], 3, axis=1)
         self.faces = self.dots if faces is None else faces
 
-    def __call__(self, moved: np.ndarray, normals: np.ndarray,
-                 landed: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
-        face, bary, onto = NearestOnSurface(moved, self.faces)(self.points)
+    def nearest_to_b(self, moved: np.ndarray) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The first half of a call, which needs only A's deformed points:
+        B's sample's closest points on the deformed A (face, barycentric
+        weights, points)."""
+        return NearestOnSurface(moved, self.faces)(self.points)
+
+    def __call__(self, moved: np.ndarray, normals: np.ndarray, landed: np.ndarray,
+                 near: Optional[Tuple[np.ndarray, np.ndarray, np.ndarray]] = None
+                 ) -> Tuple[np.ndarray, np.ndarray]:
+        """``near``: :meth:`nearest_to_b` of ``moved`` if already made."""
+        face, bary, onto = self.nearest_to_b(moved) if near is None else near
         corners = self.faces[face]
         normal = (normals[corners] * bary[:, :, None]).sum(axis=1)
         keep = (normal * self.normals).sum(1) > NORMAL_COSINE
@@ -427,9 +435,21 @@ def nonrigid_icp(a: np.ndarray, a_normals: np.ndarray, area: np.ndarray,
                 model = fit(a, y, weights, controls, sigma, stiffness, phi, normal, design, gram)
                 theta = np.vstack([model.linear.T, model.shift, model.weights])
                 moved = (design @ theta)[:n]
-                # Each point's face at the fit before starts its search from
-                # a bound (spherify._nearest: the same answers, faster).
-                faces, _, on_b = nearest(moved, hints)
+                # The searches that need only the deformed points run side by
+                # side (spherify._workers; each its own bits): their closest
+                # points on B (each point's face at the fit before starts its
+                # search from a bound, spherify._nearest: the same answers,
+                # faster), the descriptor pairs and the reverse pairs' search
+                # of the deformed A (issue 23, speed, session 12).
+                searches: List[Callable[[], Any]] = [lambda: nearest(moved, hints)]
+                if descriptors is not None:
+                    searches.append(lambda: descriptors[0](moved, descriptors[1]))
+                backward = reverse is not None and sigma >= REVERSE_SIGMA
+                if backward:
+                    assert reverse is not None
+                    searches.append(lambda: reverse.nearest_to_b(moved))
+                found = run_all(lambda search: search(), searches)
+                faces, _, on_b = found[0]
                 hints = faces
                 distance = np.linalg.norm(on_b - moved, axis=1)
                 turned = model.turn_normals(a_normals)
@@ -439,8 +459,8 @@ def nonrigid_icp(a: np.ndarray, a_normals: np.ndarray, area: np.ndarray,
                     # descriptor is not the one nearest in position alone,
                     # the pair goes to the closest point of B to the point
                     # moved by the difference of the two.
-                    pairs, a_features = descriptors
-                    best, plain, certain = pairs(moved, a_features)
+                    pairs = descriptors[0]
+                    best, plain, certain = found[1]
                     shift = certain & (best != plain)
                     if shift.any():
                         # A face near the best candidate (else the moved
@@ -458,8 +478,9 @@ def nonrigid_icp(a: np.ndarray, a_normals: np.ndarray, area: np.ndarray,
                 use = agree > NORMAL_COSINE
                 targets = on_b
                 back_w = np.zeros(n)
-                if reverse is not None and sigma >= REVERSE_SIGMA:
-                    back_w, back_s = reverse(moved, turned, on_b[use])
+                if backward:
+                    assert reverse is not None
+                    back_w, back_s = reverse(moved, turned, on_b[use], found[-1])
                 record["kept"].append(float(use.mean()))
                 record["distance"].append(float(distance.mean()))
                 done += 1
