@@ -320,6 +320,31 @@ class _Reverse:
         return total, summed
 
 
+Shifted = Tuple[np.ndarray, np.ndarray, np.ndarray, Optional[np.ndarray], Optional[np.ndarray]]
+
+
+def _shifted(descriptors: Tuple[DescriptorPairs, np.ndarray], nearest: NearestOnSurface,
+             moved: np.ndarray) -> Shifted:
+    """The descriptor pairs' word on the deformed points ``moved`` (module
+    doc): the rows whose candidate of B nearest in position and descriptor
+    is certain and not the one nearest in position alone (the mask), both
+    candidates of every row, and for the masked rows the closest point of B
+    to the point moved by the difference of the two (its face and the
+    point). A face near the best candidate bounds that search (a hint: the
+    same answers), so it needs nothing of the moved points' own closest
+    points and runs beside them; where the candidates carry no face, the
+    faces and points are None and the caller searches from the moved
+    points' own faces."""
+    pairs, features = descriptors
+    best, plain, certain = pairs(moved, features)
+    shift = certain & (best != plain)
+    if pairs.faces is None or not shift.any():
+        return shift, best, plain, None, None
+    at, _, onto = nearest(moved[shift] + pairs.points[best[shift]] - pairs.points[plain[shift]],
+                          pairs.faces[best[shift]])
+    return shift, best, plain, at, onto
+
+
 def nonrigid_icp(a: np.ndarray, a_normals: np.ndarray, area: np.ndarray,
                  first_targets: Optional[np.ndarray],
                  nearest: NearestOnSurface, b_face_normals: np.ndarray, *,
@@ -443,7 +468,7 @@ def nonrigid_icp(a: np.ndarray, a_normals: np.ndarray, area: np.ndarray,
                 # of the deformed A (issue 23, speed, session 12).
                 searches: List[Callable[[], Any]] = [lambda: nearest(moved, hints)]
                 if descriptors is not None:
-                    searches.append(lambda: descriptors[0](moved, descriptors[1]))
+                    searches.append(lambda: _shifted(descriptors, nearest, moved))
                 backward = reverse is not None and sigma >= REVERSE_SIGMA
                 if backward:
                     assert reverse is not None
@@ -455,21 +480,14 @@ def nonrigid_icp(a: np.ndarray, a_normals: np.ndarray, area: np.ndarray,
                 turned = model.turn_normals(a_normals)
                 b_normals = b_face_normals[faces]
                 if descriptors is not None:
-                    # Where the candidate of B nearest in position and
-                    # descriptor is not the one nearest in position alone,
-                    # the pair goes to the closest point of B to the point
-                    # moved by the difference of the two.
-                    pairs = descriptors[0]
-                    best, plain, certain = found[1]
-                    shift = certain & (best != plain)
-                    if shift.any():
-                        # A face near the best candidate (else the moved
-                        # point's own) bounds the search of the shifted
-                        # point (a hint: the same answers).
-                        hint = (faces[shift] if pairs.faces is None
-                                else pairs.faces[best[shift]])
+                    shift, best, plain, at, onto = found[1]
+                    if at is None and shift.any():
+                        # No face known near the candidates: the moved
+                        # point's own bounds the shifted point's search.
+                        pairs = descriptors[0]
                         at, _, onto = nearest(moved[shift] + pairs.points[best[shift]]
-                                              - pairs.points[plain[shift]], hint)
+                                              - pairs.points[plain[shift]], faces[shift])
+                    if shift.any():
                         on_b = on_b.copy()
                         on_b[shift] = onto
                         b_normals = b_normals.copy()
