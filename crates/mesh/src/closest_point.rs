@@ -556,8 +556,7 @@ mod tests {
         // a closed mesh whose queries land on shared corners and edges, and
         // a mesh with a corner no face uses.
         let mut rng = Lcg::new(11);
-        let mut cases: Vec<(Vec<[f64; 3]>, Vec<[u32; 3]>)> = Vec::new();
-        cases.push(soup_arrays(300, &mut rng));
+        let mut cases = vec![soup_arrays(300, &mut rng)];
         let m = crate::solids::icosphere(3);
         cases.push((m.positions().to_vec(), m.faces().to_vec()));
         let mut spare = m.positions().to_vec();
