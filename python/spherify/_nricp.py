@@ -355,7 +355,8 @@ def nonrigid_icp(a: np.ndarray, a_normals: np.ndarray, area: np.ndarray,
                  schedule: Sequence[Tuple[float, float, int]] = SCHEDULE,
                  should_stop: Callable[[int, int], bool] = lambda done, total: False,
                  controls: Optional[np.ndarray] = None,
-                 descriptors: Optional[Tuple[DescriptorPairs, np.ndarray]] = None
+                 descriptors: Optional[Tuple[DescriptorPairs, np.ndarray]] = None,
+                 first_faces: Optional[np.ndarray] = None
                  ) -> Tuple[Deformation, Dict[str, Any]]:
     """Fit a deformation of A's points ``a`` (all in one normalised frame)
     onto B's surface (``nearest``), starting from ``first_targets``.
@@ -370,7 +371,9 @@ def nonrigid_icp(a: np.ndarray, a_normals: np.ndarray, area: np.ndarray,
     :func:`control_points` of ``a`` if already made. ``descriptors``
     (B's :class:`spherify._descriptors.DescriptorPairs` and the descriptors
     of ``a``'s rows) moves each pair along B by the descriptor pairs' word
-    (module doc of :mod:`spherify._descriptors`). Returns the
+    (module doc of :mod:`spherify._descriptors`). ``first_faces``, if
+    given, are faces of B near ``first_targets`` (the faces they lie on):
+    the first search's hints (the same answers, faster). Returns the
     deformation and a record (``kept``: the fraction of
     pairs used at each iteration, ``distance``: their mean distance).
     """
@@ -395,7 +398,10 @@ def nonrigid_icp(a: np.ndarray, a_normals: np.ndarray, area: np.ndarray,
     done = 0
     record: Dict[str, Any] = {"kept": [], "distance": []}
     model: Optional[Deformation] = None
-    hints: Optional[np.ndarray] = None
+    # Each point's face at the fit before bounds its next search (the
+    # first from the faces of the first targets, where given: the first fit
+    # moves the points near them; issue 23, speed, session 12).
+    hints: Optional[np.ndarray] = None if first_faces is None else first_faces
     if len(ids):
         a = np.vstack([a, a[ids]])
     every = v0 if not len(ids) else np.concatenate([v0, np.full(len(ids), landmark_weight)])
