@@ -403,8 +403,8 @@ def best_rotation_then(m_a: SphereMap, m_b: SphereMap,
     same for every thread count) and the map rotation stands where it says
     no.
 
-    ``prepare``, if given, is called on the pool thread that makes the
-    check's rough runs beside the search for the rotation (work of ``then``
+    ``prepare``, if given, is called on the pool thread that makes B's
+    closest-point tree beside the search for the rotation (work of ``then``
     that does not depend on the rotation)."""
     def after(rotation: np.ndarray) -> Optional[T]:
         return None if then is None else then(rotation)
@@ -414,22 +414,24 @@ def best_rotation_then(m_a: SphereMap, m_b: SphereMap,
         # meant: only their rotation is refined.
         rotation, iterations = refine_rotation(subsample_cost(m_a, m_b), landmark_rotation)
         return rotation, "landmarks", iterations, after(rotation)
-    # The check in space's closest-point trees and rough runs do not depend
-    # on the rotation: they are made on a pool thread beside the search for
-    # it (spherify._workers), whose numpy work between its located batches
-    # left the other core idle (issue 23, speed); the same poses.
-    def aside() -> _rigid_icp.Search:
-        made = _rigid_icp.Search(normalised(m_a.mesh.vertices), m_a.mesh.faces,
-                                 normalised(m_b.mesh.vertices), m_b.mesh.faces, b_tree)
+    # B's closest-point tree (shared with the warp) and ``prepare`` (the
+    # warp's side of B) do not depend on the rotation: they are made on a
+    # pool thread beside the search for it (spherify._workers). The check's
+    # own rough runs from the principal frames (A's tree and four rigid ICP
+    # runs) are not: they go with the check, beside the stages after the
+    # rotation, whose pieces leave the second core idle more than the
+    # search's do (the search's located batches run on both cores alone);
+    # the same poses, each run's bits its own (issue 23, speed, session 12).
+    def aside() -> None:
+        if b_tree is not None:
+            b_tree()
         if prepare is not None:
             prepare()
-        return made
 
-    (rotation, name, iterations, cost), search = beside(lambda: _search_rotation(m_a, m_b),
-                                                        aside)
+    (rotation, name, iterations, cost), _ = beside(lambda: _search_rotation(m_a, m_b), aside)
 
     def check() -> Optional[Tuple[np.ndarray, int]]:
-        return _pose_in_space(m_a, m_b, rotation, cost, b_tree, search)
+        return _pose_in_space(m_a, m_b, rotation, cost, b_tree)
 
     unswitched: Optional[T] = None
     if then is None or not parallel():

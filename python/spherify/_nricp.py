@@ -74,7 +74,7 @@ CPU on the speed pairs, most of it the shifted pairs' closest-point searches.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, Callable, Dict, Optional, Sequence, Tuple
+from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
@@ -286,9 +286,17 @@ class _Reverse:
         self.dots = np.repeat(np.arange(n, dtype=np.int64)[:, None], 3, axis=1)
         self.faces = self.dots if faces is None else faces
 
-    def __call__(self, moved: np.ndarray, normals: np.ndarray,
-                 landed: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
-        face, bary, onto = NearestOnSurface(moved, self.faces)(self.points)
+    def nearest_to_b(self, moved: np.ndarray) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The first half of a call, which needs only A's deformed points:
+        B's sample's closest points on the deformed A (face, barycentric
+        weights, points)."""
+        return NearestOnSurface(moved, self.faces)(self.points)
+
+    def __call__(self, moved: np.ndarray, normals: np.ndarray, landed: np.ndarray,
+                 near: Optional[Tuple[np.ndarray, np.ndarray, np.ndarray]] = None
+                 ) -> Tuple[np.ndarray, np.ndarray]:
+        """``near``: :meth:`nearest_to_b` of ``moved`` if already made."""
+        face, bary, onto = self.nearest_to_b(moved) if near is None else near
         corners = self.faces[face]
         normal = (normals[corners] * bary[:, :, None]).sum(axis=1)
         keep = (normal * self.normals).sum(1) > NORMAL_COSINE
@@ -312,6 +320,31 @@ class _Reverse:
         return total, summed
 
 
+Shifted = Tuple[np.ndarray, np.ndarray, np.ndarray, Optional[np.ndarray], Optional[np.ndarray]]
+
+
+def _shifted(descriptors: Tuple[DescriptorPairs, np.ndarray], nearest: NearestOnSurface,
+             moved: np.ndarray) -> Shifted:
+    """The descriptor pairs' word on the deformed points ``moved`` (module
+    doc): the rows whose candidate of B nearest in position and descriptor
+    is certain and not the one nearest in position alone (the mask), both
+    candidates of every row, and for the masked rows the closest point of B
+    to the point moved by the difference of the two (its face and the
+    point). A face near the best candidate bounds that search (a hint: the
+    same answers), so it needs nothing of the moved points' own closest
+    points and runs beside them; where the candidates carry no face, the
+    faces and points are None and the caller searches from the moved
+    points' own faces."""
+    pairs, features = descriptors
+    best, plain, certain = pairs(moved, features)
+    shift = certain & (best != plain)
+    if pairs.faces is None or not shift.any():
+        return shift, best, plain, None, None
+    at, _, onto = nearest(moved[shift] + pairs.points[best[shift]] - pairs.points[plain[shift]],
+                          pairs.faces[best[shift]])
+    return shift, best, plain, at, onto
+
+
 def nonrigid_icp(a: np.ndarray, a_normals: np.ndarray, area: np.ndarray,
                  first_targets: Optional[np.ndarray],
                  nearest: NearestOnSurface, b_face_normals: np.ndarray, *,
@@ -322,7 +355,8 @@ def nonrigid_icp(a: np.ndarray, a_normals: np.ndarray, area: np.ndarray,
                  schedule: Sequence[Tuple[float, float, int]] = SCHEDULE,
                  should_stop: Callable[[int, int], bool] = lambda done, total: False,
                  controls: Optional[np.ndarray] = None,
-                 descriptors: Optional[Tuple[DescriptorPairs, np.ndarray]] = None
+                 descriptors: Optional[Tuple[DescriptorPairs, np.ndarray]] = None,
+                 first_faces: Optional[np.ndarray] = None
                  ) -> Tuple[Deformation, Dict[str, Any]]:
     """Fit a deformation of A's points ``a`` (all in one normalised frame)
     onto B's surface (``nearest``), starting from ``first_targets``.
@@ -337,7 +371,9 @@ def nonrigid_icp(a: np.ndarray, a_normals: np.ndarray, area: np.ndarray,
     :func:`control_points` of ``a`` if already made. ``descriptors``
     (B's :class:`spherify._descriptors.DescriptorPairs` and the descriptors
     of ``a``'s rows) moves each pair along B by the descriptor pairs' word
-    (module doc of :mod:`spherify._descriptors`). Returns the
+    (module doc of :mod:`spherify._descriptors`). ``first_faces``, if
+    given, are faces of B near ``first_targets`` (the faces they lie on):
+    the first search's hints (the same answers, faster). Returns the
     deformation and a record (``kept``: the fraction of
     pairs used at each iteration, ``distance``: their mean distance).
     """
@@ -362,7 +398,10 @@ def nonrigid_icp(a: np.ndarray, a_normals: np.ndarray, area: np.ndarray,
     done = 0
     record: Dict[str, Any] = {"kept": [], "distance": []}
     model: Optional[Deformation] = None
-    hints: Optional[np.ndarray] = None
+    # Each point's face at the fit before bounds its next search (the
+    # first from the faces of the first targets, where given: the first fit
+    # moves the points near them; issue 23, speed, session 12).
+    hints: Optional[np.ndarray] = None if first_faces is None else first_faces
     if len(ids):
         a = np.vstack([a, a[ids]])
     every = v0 if not len(ids) else np.concatenate([v0, np.full(len(ids), landmark_weight)])
@@ -427,29 +466,34 @@ def nonrigid_icp(a: np.ndarray, a_normals: np.ndarray, area: np.ndarray,
                 model = fit(a, y, weights, controls, sigma, stiffness, phi, normal, design, gram)
                 theta = np.vstack([model.linear.T, model.shift, model.weights])
                 moved = (design @ theta)[:n]
-                # Each point's face at the fit before starts its search from
-                # a bound (spherify._nearest: the same answers, faster).
-                faces, _, on_b = nearest(moved, hints)
+                # The searches that need only the deformed points run side by
+                # side (spherify._workers; each its own bits): their closest
+                # points on B (each point's face at the fit before starts its
+                # search from a bound, spherify._nearest: the same answers,
+                # faster), the descriptor pairs and the reverse pairs' search
+                # of the deformed A (issue 23, speed, session 12).
+                searches: List[Callable[[], Any]] = [lambda: nearest(moved, hints)]
+                if descriptors is not None:
+                    searches.append(lambda: _shifted(descriptors, nearest, moved))
+                backward = reverse is not None and sigma >= REVERSE_SIGMA
+                if backward:
+                    assert reverse is not None
+                    searches.append(lambda: reverse.nearest_to_b(moved))
+                found = run_all(lambda search: search(), searches)
+                faces, _, on_b = found[0]
                 hints = faces
                 distance = np.linalg.norm(on_b - moved, axis=1)
                 turned = model.turn_normals(a_normals)
                 b_normals = b_face_normals[faces]
                 if descriptors is not None:
-                    # Where the candidate of B nearest in position and
-                    # descriptor is not the one nearest in position alone,
-                    # the pair goes to the closest point of B to the point
-                    # moved by the difference of the two.
-                    pairs, a_features = descriptors
-                    best, plain, certain = pairs(moved, a_features)
-                    shift = certain & (best != plain)
-                    if shift.any():
-                        # A face near the best candidate (else the moved
-                        # point's own) bounds the search of the shifted
-                        # point (a hint: the same answers).
-                        hint = (faces[shift] if pairs.faces is None
-                                else pairs.faces[best[shift]])
+                    shift, best, plain, at, onto = found[1]
+                    if at is None and shift.any():
+                        # No face known near the candidates: the moved
+                        # point's own bounds the shifted point's search.
+                        pairs = descriptors[0]
                         at, _, onto = nearest(moved[shift] + pairs.points[best[shift]]
-                                              - pairs.points[plain[shift]], hint)
+                                              - pairs.points[plain[shift]], faces[shift])
+                    if shift.any():
                         on_b = on_b.copy()
                         on_b[shift] = onto
                         b_normals = b_normals.copy()
@@ -458,8 +502,9 @@ def nonrigid_icp(a: np.ndarray, a_normals: np.ndarray, area: np.ndarray,
                 use = agree > NORMAL_COSINE
                 targets = on_b
                 back_w = np.zeros(n)
-                if reverse is not None and sigma >= REVERSE_SIGMA:
-                    back_w, back_s = reverse(moved, turned, on_b[use])
+                if backward:
+                    assert reverse is not None
+                    back_w, back_s = reverse(moved, turned, on_b[use], found[-1])
                 record["kept"].append(float(use.mean()))
                 record["distance"].append(float(distance.mean()))
                 done += 1

@@ -33,7 +33,7 @@ from ._embed import improve
 from ._errors import MapError, MeshError
 from ._progress import as_callback
 from ._spheremap import SphereMap
-from ._workers import run_all
+from ._workers import beside
 
 __all__ = ["Correspondence", "SurfacePoints", "TRANSFORMS", "landmark_pairs", "register"]
 
@@ -442,24 +442,30 @@ def _after_rotation(m_a: SphereMap, m_b: SphereMap, rotation: np.ndarray, pairs:
         map_a = _moved(m_a, m_a.points @ rotation.T)
     else:
         started = time.perf_counter()
-        turn, boost, steps = _align.best_moebius(m_a, m_b, rotation)
-        # The rotated map and the Möbius candidate are certified side by side,
-        # then their costs are computed side by side (spherify._workers; each
-        # its own bits, as one after the other).
-        turned = m_a.points @ rotation.T
-        boosted = _align.moebius_transform(turn, boost)(m_a.points)
-        map_a, candidate = run_all(lambda p: SphereMap.from_points(m_a.mesh, p),
-                                   [turned, boosted])
-        if not map_a.valid:
-            map_a = _moved(m_a, turned)
-        if not candidate.valid:
-            candidate = _moved(map_a, boosted)
 
         def cost(m: SphereMap) -> float:
             return _align.Cost(m_a.mesh.vertices, m.points, m_b)(lambda p: p)
 
+        turned = m_a.points @ rotation.T
+
+        def rotated() -> Tuple[SphereMap, float]:
+            turned_map = SphereMap.from_points(m_a.mesh, turned)
+            if not turned_map.valid:
+                turned_map = _moved(m_a, turned)
+            return turned_map, cost(turned_map)
+
+        # The rotated map does not depend on the Möbius fit: it is certified
+        # and costed beside the fit (spherify._workers; each its own bits, as
+        # one after the other), then the Möbius candidate (issue 23, speed,
+        # session 12: the two had waited for the fit, then gone side by side).
+        (turn, boost, steps), (map_a, rotation_cost) = beside(
+            lambda: _align.best_moebius(m_a, m_b, rotation), rotated)
+        boosted = _align.moebius_transform(turn, boost)(m_a.points)
+        candidate = SphereMap.from_points(m_a.mesh, boosted)
+        if not candidate.valid:
+            candidate = _moved(map_a, boosted)
+        candidate_cost = cost(candidate)
         # Kept only where it is better than the rotation on all of A's vertices.
-        candidate_cost, rotation_cost = run_all(cost, [candidate, map_a])
         if candidate_cost < rotation_cost:
             map_a = candidate
             rotation = turn

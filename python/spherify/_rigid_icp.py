@@ -150,11 +150,13 @@ def best_pose(a: np.ndarray, a_faces: np.ndarray, b: np.ndarray, b_faces: np.nda
 class Search:
     """:func:`best_pose` in two parts: made, the closest-point trees and
     the rough runs from the principal frames, which do not depend on the
-    map rotation (registration makes them beside its search for the
-    rotation on the sphere, :func:`spherify._align.best_rotation_then`);
-    then :meth:`best`, the polish from the map rotation and of the best
-    rough starts. Each run's bits are its own, so the poses are those of
-    :func:`best_pose` in one go."""
+    map rotation; then :meth:`best`, the polish from the map rotation and
+    of the best rough starts. Each run's bits are its own, so the poses are
+    those of :func:`best_pose` in one go. (Registration made the first part
+    beside its search for the rotation on the sphere until session 12; it
+    now makes both on the check's thread beside the stages after the
+    rotation, :func:`spherify._align.best_rotation_then`, and only B's tree
+    beside the search.)"""
 
     def __init__(self, a: np.ndarray, a_faces: np.ndarray, b: np.ndarray, b_faces: np.ndarray,
                  b_tree: Optional[OnDemand] = None) -> None:

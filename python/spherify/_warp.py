@@ -334,7 +334,7 @@ def _targets_and_areas(map_a: SphereMap, m_b: SphereMap, *,
     # depend on the first targets: they are made beside them
     # (spherify._workers; each its own bits).
     tree = b_tree
-    (_, _, through_sphere), (nearest, b_normals, areas) = beside(
+    (first_faces, _, through_sphere), (nearest, b_normals, areas) = beside(
         lambda: m_b.to_surface(map_a.points[sample]),
         lambda: (tree(), b_side.face_normals(), _vertex_areas(a_mesh.vertices, a_mesh.faces)))
     first = (through_sphere - b_centre) / b_scale
@@ -358,7 +358,7 @@ def _targets_and_areas(map_a: SphereMap, m_b: SphereMap, *,
         first, nearest, b_normals, landmarks=landmarks, b_sample=b_sample,
         a_faces=a_mesh.faces if len(sample) == n else None,
         landmark_weight=LANDMARK_WEIGHT, schedule=schedule, should_stop=should_stop,
-        controls=controls, descriptors=descriptors)
+        controls=controls, descriptors=descriptors, first_faces=first_faces)
     faces, bary, _ = nearest(model(a_all))
     targets = m_b.to_sphere(faces, bary)
     if held:
