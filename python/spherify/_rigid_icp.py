@@ -152,11 +152,10 @@ class Search:
     the rough runs from the principal frames, which do not depend on the
     map rotation; then :meth:`best`, the polish from the map rotation and
     of the best rough starts. Each run's bits are its own, so the poses are
-    those of :func:`best_pose` in one go. (Registration made the first part
-    beside its search for the rotation on the sphere until session 12; it
-    now makes both on the check's thread beside the stages after the
-    rotation, :func:`spherify._align.best_rotation_then`, and only B's tree
-    beside the search.)"""
+    those of :func:`best_pose` in one go. Registration makes both parts on
+    the check's thread beside the stages after the rotation
+    (:func:`spherify._align.best_rotation_then`), and only B's tree beside
+    its search for the rotation on the sphere."""
 
     def __init__(self, a: np.ndarray, a_faces: np.ndarray, b: np.ndarray, b_faces: np.ndarray,
                  b_tree: Optional[OnDemand] = None) -> None:
