@@ -205,6 +205,21 @@ impl ClosestPoints {
         self.slot = slot;
     }
 
+    /// The two children of inner node `node` on the walk's `stack` with
+    /// their box distances to `p`, the nearer on top (popped first).
+    fn push_children(&self, stack: &mut Vec<(u32, f64)>, node: Node, p: [f64; 3]) {
+        let (l, r) = (node.start, node.start + 1);
+        let dl = box_distance2(&self.nodes[l as usize], p);
+        let dr = box_distance2(&self.nodes[r as usize], p);
+        if dl <= dr {
+            stack.push((r, dr));
+            stack.push((l, dl));
+        } else {
+            stack.push((l, dl));
+            stack.push((r, dr));
+        }
+    }
+
     /// The corners of input face `face` (in range), in its order.
     fn corners(&self, face: u32) -> [[f64; 3]; 3] {
         let f = self.faces[self.slot[face as usize] as usize];
@@ -320,17 +335,7 @@ impl ClosestPoints {
                 }
                 continue;
             }
-            let (l, r) = (node.start, node.start + 1);
-            let dl = box_distance2(&self.nodes[l as usize], p);
-            let dr = box_distance2(&self.nodes[r as usize], p);
-            // The nearer child is popped first.
-            if dl <= dr {
-                stack.push((r, dr));
-                stack.push((l, dl));
-            } else {
-                stack.push((l, dl));
-                stack.push((r, dr));
-            }
+            self.push_children(&mut stack, node, p);
         }
         if best.is_none() && hinted.is_some() {
             return self.closest_from(p, None);
@@ -535,16 +540,7 @@ mod tests {
                 }
                 continue;
             }
-            let (l, r) = (node.start, node.start + 1);
-            let dl = box_distance2(&tree.nodes[l as usize], p);
-            let dr = box_distance2(&tree.nodes[r as usize], p);
-            if dl <= dr {
-                stack.push((r, dr));
-                stack.push((l, dl));
-            } else {
-                stack.push((l, dl));
-                stack.push((r, dr));
-            }
+            tree.push_children(&mut stack, node, p);
         }
         best
     }
