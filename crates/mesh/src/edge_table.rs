@@ -218,8 +218,7 @@ mod tests {
         // A soup with repeated, looped, non-manifold and isolated elements.
         let mut rng = crate::lcg::Lcg::new(7);
         let n = 300;
-        let faces: Vec<[u32; 3]> =
-            (0..2000).map(|_| [0; 3].map(|_| rng.below(n) as u32)).collect();
+        let faces: Vec<[u32; 3]> = (0..2000).map(|_| [0; 3].map(|_| rng.below(n) as u32)).collect();
         let (corners, sizes) = reference(&faces);
         for parts in [1, 2, 3, 7, 300, 301] {
             let table = EdgeTable::by_ranges(&faces, &split_ranges(n, parts));
