@@ -193,7 +193,10 @@ def embed(mesh: MeshLike, method: str = "progressive", *, progress: Any = None,
         do not bound; 2.5-3.5 times the isometric energy's CPU time at 200k
         vertices), ``"conformal"``
         (MIPS with a barrier below an area ratio of 1e-5: an exactly
-        conformal map of a limbed shape cannot be stored in doubles),
+        conformal map of a limbed shape cannot be stored in doubles; on
+        smooth meshes the sweeps start from a certified global conformal map,
+        or from the radial projection from the vertex mean where that is
+        certified and lower in energy, as on nearly round meshes),
         ``"authalic"`` (area plus a small angle term, followed by global
         Gauss-Newton steps towards equal spherical areas on each level and at
         the end; ``max_iter`` and ``tol`` do not bound those) or

@@ -22,9 +22,10 @@
 //!    For the authalic energy, global steps towards equal areas follow
 //!    ([`mod@crate::methods::progressive::authalic_newton`]): the local moves alone stall on limbs.
 //!
-//! For the conformal energy, a certified global conformal map replaces steps
-//! 1-3 where no face of it lies inside the energy's barrier
-//! ([`conformal`]); otherwise the method runs as above.
+//! For the conformal energy, a certified global conformal map (or the radial
+//! projection from the vertex mean, where that is certified too and lower in
+//! conformal energy) replaces steps 1-3 where no face of it lies inside the
+//! energy's barrier ([`conformal`]); otherwise the method runs as above.
 //!
 //! Every state the method passes through is a valid GC-embedding of the
 //! current mesh: the tetrahedron is one, an insertion into the kernel keeps
