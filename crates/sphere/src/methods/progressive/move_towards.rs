@@ -17,7 +17,7 @@ use crate::embedding::{normalize, SphereEmbedding, Status};
 use crate::error::SphereError;
 use crate::genus_zero::GenusZeroMesh;
 use crate::methods::progressive::distortion_energy::Energy;
-use crate::methods::progressive::landmarks::{angle, drag_above, slerp};
+use crate::methods::progressive::landmarks::{angle, drag_star, slerp, Star};
 use crate::methods::progressive::{
     held_vertices, neighbourhoods_of, require_valid_points, whole_mesh_problem,
 };
@@ -147,15 +147,20 @@ pub(crate) fn move_towards_from(
             let moves: Vec<Option<[f64; 3]>> = class
                 .par_iter()
                 .with_min_len(64)
-                .map(|&v| {
+                // Each worker gathers a vertex's star once for its drags
+                // (landmarks::Star: the same points to the bit).
+                .map_init(Star::default, |star, &v| {
                     let goal = goals[v as usize]?;
-                    let ring = &rings[v as usize];
                     let mut p = shared[v as usize];
+                    if p == goal {
+                        return None;
+                    }
+                    star.gather(&rings[v as usize], shared);
                     for _ in 0..STEPS_PER_PASS {
                         if p == goal {
                             break;
                         }
-                        match drag_above(p, goal, ring, shared, floor) {
+                        match drag_star(p, goal, star, floor) {
                             Some(q) => p = q,
                             None => break,
                         }
