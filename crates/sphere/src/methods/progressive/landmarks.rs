@@ -325,7 +325,16 @@ pub(crate) fn drag_star(p: [f64; 3], goal: [f64; 3], star: &Star, floor: f64) ->
     }
     let mut s = (DRAG_FRACTION * s_safe).min(1.0);
     for _ in 0..DRAG_HALVINGS {
-        if let Some(q) = normalize(add(p, scale(d, s))) {
+        let x = add(p, scale(d, s));
+        if x == p {
+            // The step rounds away (s is 0 where a face at the floor
+            // blocks the way): every later halving rounds away too (each
+            // coordinate's sum rounds to p's for a term no larger), so
+            // each would make this same test. Made once, not up to thirty
+            // times (the same answer; issue 23, speed, session 13).
+            return normalize(x).filter(|&q| q != p && positive_fan(q, &star.corners));
+        }
+        if let Some(q) = normalize(x) {
             if q != p && positive_fan(q, &star.corners) {
                 return Some(q);
             }
