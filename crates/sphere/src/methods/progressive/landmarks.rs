@@ -269,9 +269,9 @@ pub(crate) fn drag_above(
 /// corners in ring order and, for each face `(p, a, b)` of the fan, the
 /// cross product `a x b`, so that det[x, a, b] = x . (a x b) costs one dot
 /// product for every point `x` a drag tries ([`spherify_mesh::vec3::det3`]
-/// forms it so: the same
-/// bits). The warp's rounds drag every vertex up to four times a pass with
-/// its ring fixed (issue 23, register's speed, session 13).
+/// forms it so: the same bits). The warp's rounds drag every vertex up to
+/// four times a pass with its ring fixed (issue 23, register's speed,
+/// session 13).
 #[derive(Debug, Default)]
 pub(crate) struct Star {
     corners: Vec<[f64; 3]>,

@@ -56,8 +56,9 @@ const COSINE_REACH: f64 = 1e-12;
 /// The largest [`angle`] from a point to its goal (0 without goals), the
 /// same value as the largest of all the angles: only the vertices whose
 /// cosine `p . g` is within [`COSINE_REACH`] of the least are given their
-/// angle (an `atan2` each, which for every vertex was a tenth of a call of
-/// the warp's rounds, for the message alone; issue 23, speed, session 13).
+/// angle (an `atan2` each, which for every vertex was about a twentieth of
+/// a call of the warp's rounds, for the message alone; issue 23, speed,
+/// session 13).
 /// The vertex of the largest computed angle has an exact angle within a
 /// few rounding units of the largest exact one, so its cosine is within a
 /// few rounding units of the least.
