@@ -30,16 +30,15 @@ mod sphere_flow;
 use std::time::Instant;
 
 use spherify_mesh::predicates::{det3_sign, Sign};
-use spherify_mesh::vec3::{add, cross, det3, dot, norm, scale, sub};
+use spherify_mesh::vec3::{add, cross, dot, norm, scale, sub};
 
 use crate::certificate::validity::check_sphere;
 use crate::embedding::{normalize, SphereEmbedding, Status};
 use crate::error::SphereError;
 use crate::genus_zero::GenusZeroMesh;
 use crate::methods::progressive::distortion_energy::Energy;
-use crate::methods::progressive::flip_free::{
-    check_tolerance, positive_star, tangent_basis, Optimised, Problem,
-};
+use crate::methods::progressive::flip_free::{check_tolerance, tangent_basis, Optimised, Problem};
+use crate::methods::progressive::star_lanes::positive_fan;
 use crate::methods::progressive::{require_valid_start, rings_of, whole_mesh_problem};
 use path_layout::{path_layout, PathLayout};
 use spherify_mesh::Mesh;
@@ -261,6 +260,42 @@ pub(crate) fn drag_above(
     points: &[[f64; 3]],
     floor: f64,
 ) -> Option<[f64; 3]> {
+    let mut star = Star::default();
+    star.gather(ring, points);
+    drag_star(p, goal, &star, floor)
+}
+
+/// A vertex's ring laid out for its drags while the ring stands still: the
+/// corners in ring order and, for each face `(p, a, b)` of the fan, the
+/// cross product `a x b`, so that det[x, a, b] = x . (a x b) costs one dot
+/// product for every point `x` a drag tries ([`spherify_mesh::vec3::det3`]
+/// forms it so: the same bits). The warp's rounds drag every vertex up to
+/// four times a pass with its ring fixed (issue 23, register's speed,
+/// session 13).
+#[derive(Debug, Default)]
+pub(crate) struct Star {
+    corners: Vec<[f64; 3]>,
+    crosses: Vec<[f64; 3]>,
+}
+
+impl Star {
+    /// The star of the vertex with ring `ring` in `points` (the buffers are
+    /// reused).
+    pub(crate) fn gather(&mut self, ring: &[u32], points: &[[f64; 3]]) {
+        self.corners.clear();
+        self.corners.extend(ring.iter().map(|&v| points[v as usize]));
+        let m = self.corners.len();
+        self.crosses.clear();
+        let corners = &self.corners;
+        self.crosses.extend((0..m).map(|j| cross(corners[j], corners[(j + 1) % m])));
+    }
+}
+
+/// [`drag_above`] on a gathered [`Star`]: the same points to the bit (each
+/// det is `x . (a x b)` as [`spherify_mesh::vec3::det3`] forms it, and the
+/// exact orientation test is [`positive_fan`]'s, whose answer is
+/// [`crate::methods::progressive::flip_free::positive_star`]'s).
+pub(crate) fn drag_star(p: [f64; 3], goal: [f64; 3], star: &Star, floor: f64) -> Option<[f64; 3]> {
     if p == goal {
         return Some(goal);
     }
@@ -277,23 +312,30 @@ pub(crate) fn drag_above(
         }
     };
     let d = sub(waypoint, p);
-    let m = ring.len();
     let mut s_safe = f64::INFINITY;
-    for j in 0..m {
-        let (a, b) = (points[ring[j] as usize], points[ring[(j + 1) % m] as usize]);
-        let rate = det3(d, a, b);
+    for &ab in &star.crosses {
+        let rate = dot(d, ab);
         if rate < 0.0 {
-            let det = det3(p, a, b);
+            let det = dot(p, ab);
             s_safe = s_safe.min((det - floor.min(det)) / -rate);
         }
     }
-    if waypoint == goal && s_safe > 1.0 && positive_star(goal, ring, points) {
+    if waypoint == goal && s_safe > 1.0 && positive_fan(goal, &star.corners) {
         return Some(goal);
     }
     let mut s = (DRAG_FRACTION * s_safe).min(1.0);
     for _ in 0..DRAG_HALVINGS {
-        if let Some(q) = normalize(add(p, scale(d, s))) {
-            if q != p && positive_star(q, ring, points) {
+        let x = add(p, scale(d, s));
+        if x == p {
+            // The step rounds away (s is 0 where a face at the floor
+            // blocks the way): every later halving rounds away too (each
+            // coordinate's sum rounds to p's for a term no larger), so
+            // each would make this same test. Made once, not up to thirty
+            // times (the same answer; issue 23, speed, session 13).
+            return normalize(x).filter(|&q| q != p && positive_fan(q, &star.corners));
+        }
+        if let Some(q) = normalize(x) {
+            if q != p && positive_fan(q, &star.corners) {
                 return Some(q);
             }
         }

@@ -17,11 +17,11 @@ use crate::embedding::{normalize, SphereEmbedding, Status};
 use crate::error::SphereError;
 use crate::genus_zero::GenusZeroMesh;
 use crate::methods::progressive::distortion_energy::Energy;
-use crate::methods::progressive::landmarks::{angle, drag_above, slerp};
+use crate::methods::progressive::landmarks::{angle, drag_star, slerp, Star};
 use crate::methods::progressive::{
     held_vertices, neighbourhoods_of, require_valid_points, whole_mesh_problem,
 };
-use spherify_mesh::vec3::det3;
+use spherify_mesh::vec3::{det3, dot};
 
 #[derive(Debug, Clone, PartialEq)]
 pub struct TowardsParams {
@@ -46,6 +46,30 @@ const STEPS_PER_PASS: usize = 4;
 /// 2000-vertex `tentacles` with every vertex 10 degrees off in its own
 /// direction: smallest triangle 0.0 of the mean, in floating point).
 const FLOOR: f64 = 1e-2;
+
+/// Cosines this far above the least are weighed again by their angle in
+/// [`largest_angle`]: far above the rounding of a cosine and of an angle
+/// (a few units of 1e-16), so the vertex of the largest computed angle is
+/// always among them.
+const COSINE_REACH: f64 = 1e-12;
+
+/// The largest [`angle`] from a point to its goal (0 without goals), the
+/// same value as the largest of all the angles: only the vertices whose
+/// cosine `p . g` is within [`COSINE_REACH`] of the least are given their
+/// angle (an `atan2` each, which for every vertex was about a twentieth of
+/// a call of the warp's rounds, for the message alone; issue 23, speed,
+/// session 13).
+/// The vertex of the largest computed angle has an exact angle within a
+/// few rounding units of the largest exact one, so its cosine is within a
+/// few rounding units of the least.
+fn largest_angle(points: &[[f64; 3]], goals: &[Option<[f64; 3]>]) -> f64 {
+    let cosine = |i: usize| goals[i].map(|g| dot(points[i], g));
+    let least = (0..points.len()).filter_map(cosine).fold(f64::INFINITY, f64::min);
+    (0..points.len())
+        .filter(|&i| cosine(i).is_some_and(|c| c <= least + COSINE_REACH))
+        .filter_map(|i| goals[i].map(|g| angle(points[i], g)))
+        .fold(0.0, f64::max)
+}
 
 /// Moves `points` (a valid map of `mesh`) towards `targets` (one direction
 /// per vertex). Vertex `i` aims at the point a fraction `min(weights[i], 1)`
@@ -147,15 +171,20 @@ pub(crate) fn move_towards_from(
             let moves: Vec<Option<[f64; 3]>> = class
                 .par_iter()
                 .with_min_len(64)
-                .map(|&v| {
+                // Each worker gathers a vertex's star once for its drags
+                // (landmarks::Star: the same points to the bit).
+                .map_init(Star::default, |star, &v| {
                     let goal = goals[v as usize]?;
-                    let ring = &rings[v as usize];
                     let mut p = shared[v as usize];
+                    if p == goal {
+                        return None;
+                    }
+                    star.gather(&rings[v as usize], shared);
                     for _ in 0..STEPS_PER_PASS {
                         if p == goal {
                             break;
                         }
-                        match drag_above(p, goal, ring, shared, floor) {
+                        match drag_star(p, goal, star, floor) {
                             Some(q) => p = q,
                             None => break,
                         }
@@ -171,8 +200,7 @@ pub(crate) fn move_towards_from(
         }
         progress(pass + 1, total);
     }
-    let left: f64 =
-        (0..n).filter_map(|i| goals[i].map(|g| angle(points[i], g))).fold(0.0, f64::max);
+    let left = largest_angle(&points, &goals);
     let mut sweeps = 0;
     if params.energy_sweeps > 0 {
         let problem = whole_mesh_problem(params.energy, mesh);
@@ -198,4 +226,44 @@ pub(crate) fn move_towards_from(
         ),
         seconds: vec![("move_towards", started.elapsed().as_secs_f64())],
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use spherify_mesh::lcg::Lcg;
+
+    #[test]
+    fn the_largest_angle_is_that_of_every_vertex() {
+        // Random pairs, pairs at nearly the same point and nearly opposite
+        // (where the cosine is flat and many vertices tie in it), pairs
+        // without a goal: the filtered maximum equals the plain one.
+        let mut rng = Lcg::new(5);
+        let mut unit = || {
+            let v = [rng.next_f64() - 0.5, rng.next_f64() - 0.5, rng.next_f64() - 0.5];
+            normalize(v).unwrap()
+        };
+        for case in 0..40 {
+            let n = 500;
+            let points: Vec<[f64; 3]> = (0..n).map(|_| unit()).collect();
+            let goals: Vec<Option<[f64; 3]>> = points
+                .iter()
+                .enumerate()
+                .map(|(i, &p)| {
+                    let tiny = [1e-9, -3e-10, 2e-9].map(|x| x * (i % 7) as f64);
+                    match (case % 4, i % 5) {
+                        (_, 0) => None,
+                        (0, _) => Some(unit()),
+                        (1, _) => normalize([p[0] + tiny[0], p[1] + tiny[1], p[2] + tiny[2]]),
+                        (2, _) => normalize([tiny[0] - p[0], tiny[1] - p[1], tiny[2] - p[2]]),
+                        _ => Some(p),
+                    }
+                })
+                .collect();
+            let plain =
+                (0..n).filter_map(|i| goals[i].map(|g| angle(points[i], g))).fold(0.0, f64::max);
+            assert_eq!(largest_angle(&points, &goals).to_bits(), plain.to_bits(), "case {case}");
+        }
+        assert_eq!(largest_angle(&[[1.0, 0.0, 0.0]], &[None]), 0.0);
+    }
 }
