@@ -249,6 +249,16 @@ mod tests {
         // 0.004 degrees after the sweeps (rounding-level moves), 0.43 from
         // the global conformal map alone.
         assert!(angle < 0.01 && angle < 0.1 * from_start, "{angle} against {from_start}");
+        // The same bits on every thread count.
+        let on = |threads: usize| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap()
+                .install(|| conformal(&mesh).points)
+        };
+        assert_eq!(on(1), map.points);
+        assert_eq!(on(2), map.points);
     }
 
     #[test]
