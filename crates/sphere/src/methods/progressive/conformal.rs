@@ -204,6 +204,15 @@ mod tests {
         progressive(mesh, &ProgressiveParams::for_energy(Energy::Conformal), &|_, _| true).unwrap()
     }
 
+    /// The conformal map of `mesh` on one and on two threads is `map`, bit
+    /// for bit.
+    fn assert_same_on_one_and_two_threads(mesh: &GenusZeroMesh, map: &SphereEmbedding) {
+        for threads in [1, 2] {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            assert_eq!(pool.install(|| conformal(mesh).points), map.points, "{threads} threads");
+        }
+    }
+
     #[test]
     fn a_smooth_shape_starts_from_the_global_conformal_map() {
         let mesh = GenusZeroMesh::new(bumpy(3)).unwrap();
@@ -222,15 +231,7 @@ mod tests {
         let after = quality(mesh.mesh(), &map.points).unwrap().angle_mean_deg;
         assert!(after <= before && after < 3.0, "{before} -> {after}");
         // The same bits on every thread count, start included.
-        let on = |threads: usize| {
-            rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .unwrap()
-                .install(|| conformal(&mesh).points)
-        };
-        assert_eq!(on(1), map.points);
-        assert_eq!(on(2), map.points);
+        assert_same_on_one_and_two_threads(&mesh, &map);
     }
 
     #[test]
@@ -250,15 +251,7 @@ mod tests {
         // the global conformal map alone.
         assert!(angle < 0.01 && angle < 0.1 * from_start, "{angle} against {from_start}");
         // The same bits on every thread count.
-        let on = |threads: usize| {
-            rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .unwrap()
-                .install(|| conformal(&mesh).points)
-        };
-        assert_eq!(on(1), map.points);
-        assert_eq!(on(2), map.points);
+        assert_same_on_one_and_two_threads(&mesh, &map);
     }
 
     #[test]
