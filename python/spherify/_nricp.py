@@ -323,6 +323,15 @@ class _Reverse:
 Shifted = Tuple[np.ndarray, np.ndarray, np.ndarray, Optional[np.ndarray], Optional[np.ndarray]]
 
 
+def _moved_by_pairs(pairs: DescriptorPairs, moved: np.ndarray, best: np.ndarray,
+                    plain: np.ndarray, shift: np.ndarray) -> np.ndarray:
+    """The deformed points of the rows ``shift`` moved by the difference of
+    their two candidates of B (best in position and descriptor, minus
+    nearest in position alone): where their pairs are searched."""
+    shifted: np.ndarray = moved[shift] + pairs.points[best[shift]] - pairs.points[plain[shift]]
+    return shifted
+
+
 def _shifted(descriptors: Tuple[DescriptorPairs, np.ndarray], nearest: NearestOnSurface,
              moved: np.ndarray) -> Shifted:
     """The descriptor pairs' word on the deformed points ``moved`` (module
@@ -340,7 +349,7 @@ def _shifted(descriptors: Tuple[DescriptorPairs, np.ndarray], nearest: NearestOn
     shift = certain & (best != plain)
     if pairs.faces is None or not shift.any():
         return shift, best, plain, None, None
-    at, _, onto = nearest(moved[shift] + pairs.points[best[shift]] - pairs.points[plain[shift]],
+    at, _, onto = nearest(_moved_by_pairs(pairs, moved, best, plain, shift),
                           pairs.faces[best[shift]])
     return shift, best, plain, at, onto
 
@@ -490,9 +499,9 @@ def nonrigid_icp(a: np.ndarray, a_normals: np.ndarray, area: np.ndarray,
                     if at is None and shift.any():
                         # No face known near the candidates: the moved
                         # point's own bounds the shifted point's search.
-                        pairs = descriptors[0]
-                        at, _, onto = nearest(moved[shift] + pairs.points[best[shift]]
-                                              - pairs.points[plain[shift]], faces[shift])
+                        at, _, onto = nearest(
+                            _moved_by_pairs(descriptors[0], moved, best, plain, shift),
+                            faces[shift])
                     if shift.any():
                         on_b = on_b.copy()
                         on_b[shift] = onto

@@ -95,8 +95,7 @@ pub fn from_conformal_start(
         );
         return Ok(Err(NotUsed { reason, seconds: started.elapsed().as_secs_f64() }));
     }
-    let conformal_energy = problem.per_area(&stars, &start.points);
-    let rival = radial_rival(mesh, &problem, &stars, conformal_energy);
+    let rival = radial_rival(mesh, &problem, &stars, &start.points);
     let seconds_start = started.elapsed().as_secs_f64();
     if !progress(0, 0) {
         return Err(cancelled(n));
@@ -104,7 +103,7 @@ pub fn from_conformal_start(
 
     let started = Instant::now();
     let (mut points, from) = match rival {
-        Some((points, energy)) => (
+        Some(Rival { points, energy, conformal_energy }) => (
             points,
             format!(
                 "started from the radial projection from the vertex mean (eq. 3.17-3.18), whose \
@@ -148,16 +147,24 @@ pub fn from_conformal_start(
     }))
 }
 
-/// The radial projection from the vertex mean and its conformal energy per
-/// unit area, when it is a certified map (exact orientation and area
-/// tests) with no face inside the barrier and an energy below
-/// `conformal_energy` (the global conformal map's); otherwise `None`.
+/// The radial projection from the vertex mean when it beats the global
+/// conformal map as a start, with both conformal energies per unit area.
+struct Rival {
+    points: Vec<[f64; 3]>,
+    energy: f64,
+    conformal_energy: f64,
+}
+
+/// The radial projection from the vertex mean, when it is a certified map
+/// (exact orientation and area tests) with no face inside the barrier and
+/// a lower conformal energy than `start` (the global conformal map's
+/// points, whose energy is measured only then); otherwise `None`.
 fn radial_rival(
     mesh: &GenusZeroMesh,
     problem: &Problem<'_>,
     stars: &Stars,
-    conformal_energy: f64,
-) -> Option<(Vec<[f64; 3]>, f64)> {
+    start: &[[f64; 3]],
+) -> Option<Rival> {
     // A vertex at the mean has no direction: then there is no rival.
     let points = radial_map(mesh, Center::Centroid).ok()?.embedding.points;
     if !check_sphere(mesh.faces(), &points).valid {
@@ -168,7 +175,8 @@ fn radial_rival(
         return None;
     }
     let energy = problem.per_area(stars, &points);
-    (energy < conformal_energy).then_some((points, energy))
+    let conformal_energy = problem.per_area(stars, start);
+    (energy < conformal_energy).then_some(Rival { points, energy, conformal_energy })
 }
 
 /// The smallest d (image area over scaled surface area, as in the energies)
